@@ -1,0 +1,33 @@
+# explore_seg: the one entry point. `make demo` and `make test` set up what is missing first.
+SHELL := /bin/bash
+PY := .venv/bin/python
+OUT ?= out/demo
+BENCH_OUT ?= out/bench
+RUNS ?= 20
+
+.PHONY: help setup test demo bench build clean
+
+help:
+	@echo "make demo   - headless exploration demo on the embedded cluttered house -> $(OUT)/"
+	@echo "make test   - the test suite (private network namespace where possible)"
+	@echo "make bench  - benchmarks: strategies x worlds x $(RUNS) runs -> $(BENCH_OUT)/, BENCHMARKS.md"
+	@echo "make build  - colcon build of the package into build/ install/"
+	@echo "make setup  - only the idempotent set-up (venv, apt packages, detector weights)"
+
+setup:
+	@bash scripts/setup_env.sh
+
+test: setup
+	@bash scripts/run_tests.sh $(PYTEST_ARGS)
+
+demo: setup
+	@bash scripts/run_demo.sh $(OUT)
+
+bench: setup
+	@bash scripts/run_bench.sh $(BENCH_OUT) $(RUNS)
+
+build: setup
+	@unset _ROS_WHEELS_BOOTSTRAP_COMPLETE; . .venv/bin/activate && colcon build --base-paths . --build-base build --install-base install
+
+clean:
+	rm -rf build install log out

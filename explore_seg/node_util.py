@@ -1,0 +1,40 @@
+"""Shared entry point and small helpers for the package's rclpy nodes."""
+
+from __future__ import annotations
+
+from typing import Callable, Sequence
+
+import rclpy
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+
+
+def run(node_cls: Callable[..., Node] | Sequence[Callable[..., Node]],
+        args: list[str] | None = None) -> int:
+    """Main for console scripts: init, spin one or several nodes, exit cleanly.
+
+    SIGINT (Ctrl-C) and external shutdown end the spin; the nodes are destroyed and the
+    context shut down. Returns the process exit code (0).
+    """
+    classes = list(node_cls) if isinstance(node_cls, (list, tuple)) else [node_cls]
+    rclpy.init(args=args)
+    nodes: list[Node] = []
+    executor = SingleThreadedExecutor()
+    try:
+        for cls in classes:
+            node = cls()
+            nodes.append(node)
+            executor.add_node(node)
+        nodes[0].get_logger().info(
+            "running " + ", ".join(n.get_name() for n in nodes) + " (Ctrl-C to stop)")
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        for node in nodes:
+            executor.remove_node(node)
+            node.destroy_node()
+        executor.shutdown()
+        rclpy.try_shutdown()
+    return 0
+

@@ -1,0 +1,37 @@
+"""ament_python build of explore_seg (colcon) and plain pip installs."""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+PACKAGE = "explore_seg"
+
+setup(
+    name=PACKAGE,
+    version="0.1.0",
+    packages=find_packages(exclude=["test", "test.*", "bench", "scripts"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
+        (f"share/{PACKAGE}", ["package.xml", "README.md"]),
+        (f"share/{PACKAGE}/config", glob("config/*.yaml") + glob("config/*.rviz")),
+        (f"share/{PACKAGE}/worlds", glob("worlds/*")),
+    ],
+    install_requires=["setuptools"],
+    extras_require={"test": ["pytest"]},
+    zip_safe=True,
+    maintainer="explore_seg developers",
+    maintainer_email="explore-seg@example.org",
+    description="Autonomous exploration with 2D-map segmentation and object costmaps",
+    license="Apache-2.0",
+    entry_points={
+        "console_scripts": [
+            "explorer = explore_seg.explorer:main",
+            "frontier_detector = explore_seg.frontier_node:main",
+            "target_selector = explore_seg.selector_node:main",
+            "segmentation = explore_seg.segmentation_node:main",
+            "object_costmap = explore_seg.object_costmap_node:main",
+            "segment_map = explore_seg.segment_cli:main",
+            "sim_bridge = sim_bridge.node:main",
+        ],
+    },
+)

@@ -1,0 +1,87 @@
+"""ParamBinding: declaration from a dataclass, validation on set, pass-through."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import pytest
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from explore_seg.params import ParamBinding, load_node_params, overrides_from_dict
+
+
+@dataclass(frozen=True)
+class DemoParams:
+    rate_hz: float = field(default=2.0, metadata={"doc": "tick rate", "unit": "Hz"})
+    strategy: str = field(default="paper", metadata={"doc": "paper | nearest"})
+    layers: tuple[str, ...] = field(default=(), metadata={"doc": "extra layers"})
+    mount_xy_m: tuple[float, ...] = field(default=(0.1, -0.2), metadata={"doc": "mount", "unit": "m"})
+    enabled: bool = field(default=True, metadata={"doc": "on/off"})
+    max_items: int = field(default=5, metadata={"doc": "bound"})
+    table: dict = field(default_factory=dict, metadata={"ros": False})
+
+    def __post_init__(self) -> None:
+        if not self.rate_hz > 0:
+            raise ValueError(f"rate_hz must be > 0, got {self.rate_hz}")
+        if self.strategy not in ("paper", "nearest"):
+            raise ValueError(f"strategy must be paper or nearest, got {self.strategy!r}")
+
+
+def test_declares_every_field_with_description(ros):
+    node = ros.add(Node("p1", context=ros.context))
+    b = ParamBinding(node, DemoParams())
+    assert b.params == DemoParams()
+    names = {p for p in node._parameters}
+    assert {"rate_hz", "strategy", "layers", "mount_xy_m", "enabled", "max_items"} <= names
+    assert "table" not in names
+    desc = node.describe_parameter("rate_hz")
+    assert desc.description == "tick rate [Hz]"
+
+
+def test_overrides_are_coerced_and_validated(ros):
+    node = ros.add(Node("p2", context=ros.context, parameter_overrides=overrides_from_dict(
+        {"rate_hz": 5, "layers": ["object_costmap"], "mount_xy_m": [0.0, 0.0]})))
+    b = ParamBinding(node, DemoParams())
+    assert b.params.rate_hz == 5.0 and isinstance(b.params.rate_hz, float)
+    assert b.params.layers == ("object_costmap",)
+    assert b.params.mount_xy_m == (0.0, 0.0)
+
+
+def test_invalid_initial_override_raises(ros):
+    node = ros.add(Node("p3", context=ros.context,
+                        parameter_overrides=[Parameter("strategy", value="bogus")]))
+    with pytest.raises(ValueError, match="strategy must be paper or nearest, got 'bogus'"):
+        ParamBinding(node, DemoParams())
+
+
+def test_set_rejects_invalid_and_keeps_old_values(ros):
+    node = ros.add(Node("p4", context=ros.context))
+    b = ParamBinding(node, DemoParams())
+    seen = []
+    b.on_change(lambda old, new: seen.append((old.rate_hz, new.rate_hz)))
+    res = node.set_parameters([Parameter("rate_hz", value=-1.0)])
+    assert not res[0].successful and "rate_hz must be > 0, got -1.0" in res[0].reason
+    assert b.params.rate_hz == 2.0 and seen == []
+    res = node.set_parameters([Parameter("max_items", value="many")])
+    assert not res[0].successful and "expects an int" in res[0].reason
+    res = node.set_parameters([Parameter("rate_hz", value=4.0)])
+    assert res[0].successful and b.params.rate_hz == 4.0 and seen == [(2.0, 4.0)]
+
+
+def test_foreign_parameters_pass_through(ros):
+    node = ros.add(Node("p5", context=ros.context))
+    ParamBinding(node, DemoParams())
+    res = node.set_parameters([Parameter("use_sim_time", value=True)])
+    assert res[0].successful
+
+
+def test_load_node_params_merges_wildcard(tmp_path):
+    f = tmp_path / "p.yaml"
+    f.write_text("/**:\n  ros__parameters:\n    use_sim_time: true\n"
+                 "target_selector:\n  ros__parameters:\n    strategy: nearest\n    sub:\n      a: 1\n")
+    assert load_node_params(f, "target_selector") == {
+        "use_sim_time": True, "strategy": "nearest", "sub.a": 1}
+    f.write_text("target_selector: {}\n")
+    with pytest.raises(ValueError, match="lacks 'ros__parameters'"):
+        load_node_params(f, "target_selector")
