@@ -206,15 +206,15 @@ def load_node_params(path: str | Path, node_name: str) -> dict[str, Any]:
             continue
         if not isinstance(section, dict) or "ros__parameters" not in section:
             raise ValueError(f"{path}: section {key!r} lacks 'ros__parameters'")
-        out.update(_flatten(section["ros__parameters"] or {}))
+        out.update(flatten_params(section["ros__parameters"] or {}))
     return out
 
 
-def _flatten(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+def flatten_params(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
     out: dict[str, Any] = {}
     for k, v in d.items():
         if isinstance(v, dict):
-            out.update(_flatten(v, f"{prefix}{k}."))
+            out.update(flatten_params(v, f"{prefix}{k}."))
         else:
             out[f"{prefix}{k}"] = v
     return out

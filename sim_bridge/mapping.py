@@ -177,6 +177,17 @@ class ScanMapper:
         self._origin_cells = (ox - left, oy - down)
 
     # ------------------------------------------------------------ integration
+    def _flat_index(self, rows: npt.NDArray[np.float32], cols: npt.NDArray[np.float32]
+                    ) -> npt.NDArray[np.int64]:
+        """Flat indices of integral (row, col) values; cells outside the grid are dropped."""
+        h, w = self._log_odds.shape
+        if rows.size == 0:
+            return np.zeros(0, dtype=np.int64)
+        if rows.min() < 0 or cols.min() < 0 or rows.max() >= h or cols.max() >= w:
+            ok = (rows >= 0) & (rows < h) & (cols >= 0) & (cols < w)
+            rows, cols = rows[ok], cols[ok]
+        return rows.astype(np.int64) * w + cols.astype(np.int64)
+
     def integrate_scan(self, pose: tuple[float, float, float],
                        ranges: npt.ArrayLike, angle_min_rad: float,
                        angle_increment_rad: float, range_max_m: float,
@@ -232,32 +243,29 @@ class ScanMapper:
         self._ensure_contains(min(int(ecx.min()), scx), min(int(ecy.min()), scy),
                               max(int(ecx.max()), scx), max(int(ecy.max()), scy))
         ox, oy = self._origin_cells
-        h, w = self._log_odds.shape
 
         # Free samples along every beam, ragged: beam b gets n_b samples strictly before
         # its end (the end cell itself is handled as a hit or left alone for misses).
-        # Work in float32 cell units relative to the grid origin.
-        step = np.float32(p.ray_step_cells)
-        len_cells = (length / res).astype(np.float32)
+        # Free samples along every beam, ragged and in float32 cell units relative to the
+        # origin: beam b gets n_b samples at (k + 0.5) * step, all strictly before its end
+        # (the end cell is handled as a hit, or left alone for a miss).
+        step = float(p.ray_step_cells)
+        len_cells = length / res
         n_samples = np.floor(len_cells / step).astype(np.int64)
         total = int(n_samples.sum())
         if total:
-            beam = np.repeat(np.arange(length.size), n_samples)
             first = np.cumsum(n_samples) - n_samples
-            k = (np.arange(total) - np.repeat(first, n_samples)).astype(np.float32)
-            t = np.minimum((k + np.float32(0.5)) * step, len_cells[beam] - np.float32(1e-3))
-            sx = np.float32(x0 / res - ox)
-            sy = np.float32(y0 / res - oy)
-            fc = np.floor(sx + t * ca.astype(np.float32)[beam]).astype(np.int64)
-            fr = np.floor(sy + t * sa.astype(np.float32)[beam]).astype(np.int64)
-            ok = (fc >= 0) & (fc < w) & (fr >= 0) & (fr < h)
-            free_idx = fr[ok] * w + fc[ok]
+            k = np.arange(total, dtype=np.float32) - np.repeat(
+                first.astype(np.float32) - np.float32(0.5), n_samples)
+            fc = np.floor(np.float32(x0 / res - ox)
+                          + k * np.repeat((ca * step).astype(np.float32), n_samples))
+            fr = np.floor(np.float32(y0 / res - oy)
+                          + k * np.repeat((sa * step).astype(np.float32), n_samples))
+            free_idx = self._flat_index(fr, fc)
         else:
             free_idx = np.zeros(0, dtype=np.int64)
-        hc = ecx[hit] - ox
-        hr = ecy[hit] - oy
-        ok = (hc >= 0) & (hc < w) & (hr >= 0) & (hr < h)
-        hit_idx = hr[ok] * w + hc[ok]
+        hit_idx = self._flat_index((ecy[hit] - oy).astype(np.float32),
+                                   (ecx[hit] - ox).astype(np.float32))
 
         lo = self._log_odds.reshape(-1)
         obs = self._observed.reshape(-1)

@@ -8,9 +8,13 @@ This module holds the data types every part of the simulator shares. Loading
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
+
+if TYPE_CHECKING:
+    from explore_seg.core.grid import GridMap
 
 SHAPES = ("box", "cylinder")
 
@@ -81,3 +85,14 @@ class World:
     room_kinds: dict[int, str] = field(default_factory=dict)
     base_grid: object | None = None                         # explore_seg.core.grid.GridMap
     description: str = ""
+
+    def occupancy(self, resolution_m: float, z_low: float, z_high: float) -> "GridMap":
+        """Occupancy GridMap (0 / 100 int8) over ``bounds`` of the primitives in a height band.
+
+        ``z_low == z_high`` selects primitives cut by that plane (``zmin <= z <= zmax``),
+        otherwise those occupying some height in ``(z_low, z_high)``; a cell is occupied
+        when a cross-section overlaps it by more than 1 mm (see
+        :func:`sim_bridge.worlds.rasterize`).
+        """
+        from sim_bridge.worlds import rasterize   # local import: worlds imports this module
+        return rasterize(self, resolution_m, z_low, z_high)

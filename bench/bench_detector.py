@@ -1,0 +1,85 @@
+#!/usr/bin/env python3
+"""Benchmark the 2D detector: p50/p95 milliseconds per 640x480 frame.
+
+Times the whole :meth:`Detector.detect` (letterbox, network, decoding, NMS) for the torch
+and onnx backends at input sizes 320 and 416, plus the oracle backend on a synthetic
+semantic image. Prints, never asserts. Uses a real frame from the shared data when present,
+else seeded noise. Target: <= 30 ms per frame on 2 CPU threads.
+
+Usage::
+
+    python bench/bench_detector.py [--iterations 30] [--warmup 3] [--threads 2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from explore_seg.core.detector import Detector, DetectorParams  # noqa: E402
+
+SHARED = Path(os.environ.get("EXPLORE_SEG_SHARED", ROOT.parent / "shared"))
+FRAME = SHARED / "data" / "rgbd" / "tum_fr3_office_color.png"
+FRAME_HW = (480, 640)
+
+
+def _frame() -> tuple[np.ndarray, str]:
+    if FRAME.is_file():
+        return cv2.cvtColor(cv2.imread(str(FRAME)), cv2.COLOR_BGR2RGB), FRAME.name
+    rng = np.random.default_rng(0)
+    return rng.integers(0, 256, FRAME_HW + (3,), dtype=np.uint8), "seeded noise"
+
+
+def _time(fn, iterations: int, warmup: int) -> tuple[float, float, int]:
+    for _ in range(warmup):
+        fn()
+    times = []
+    n = 0
+    for _ in range(iterations):
+        t0 = time.perf_counter()
+        n = len(fn())
+        times.append((time.perf_counter() - t0) * 1e3)
+    return float(np.percentile(times, 50)), float(np.percentile(times, 95)), n
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--iterations", type=int, default=30)
+    parser.add_argument("--warmup", type=int, default=3)
+    parser.add_argument("--threads", type=int, default=2)
+    args = parser.parse_args(argv)
+    rgb, source = _frame()
+    print(f"frame: {source} {rgb.shape[1]}x{rgb.shape[0]}, threads {args.threads}, "
+          f"{args.iterations} iterations (machine load inflates these numbers)")
+    print(f"{'backend':>8} {'size':>5} {'load_s':>7} {'p50_ms':>8} {'p95_ms':>8} {'dets':>5}")
+    for backend in ("torch", "onnx"):
+        for size in (320, 416):
+            t0 = time.perf_counter()
+            det = Detector(DetectorParams(backend=backend, input_size=size,
+                                          num_threads=args.threads))
+            load_s = time.perf_counter() - t0
+            p50, p95, n = _time(lambda: det.detect(rgb), args.iterations, args.warmup)
+            print(f"{backend:>8} {size:>5} {load_s:>7.2f} {p50:>8.1f} {p95:>8.1f} {n:>5}")
+    semantic = np.zeros(FRAME_HW, np.uint8)
+    semantic[200:400, 50:250] = 1
+    semantic[250:450, 350:600] = 2
+    oracle = Detector(DetectorParams(backend="oracle", oracle_jitter_px=2.0),
+                      sim_class_ids={"chair": 1, "table": 2})
+    p50, p95, n = _time(lambda: oracle.detect(rgb, semantic=semantic), args.iterations,
+                        args.warmup)
+    print(f"{'oracle':>8} {'-':>5} {'-':>7} {p50:>8.1f} {p95:>8.1f} {n:>5}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1474 @@
+"""Object-based costmap: 3D boxes of furniture from 2D detections + depth, and their fusion.
+
+Pipeline (Kim, Kim & Lee, RA-L 2022, Sec. IV-C), per detection of a class with a size prior:
+
+1. crop the depth image by the 2D box (valid depth only, every ``pixel_stride``-th pixel,
+   coarser for large boxes: ``max_box_samples``);
+2. back-project to the optical frame and move to the map frame (robot pose + extrinsics);
+3. drop floor and ceiling points, voxel-downsample;
+4. statistical outlier removal (mean distance to the k nearest neighbours);
+5. Euclidean clustering (connected components of the fixed-radius neighbour graph);
+6. keep the cluster that best matches the box (most points, weighted by closeness to
+   the box centre; ties to the nearest median depth), plus clusters that lie inside its
+   clamped box (parts split at thin links);
+7. 3D box: footprint orientation by PCA (or minimum-area rectangle), extents by min/max
+   along the footprint axes, heights from the floor (or the lowest point) to the top;
+8. clamp the extents by the class's size prior: grown to the minimum away from the camera
+   (the hidden side), shrunk to the maximum around the centre.
+
+Unclassified objects (furniture the detector misses): leg-like clusters of the 2D laser
+scan (a few cm wide, isolated) are grouped when they are close; depth points above the
+lidar plane over such a group (inside the legs' rectangle grown by a radius, in a height
+band) give the footprint of an ``"unknown"`` object, so a table whose legs the lidar sees
+and whose top it misses becomes an obstacle.
+
+:class:`ObjectMap` fuses the per-frame boxes in the map frame (merging re-detections,
+counting misses where the camera sees through an object, bounded size) and renders the
+occupancy layer, the virtual point cloud and the boxes.
+
+Frames: ``map`` (x, y on the floor, z up, z = 0 at the floor), ``base_link`` on the floor
+at the robot pose, camera optical frame (see :mod:`explore_seg.core.camera`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Iterable, Protocol, Sequence
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+from scipy import sparse
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from explore_seg.core.camera import CameraIntrinsics, apply_transform, invert_transform
+from explore_seg.core.grid import GridMap
+
+#: Class name given to objects found from laser legs without a detection.
+UNKNOWN_CLASS = "unknown"
+
+_ORIENTATION_METHODS = ("pca", "min_area_rect")
+_POSE_SOURCES = ("odom", "pose")
+
+
+def _doc(doc: str, unit: str | None = None, **extra) -> dict:
+    meta = {"doc": doc}
+    if unit:
+        meta["unit"] = unit
+    meta.update(extra)
+    return meta
+
+
+# ------------------------------------------------------------------------- params
+
+
+@dataclass(frozen=True)
+class ObjectParams:
+    """Parameters of the object costmap (core pipeline + the ``object_costmap`` node).
+
+    Raises
+    ------
+    ValueError
+        From ``__post_init__`` on any out-of-range value (message names field and value).
+    """
+
+    # --- node: rate, inputs, frames
+    rate_hz: float = field(default=2.0, metadata=_doc(
+        "Rate at which the newest colour/depth pair is processed; frames arriving "
+        "in between are dropped, never queued", "Hz"))
+    sync_tolerance_s: float = field(default=0.05, metadata=_doc(
+        "Largest stamp difference for pairing colour with depth", "s"))
+    pose_tolerance_s: float = field(default=0.2, metadata=_doc(
+        "Largest stamp difference between the depth image and the robot pose used for it; "
+        "frames without a pose this close are dropped", "s"))
+    pose_source: str = field(default="odom", metadata=_doc(
+        "Where the robot pose in the map frame comes from: 'odom' (nav_msgs/Odometry on "
+        "'odom') or 'pose' (PoseWithCovarianceStamped on 'pose')"))
+    map_frame: str = field(default="map", metadata=_doc(
+        "Frame of the published cloud and markers"))
+    map_transient_local: bool = field(default=True, metadata=_doc(
+        "Subscribe to 'map' transient-local (latched); false for a volatile publisher"))
+    camera_x_m: float = field(default=0.064, metadata=_doc(
+        "Camera position in base_link, x (default: sim_bridge's TurtleBot3-like mount)", "m"))
+    camera_y_m: float = field(default=0.0, metadata=_doc(
+        "Camera position in base_link, y", "m"))
+    camera_z_m: float = field(default=0.2, metadata=_doc(
+        "Camera position in base_link (above the floor), z", "m"))
+    camera_roll_rad: float = field(default=0.0, metadata=_doc(
+        "Camera body frame (x forward, z up) roll in base_link", "rad"))
+    camera_pitch_rad: float = field(default=0.0, metadata=_doc(
+        "Camera body frame pitch in base_link (positive looks down)", "rad"))
+    camera_yaw_rad: float = field(default=0.0, metadata=_doc(
+        "Camera body frame yaw in base_link", "rad"))
+    lidar_x_m: float = field(default=-0.064, metadata=_doc(
+        "Lidar position in base_link, x", "m"))
+    lidar_y_m: float = field(default=0.0, metadata=_doc("Lidar position in base_link, y", "m"))
+    lidar_yaw_rad: float = field(default=0.0, metadata=_doc("Lidar yaw in base_link", "rad"))
+    oracle_sim_class_ids: tuple[str, ...] = field(default=(
+        "none:0", "wall:1", "chair:2", "table:3", "desk:4", "cabinet:5", "sofa:6", "other:7"),
+        metadata=_doc("Oracle detector only: the simulator's semantic class table as "
+                      "'name:id' pairs (mirrors sim_bridge.sensors.CLASS_IDS)"))
+    # --- detection -> 3D box
+    min_score: float = field(default=0.4, metadata=_doc(
+        "Detections below this confidence are ignored", "0..1"))
+    max_depth_m: float = field(default=4.0, metadata=_doc(
+        "Depth readings farther than this are ignored", "m"))
+    pixel_stride: int = field(default=2, metadata=_doc(
+        "Use every n-th pixel (rows and columns) inside a detection box", "px"))
+    max_box_samples: int = field(default=8000, metadata=_doc(
+        "Larger boxes are sampled with a larger stride so that at most about this many "
+        "pixels are used per detection"))
+    voxel_size_m: float = field(default=0.03, metadata=_doc(
+        "Voxel edge for downsampling the cropped cloud (0 disables)", "m"))
+    floor_height_m: float = field(default=0.05, metadata=_doc(
+        "Points lower than this above the floor (map z) are floor and dropped", "m"))
+    ceiling_height_m: float = field(default=2.2, metadata=_doc(
+        "Points higher than this above the floor are dropped", "m"))
+    sor_k: int = field(default=8, metadata=_doc(
+        "Statistical outlier removal: number of neighbours"))
+    sor_std: float = field(default=2.5, metadata=_doc(
+        "Statistical outlier removal: keep points whose mean neighbour distance is below "
+        "mean + sor_std * std"))
+    cluster_tolerance_m: float = field(default=0.08, metadata=_doc(
+        "Euclidean clustering: points closer than this join one cluster", "m"))
+    min_grazing_angle_rad: float = field(default=0.07, metadata=_doc(
+        "Euclidean clustering: points of neighbouring sampled pixels are also linked when "
+        "as far apart as a surface seen at this angle gives (a table top from a low "
+        "camera is sampled in strips); larger = fewer links", "rad"))
+    min_cluster_points: int = field(default=15, metadata=_doc(
+        "Euclidean clustering: smaller clusters are discarded"))
+    merge_parts_fraction: float = field(default=0.5, metadata=_doc(
+        "After choosing a cluster and clamping its box, other clusters with at least this "
+        "fraction of their points inside that footprint (grown by cluster_tolerance_m) join "
+        "it (a chair's backrest, seat and base split at the thin stem; a table's far legs "
+        "below a top seen at a grazing angle); 1 disables it", "0..1"))
+    orientation_method: str = field(default="min_area_rect", metadata=_doc(
+        "Footprint orientation: 'min_area_rect' (minimum-area enclosing rectangle) or "
+        "'pca' (the paper; tilts by 5-10 deg on partly seen, unevenly sampled tops)"))
+    boxes_on_floor: bool = field(default=True, metadata=_doc(
+        "Extend every box down to the floor (furniture stands on it)"))
+    priors_path: str = field(default="", metadata=_doc(
+        "YAML of per-class size priors; empty = the package's config/object_priors.yaml. "
+        "Classes without a prior are ignored", read_only=True))
+    # --- fusion
+    merge_distance_m: float = field(default=0.5, metadata=_doc(
+        "Re-detections of a class whose centres are closer than this merge", "m"))
+    merge_iou: float = field(default=0.2, metadata=_doc(
+        "Re-detections whose footprints overlap more than this (IoU) merge", "0..1"))
+    max_objects: int = field(default=200, metadata=_doc(
+        "Most objects kept; the least confirmed are dropped first"))
+    clear_after_misses: int = field(default=3, metadata=_doc(
+        "An object is removed after this many frames in which the camera sees through it"))
+    miss_depth_margin_m: float = field(default=0.15, metadata=_doc(
+        "Depth must exceed the box surface by this to count as seeing through it", "m"))
+    miss_free_fraction: float = field(default=0.6, metadata=_doc(
+        "Fraction of the box's visible sample points that must be seen through for a miss",
+        "0..1"))
+    miss_min_samples: int = field(default=6, metadata=_doc(
+        "Fewest visible sample points of a box needed to judge a miss"))
+    miss_sample_spacing_m: float = field(default=0.1, metadata=_doc(
+        "Spacing of the sample points on a box used to judge misses", "m"))
+    # --- outputs
+    object_value: int = field(default=100, metadata=_doc(
+        "Layer value inside object footprints", "0..100"))
+    background_value: int = field(default=0, metadata=_doc(
+        "Layer value outside objects (0 = no object known, -1 = unknown)", "-1..100"))
+    cloud_spacing_m: float = field(default=0.05, metadata=_doc(
+        "Spacing of the virtual point cloud filling each box", "m"))
+    max_cloud_points: int = field(default=200000, metadata=_doc(
+        "Most virtual cloud points; the spacing grows to stay below"))
+    # --- unclassified objects (laser legs)
+    unknown_enabled: bool = field(default=True, metadata=_doc(
+        "Find unclassified objects from laser leg clusters and depth above them"))
+    leg_cluster_gap_m: float = field(default=0.05, metadata=_doc(
+        "Scan points closer than this form one cluster", "m"))
+    leg_min_width_m: float = field(default=0.0, metadata=_doc(
+        "Narrowest leg cluster (extent of its points; one-point clusters have 0)", "m"))
+    leg_max_width_m: float = field(default=0.15, metadata=_doc(
+        "Widest leg cluster", "m"))
+    leg_min_points: int = field(default=1, metadata=_doc("Fewest scan points in a leg"))
+    leg_isolation_m: float = field(default=0.15, metadata=_doc(
+        "A leg has no other scan point within this distance of its centre", "m"))
+    leg_group_distance_m: float = field(default=1.6, metadata=_doc(
+        "Legs closer than this belong to one piece of furniture", "m"))
+    min_legs: int = field(default=2, metadata=_doc("Fewest legs of an unclassified object"))
+    leg_max_range_m: float = field(default=4.0, metadata=_doc(
+        "Only scan points closer than this to the robot are used", "m"))
+    unknown_radius_m: float = field(default=0.3, metadata=_doc(
+        "Depth points within this of the legs' rectangle belong to the object", "m"))
+    unknown_min_height_m: float = field(default=0.2, metadata=_doc(
+        "Lowest depth point (above the lidar plane) of an unclassified object", "m"))
+    unknown_max_height_m: float = field(default=1.2, metadata=_doc(
+        "Highest depth point of an unclassified object", "m"))
+    unknown_min_points: int = field(default=20, metadata=_doc(
+        "Fewest depth points over a leg group to make an object"))
+    unknown_pixel_stride: int = field(default=4, metadata=_doc(
+        "Use every n-th depth pixel (rows and columns) for unclassified objects", "px"))
+
+    def __post_init__(self) -> None:
+        positive = ("rate_hz", "max_depth_m", "ceiling_height_m", "cluster_tolerance_m",
+                    "merge_distance_m", "miss_sample_spacing_m", "cloud_spacing_m",
+                    "leg_cluster_gap_m", "leg_max_width_m", "leg_isolation_m",
+                    "leg_group_distance_m", "leg_max_range_m", "unknown_max_height_m",
+                    "sor_std")
+        for name in positive:
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be finite and > 0, got {v}")
+        non_negative = ("sync_tolerance_s", "pose_tolerance_s", "voxel_size_m",
+                        "miss_depth_margin_m", "leg_min_width_m", "unknown_radius_m")
+        for name in non_negative:
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be finite and >= 0, got {v}")
+        finite = ("camera_x_m", "camera_y_m", "camera_z_m", "camera_roll_rad",
+                  "camera_pitch_rad", "camera_yaw_rad", "lidar_x_m", "lidar_y_m",
+                  "lidar_yaw_rad", "floor_height_m", "unknown_min_height_m")
+        for name in finite:
+            v = getattr(self, name)
+            if not math.isfinite(v):
+                raise ValueError(f"{name} must be finite, got {v}")
+        fractions = ("min_score", "merge_iou", "miss_free_fraction",
+                     "merge_parts_fraction")
+        for name in fractions:
+            v = getattr(self, name)
+            if not 0.0 <= v <= 1.0:
+                raise ValueError(f"{name} must be in [0, 1], got {v}")
+        at_least_one = ("pixel_stride", "max_box_samples", "sor_k", "min_cluster_points", "max_objects",
+                        "clear_after_misses", "miss_min_samples", "max_cloud_points",
+                        "leg_min_points", "min_legs", "unknown_min_points",
+                        "unknown_pixel_stride")
+        for name in at_least_one:
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
+        if not 0.0 < self.min_grazing_angle_rad <= 0.5 * math.pi:
+            raise ValueError(f"min_grazing_angle_rad must be in (0, pi/2], "
+                             f"got {self.min_grazing_angle_rad}")
+        if self.floor_height_m >= self.ceiling_height_m:
+            raise ValueError(
+                f"floor_height_m ({self.floor_height_m}) must be below ceiling_height_m "
+                f"({self.ceiling_height_m})")
+        if self.unknown_min_height_m >= self.unknown_max_height_m:
+            raise ValueError(
+                f"unknown_min_height_m ({self.unknown_min_height_m}) must be below "
+                f"unknown_max_height_m ({self.unknown_max_height_m})")
+        if self.leg_min_width_m > self.leg_max_width_m:
+            raise ValueError(
+                f"leg_min_width_m ({self.leg_min_width_m}) must not exceed leg_max_width_m "
+                f"({self.leg_max_width_m})")
+        if self.orientation_method not in _ORIENTATION_METHODS:
+            raise ValueError(f"orientation_method must be one of {_ORIENTATION_METHODS}, "
+                             f"got {self.orientation_method!r}")
+        if self.pose_source not in _POSE_SOURCES:
+            raise ValueError(
+                f"pose_source must be one of {_POSE_SOURCES}, got {self.pose_source!r}")
+        if not 0 <= self.object_value <= 100:
+            raise ValueError(f"object_value must be in 0..100, got {self.object_value}")
+        if not -1 <= self.background_value <= 100:
+            raise ValueError(f"background_value must be in -1..100, got {self.background_value}")
+        if not self.map_frame:
+            raise ValueError("map_frame must not be empty")
+        parse_class_ids(self.oracle_sim_class_ids)
+
+
+def parse_class_ids(pairs: Sequence[str]) -> dict[str, int]:
+    """Parse ``"name:id"`` pairs (a simulator's semantic class table) into a dict.
+
+    Raises
+    ------
+    ValueError
+        On a pair that is not ``name:non-negative integer`` or a name listed twice.
+    """
+    out: dict[str, int] = {}
+    for pair in pairs:
+        name, sep, value = str(pair).partition(":")
+        name, value = name.strip(), value.strip()
+        if not sep or not name or not value.isdigit():
+            raise ValueError(f"class ids must be 'name:id' with an integer id >= 0, got {pair!r}")
+        if name in out:
+            raise ValueError(f"class id table lists {name!r} twice")
+        out[name] = int(value)
+    return out
+
+
+# -------------------------------------------------------------------------- priors
+
+
+@dataclass(frozen=True)
+class SizePrior:
+    """Plausible size of a class: footprint sides in [min_xy_m, max_xy_m], height in
+    [min_z_m, max_z_m] (metres).
+
+    Raises
+    ------
+    ValueError
+        On non-finite, negative or inverted ranges.
+    """
+
+    min_xy_m: float
+    max_xy_m: float
+    min_z_m: float
+    max_z_m: float
+
+    def __post_init__(self) -> None:
+        vals = (self.min_xy_m, self.max_xy_m, self.min_z_m, self.max_z_m)
+        if not all(math.isfinite(v) and v >= 0 for v in vals):
+            raise ValueError(f"size prior values must be finite and >= 0, got {vals}")
+        if self.min_xy_m > self.max_xy_m or self.min_z_m > self.max_z_m:
+            raise ValueError(f"size prior ranges must satisfy min <= max, got {vals}")
+        if self.max_xy_m <= 0 or self.max_z_m <= 0:
+            raise ValueError(f"size prior maxima must be > 0, got {vals}")
+
+
+def default_priors_path() -> Path:
+    """The package's ``config/object_priors.yaml`` (source tree or installed share).
+
+    Raises
+    ------
+    FileNotFoundError
+        When neither location holds the file.
+    """
+    here = Path(__file__).resolve().parents[2] / "config" / "object_priors.yaml"
+    if here.is_file():
+        return here
+    try:
+        from ament_index_python.packages import get_package_share_directory
+
+        shared = Path(get_package_share_directory("explore_seg")) / "config" / "object_priors.yaml"
+        if shared.is_file():
+            return shared
+    except (ImportError, LookupError, ValueError):
+        pass
+    raise FileNotFoundError(f"object priors not found at {here} nor in the package share")
+
+
+def load_priors(path: str | Path | None = None) -> dict[str, SizePrior]:
+    """Read per-class size priors.
+
+    Parameters
+    ----------
+    path : str or Path, optional
+        YAML with ``priors: {class_name: {min_xy_m, max_xy_m, min_z_m, max_z_m}}``;
+        ``None`` or ``""`` = :func:`default_priors_path`.
+
+    Returns
+    -------
+    dict of str to SizePrior
+        Keyed by class name (COCO names, e.g. ``"chair"``, ``"dining table"``).
+
+    Raises
+    ------
+    ValueError
+        When the file does not hold a ``priors`` mapping of complete, valid entries.
+    FileNotFoundError
+        When the file does not exist.
+    """
+    import yaml
+
+    p = default_priors_path() if path in (None, "") else Path(path)
+    data = yaml.safe_load(Path(p).read_text())
+    if not isinstance(data, dict) or not isinstance(data.get("priors"), dict):
+        raise ValueError(
+            f"{p}: expected a mapping with a 'priors' mapping, got {type(data).__name__}")
+    out: dict[str, SizePrior] = {}
+    keys = ("min_xy_m", "max_xy_m", "min_z_m", "max_z_m")
+    for name, entry in data["priors"].items():
+        if not isinstance(entry, dict) or set(keys) - set(entry):
+            raise ValueError(f"{p}: prior {name!r} must have keys {keys}, got {entry!r}")
+        try:
+            out[str(name)] = SizePrior(*(float(entry[k]) for k in keys))
+        except (TypeError, ValueError) as err:
+            raise ValueError(f"{p}: prior {name!r}: {err}") from err
+    if not out:
+        raise ValueError(f"{p}: 'priors' is empty")
+    return out
+
+
+# ------------------------------------------------------------------------- objects
+
+
+@dataclass(frozen=True)
+class Object3D:
+    """An oriented 3D box in the map frame.
+
+    Parameters
+    ----------
+    cls : str
+        Class name (COCO name or :data:`UNKNOWN_CLASS`).
+    score : float
+        Detection confidence (1.0 for unclassified objects).
+    center_xyz : tuple of float
+        Box centre (metres, map frame).
+    size_xyz : tuple of float
+        Extent along the box's own x (yaw direction), y and z axes (metres, >= 0).
+    yaw : float
+        Rotation of the box about z (radians), normalised to [-pi/2, pi/2).
+    n_points : int
+        Points the box was fitted to.
+    """
+
+    cls: str
+    score: float
+    center_xyz: tuple[float, float, float]
+    size_xyz: tuple[float, float, float]
+    yaw: float
+    n_points: int
+
+    def footprint(self) -> npt.NDArray[np.float64]:
+        """The 4 corners (x, y) of the footprint, counter-clockwise, shape (4, 2)."""
+        return rect_corners(self.center_xyz[:2], self.size_xyz[:2], self.yaw)
+
+
+class BoxDetection(Protocol):
+    """What the pipeline needs from a 2D detection (``core.detector.Detection`` fits)."""
+
+    cls_name: str
+    score: float
+    box_xyxy: Sequence[float]
+
+
+@dataclass(frozen=True)
+class DepthFrame:
+    """A depth image with its camera model and pose in the map frame.
+
+    Parameters
+    ----------
+    depth_m : ndarray of float32, shape (H, W)
+        Depth along the optical axis (metres), NaN / <= 0 invalid.
+    intrinsics : CameraIntrinsics
+        Matching ``depth_m``'s size.
+    map_from_optical : ndarray of float64, shape (4, 4)
+        Transform taking optical-frame points to the map frame.
+
+    Raises
+    ------
+    ValueError
+        On a size mismatch or a malformed transform.
+    """
+
+    depth_m: npt.NDArray[np.float32]
+    intrinsics: CameraIntrinsics
+    map_from_optical: npt.NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        depth = np.asarray(self.depth_m)
+        if depth.ndim != 2:
+            raise ValueError(f"depth must be 2D (H, W), got shape {depth.shape}")
+        if depth.shape != self.intrinsics.shape:
+            raise ValueError(f"depth shape {depth.shape} does not match camera info "
+                             f"(height, width)={self.intrinsics.shape}")
+        t = np.asarray(self.map_from_optical, dtype=np.float64)
+        if t.shape != (4, 4) or not np.all(np.isfinite(t)):
+            raise ValueError(f"map_from_optical must be a finite 4x4 matrix, got shape {t.shape}")
+        object.__setattr__(self, "depth_m", depth.astype(np.float32, copy=False))
+        object.__setattr__(self, "map_from_optical", t)
+
+    @property
+    def camera_xyz(self) -> npt.NDArray[np.float64]:
+        """Camera position in the map frame, shape (3,)."""
+        return self.map_from_optical[:3, 3].copy()
+
+
+# ----------------------------------------------------------------- geometry steps
+
+
+def rect_corners(center_xy: Sequence[float], size_xy: Sequence[float], yaw: float
+                 ) -> npt.NDArray[np.float64]:
+    """Corners of a rotated rectangle, counter-clockwise, shape (4, 2)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    hx, hy = 0.5 * float(size_xy[0]), 0.5 * float(size_xy[1])
+    local = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
+    rot = np.array([[c, -s], [s, c]])
+    return local @ rot.T + np.asarray(center_xy, dtype=np.float64)[:2]
+
+
+def box_mask(box_xyxy: Sequence[float], shape: tuple[int, int], stride: int = 1
+             ) -> npt.NDArray[np.bool_]:
+    """Pixel mask of a 2D box (inclusive corners, clipped to the image).
+
+    Parameters
+    ----------
+    box_xyxy : sequence of 4 float
+        ``(x0, y0, x1, y1)`` pixel corners, x = column, y = row.
+    shape : tuple of int
+        Image ``(H, W)``.
+    stride : int
+        Only every ``stride``-th row and column (counted from the image origin) is set.
+
+    Returns
+    -------
+    ndarray of bool, shape (H, W)
+
+    Raises
+    ------
+    ValueError
+        If the box is not 4 finite numbers, is inverted or lies entirely outside the image.
+    """
+    b = np.asarray(box_xyxy, dtype=np.float64).reshape(-1)
+    if b.shape != (4,) or not np.all(np.isfinite(b)):
+        raise ValueError(f"box must be 4 finite numbers (x0, y0, x1, y1), got {box_xyxy!r}")
+    x0, y0, x1, y1 = b
+    if x1 < x0 or y1 < y0:
+        raise ValueError(f"box must have x0 <= x1 and y0 <= y1, got {tuple(b)}")
+    h, w = shape
+    c0, r0 = max(int(math.floor(x0)), 0), max(int(math.floor(y0)), 0)
+    c1, r1 = min(int(math.ceil(x1)), w - 1), min(int(math.ceil(y1)), h - 1)
+    if c0 > c1 or r0 > r1:
+        raise ValueError(f"box {tuple(b)} lies outside the {w}x{h} image")
+    mask = np.zeros((h, w), dtype=bool)
+    r0s = r0 + (-r0) % stride
+    c0s = c0 + (-c0) % stride
+    mask[r0s:r1 + 1:stride, c0s:c1 + 1:stride] = True
+    return mask
+
+
+def box_stride(box_xyxy: Sequence[float], min_stride: int, max_samples: int) -> int:
+    """Pixel stride for a box: at least ``min_stride``, larger for boxes that would
+    otherwise give more than ``max_samples`` pixels."""
+    b = np.asarray(box_xyxy, dtype=np.float64).reshape(-1)
+    area = max(float(b[2] - b[0] + 1), 1.0) * max(float(b[3] - b[1] + 1), 1.0) \
+        if b.shape == (4,) and np.all(np.isfinite(b)) else 1.0
+    return max(int(min_stride), int(math.ceil(math.sqrt(area / max(max_samples, 1)))))
+
+
+def voxel_downsample(points: npt.NDArray[np.floating], voxel_m: float,
+                     return_inverse: bool = False
+                     ) -> npt.NDArray[np.int64] | tuple[npt.NDArray[np.int64],
+                                                        npt.NDArray[np.int64]]:
+    """Indices of one point per occupied voxel (the first in input order).
+
+    Parameters
+    ----------
+    points : ndarray, shape (N, 3)
+    voxel_m : float
+        Voxel edge; ``<= 0`` keeps every point.
+    return_inverse : bool
+        Also return, for every input point, the position of its voxel's representative
+        in the returned index array.
+
+    Returns
+    -------
+    keep : ndarray of int64, shape (M,)
+        Sorted indices into ``points``.
+    inverse : ndarray of int64, shape (N,)
+        Only with ``return_inverse``: ``points[keep[inverse[i]]]`` shares point i's voxel.
+    """
+    n = len(points)
+    if voxel_m <= 0 or n == 0:
+        keep = np.arange(n, dtype=np.int64)
+        return (keep, keep.copy()) if return_inverse else keep
+    keys = np.floor(np.asarray(points, dtype=np.float64) / voxel_m).astype(np.int64)
+    keys -= keys.min(axis=0)
+    dims = keys.max(axis=0) + 1
+    if np.prod(dims.astype(np.float64)) < 2.0**62:
+        flat = np.ravel_multi_index(keys.T, dims)
+    else:
+        flat = np.unique(keys, axis=0, return_inverse=True)[1].reshape(-1)
+    _, first, inverse = np.unique(flat, return_index=True, return_inverse=True)
+    order = np.argsort(first, kind="stable")
+    keep = first[order].astype(np.int64)
+    if not return_inverse:
+        return keep
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return keep, rank[inverse.reshape(-1)].astype(np.int64)
+
+
+def pixel_grid_edges(pixels_uv: npt.NDArray[np.floating], points: npt.NDArray[np.floating],
+                     depth_m: npt.NDArray[np.floating], stride: int, link_m: float,
+                     link_ratio: float) -> npt.NDArray[np.int64]:
+    """Links between points of neighbouring sampled pixels that are close in 3D.
+
+    Surfaces seen at a grazing angle (a table top from a low camera) are sampled in
+    strips farther apart than any fixed clustering distance; neighbouring pixels on them
+    are still linked when their 3D distance is at most ``max(link_m, link_ratio * depth)``.
+
+    Parameters
+    ----------
+    pixels_uv : ndarray, shape (N, 2)
+        Pixel (column, row) of each point, on a grid of step ``stride``.
+    points : ndarray, shape (N, 3)
+    depth_m : ndarray, shape (N,)
+    stride : int
+    link_m, link_ratio : float
+
+    Returns
+    -------
+    ndarray of int64, shape (E, 2)
+        Index pairs into the inputs (right and down neighbours).
+    """
+    n = len(points)
+    if n == 0:
+        return np.zeros((0, 2), dtype=np.int64)
+    gc = (np.asarray(pixels_uv[:, 0]) // stride).astype(np.int64)
+    gr = (np.asarray(pixels_uv[:, 1]) // stride).astype(np.int64)
+    gc -= gc.min()
+    gr -= gr.min()
+    index = np.full((gr.max() + 2, gc.max() + 2), -1, dtype=np.int64)
+    index[gr, gc] = np.arange(n)
+    pairs = []
+    for dr, dc in ((0, 1), (1, 0)):
+        j = index[gr + dr, gc + dc]
+        ok = j >= 0
+        i, j = np.flatnonzero(ok), j[ok]
+        dist = np.linalg.norm(points[i] - points[j], axis=1)
+        near = dist <= np.maximum(link_m, link_ratio * np.minimum(depth_m[i], depth_m[j]))
+        pairs.append(np.stack([i[near], j[near]], axis=1))
+    return np.vstack(pairs).astype(np.int64)
+
+
+def statistical_outlier_mask(points: npt.NDArray[np.floating], k: int, std_ratio: float
+                             ) -> npt.NDArray[np.bool_]:
+    """Statistical outlier removal (as PCL / Open3D): keep points whose mean distance to
+    their ``k`` nearest neighbours is at most ``mean + std_ratio * std`` over the cloud.
+
+    Parameters
+    ----------
+    points : ndarray, shape (N, 3)
+    k : int
+        Neighbours (>= 1).
+    std_ratio : float
+        Threshold in standard deviations.
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+        True for inliers. Clouds of at most ``k`` points are kept whole.
+
+    Raises
+    ------
+    ValueError
+        If ``k < 1``.
+    """
+    if k < 1:
+        raise ValueError(f"k must be >= 1, got {k}")
+    pts = np.asarray(points, dtype=np.float64)
+    n = len(pts)
+    if n <= k:
+        return np.ones(n, dtype=bool)
+    dist, _ = cKDTree(pts).query(pts, k=k + 1)
+    mean_d = dist[:, 1:].mean(axis=1)
+    return mean_d <= mean_d.mean() + std_ratio * mean_d.std()
+
+
+def euclidean_clusters(points: npt.NDArray[np.floating], tolerance_m: float, min_points: int,
+                       extra_edges: npt.NDArray[np.integer] | None = None
+                       ) -> npt.NDArray[np.int64]:
+    """Euclidean clustering: connected components of the graph linking points closer than
+    ``tolerance_m``.
+
+    Parameters
+    ----------
+    points : ndarray, shape (N, D)
+    tolerance_m : float
+        Link distance (> 0).
+    min_points : int
+        Clusters with fewer points get label -1.
+    extra_edges : ndarray of int, shape (E, 2), optional
+        Further links (index pairs), e.g. from :func:`pixel_grid_edges`.
+
+    Returns
+    -------
+    ndarray of int64, shape (N,)
+        Labels 0, 1, ... ordered by decreasing cluster size; -1 for small clusters.
+
+    Raises
+    ------
+    ValueError
+        If ``tolerance_m <= 0``.
+    """
+    if not tolerance_m > 0:
+        raise ValueError(f"tolerance_m must be > 0, got {tolerance_m}")
+    pts = np.asarray(points, dtype=np.float64)
+    n = len(pts)
+    if n == 0:
+        return np.zeros(0, dtype=np.int64)
+    pairs = cKDTree(pts).query_pairs(tolerance_m, output_type="ndarray").reshape(-1, 2)
+    if extra_edges is not None and len(extra_edges):
+        pairs = np.vstack([pairs, np.asarray(extra_edges, dtype=pairs.dtype).reshape(-1, 2)])
+    graph = sparse.coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])),
+                              shape=(n, n))
+    _, comp = connected_components(graph, directed=False)
+    counts = np.bincount(comp)
+    order = np.argsort(-counts, kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    labels = rank[comp].astype(np.int64)
+    labels[counts[comp] < min_points] = -1
+    return labels
+
+
+def select_cluster(labels: npt.NDArray[np.integer], pixels_uv: npt.NDArray[np.floating],
+                   depth_m: npt.NDArray[np.floating], box_xyxy: Sequence[float]) -> int:
+    """Pick the cluster that is the detected object.
+
+    Every point votes for its cluster with a weight that falls linearly from 1 at the
+    box centre to 0 at the box border in each image direction (a tent); detectors centre
+    boxes on the object, while background shows at the borders and through gaps. Ties
+    go to the nearest median depth (objects occlude what is seen around them).
+
+    Parameters
+    ----------
+    labels : ndarray of int, shape (N,)
+        Cluster labels (-1 = none).
+    pixels_uv : ndarray, shape (N, 2)
+        Pixel (column, row) of each point.
+    depth_m : ndarray, shape (N,)
+        Optical-axis depth of each point.
+    box_xyxy : sequence of 4 float
+
+    Returns
+    -------
+    int
+        Chosen label, -1 if there is no cluster.
+    """
+    valid = labels >= 0
+    if not np.any(valid):
+        return -1
+    x0, y0, x1, y1 = (float(v) for v in box_xyxy)
+    cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+    hw, hh = max(0.5 * (x1 - x0), 0.5), max(0.5 * (y1 - y0), 0.5)
+    weight = (np.clip(1.0 - np.abs(pixels_uv[:, 0] - cx) / hw, 0.0, 1.0)
+              * np.clip(1.0 - np.abs(pixels_uv[:, 1] - cy) / hh, 0.0, 1.0))
+    votes = np.bincount(labels[valid], weights=weight[valid])
+    best, best_key = -1, None
+    for lab in np.flatnonzero(np.bincount(labels[valid])):
+        key = (round(float(votes[lab]), 9), -float(np.median(depth_m[labels == lab])))
+        if best_key is None or key > best_key:
+            best, best_key = int(lab), key
+    return best
+
+
+def footprint_orientation(points_xy: npt.NDArray[np.floating], method: str = "pca"
+                          ) -> tuple[tuple[float, float], tuple[float, float], float]:
+    """Oriented rectangle around footprint points.
+
+    Parameters
+    ----------
+    points_xy : ndarray, shape (N, 2), N >= 1
+    method : {"pca", "min_area_rect"}
+        ``"pca"``: axes from the principal components of the points (the paper);
+        ``"min_area_rect"``: the minimum-area enclosing rectangle.
+
+    Returns
+    -------
+    center_xy : tuple of float
+        Centre of the rectangle (mid-range along each axis, not the point mean).
+    size_xy : tuple of float
+        Extents along the rectangle's x axis (direction ``yaw``, the long side) and y axis;
+        ``size_xy[0] >= size_xy[1]``.
+    yaw : float
+        In [-pi/2, pi/2).
+
+    Raises
+    ------
+    ValueError
+        On an empty or non-(N, 2) input or an unknown method.
+
+    Examples
+    --------
+    >>> pts = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]])
+    >>> c, s, yaw = footprint_orientation(pts)
+    >>> [round(v, 6) for v in (*c, *s, yaw)]
+    [1.0, 0.5, 2.0, 1.0, 0.0]
+    """
+    pts = np.asarray(points_xy, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) == 0:
+        raise ValueError(f"points_xy must have shape (N>=1, 2), got {pts.shape}")
+    if method not in _ORIENTATION_METHODS:
+        raise ValueError(f"method must be one of {_ORIENTATION_METHODS}, got {method!r}")
+    if method == "min_area_rect" and len(pts) >= 3:
+        (rcx, rcy), (w, h), ang = cv2.minAreaRect(pts.astype(np.float32))
+        yaw = math.radians(ang)
+    elif len(pts) >= 2:
+        mean = pts.mean(axis=0)
+        cov = np.cov((pts - mean).T)
+        evals, evecs = np.linalg.eigh(cov)
+        major = evecs[:, int(np.argmax(evals))]
+        yaw = math.atan2(major[1], major[0])
+    else:
+        yaw = 0.0
+    yaw = _wrap_half_pi(yaw)
+    c, s = math.cos(yaw), math.sin(yaw)
+    u = pts[:, 0] * c + pts[:, 1] * s
+    v = -pts[:, 0] * s + pts[:, 1] * c
+    um, vm = 0.5 * (u.min() + u.max()), 0.5 * (v.min() + v.max())
+    center = (um * c - vm * s, um * s + vm * c)
+    size_u, size_v = float(np.ptp(u)), float(np.ptp(v))
+    if size_u < size_v:     # canonical: x along the long side
+        size_u, size_v, yaw = size_v, size_u, _wrap_half_pi(yaw + 0.5 * math.pi)
+    return (float(center[0]), float(center[1])), (size_u, size_v), yaw
+
+
+def _wrap_half_pi(yaw: float) -> float:
+    """Wrap an axis direction (defined modulo pi) to [-pi/2, pi/2)."""
+    return (yaw + 0.5 * math.pi) % math.pi - 0.5 * math.pi
+
+
+def clamp_to_prior(center_xyz: Sequence[float], size_xyz: Sequence[float], yaw: float,
+                   prior: SizePrior, camera_xy: Sequence[float] | None = None,
+                   floor_z_m: float | None = 0.0
+                   ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """Clamp a box's extents to a size prior.
+
+    Footprint sides shorter than ``prior.min_xy_m`` grow to it: away from the camera when
+    ``camera_xy`` is given (the near face was measured, the far side was hidden), around
+    the centre otherwise. Sides longer than ``prior.max_xy_m`` shrink around the centre.
+    A height below ``prior.min_z_m`` grows upwards from the bottom when ``floor_z_m`` is
+    given (the box stands on the floor), around the centre otherwise; above
+    ``prior.max_z_m`` it shrinks around the centre (or keeps the bottom on the floor).
+
+    Parameters
+    ----------
+    center_xyz, size_xyz : sequence of 3 float
+    yaw : float
+    prior : SizePrior
+    camera_xy : sequence of 2 float, optional
+    floor_z_m : float, optional
+
+    Returns
+    -------
+    center_xyz, size_xyz : tuple of float
+    """
+    cx, cy, cz = (float(v) for v in center_xyz)
+    sx, sy, sz = (float(v) for v in size_xyz)
+    axes = (np.array([math.cos(yaw), math.sin(yaw)]), np.array([-math.sin(yaw), math.cos(yaw)]))
+    centre = np.array([cx, cy])
+    sizes = [sx, sy]
+    for i in range(2):
+        if sizes[i] < prior.min_xy_m:
+            grow = prior.min_xy_m - sizes[i]
+            if camera_xy is not None:
+                away = float(np.dot(centre - np.asarray(camera_xy, dtype=np.float64), axes[i]))
+                sign = 1.0 if away >= 0 else -1.0
+                centre = centre + axes[i] * sign * 0.5 * grow
+            sizes[i] = prior.min_xy_m
+        elif sizes[i] > prior.max_xy_m:
+            sizes[i] = prior.max_xy_m
+    bottom = cz - 0.5 * sz
+    on_floor = floor_z_m is not None and abs(bottom - floor_z_m) < 1e-6
+    if sz < prior.min_z_m:
+        sz = prior.min_z_m
+        cz = bottom + 0.5 * sz if on_floor else cz
+    elif sz > prior.max_z_m:
+        sz = prior.max_z_m
+        cz = bottom + 0.5 * sz if on_floor else cz
+    return (float(centre[0]), float(centre[1]), cz), (sizes[0], sizes[1], sz)
+
+
+def fit_box(points_map: npt.NDArray[np.floating], cls: str, score: float,
+            prior: SizePrior | None, params: ObjectParams,
+            camera_xy: Sequence[float] | None = None) -> Object3D:
+    """3D box of a cluster in the map frame, clamped by the class's prior.
+
+    Parameters
+    ----------
+    points_map : ndarray, shape (N, 3), N >= 1
+    cls : str
+    score : float
+    prior : SizePrior or None
+        None skips the clamp.
+    params : ObjectParams
+        ``orientation_method`` and ``boxes_on_floor`` are used.
+    camera_xy : sequence of 2 float, optional
+        Camera position (map frame): footprints grow away from it.
+
+    Returns
+    -------
+    Object3D
+
+    Raises
+    ------
+    ValueError
+        If ``points_map`` is empty or not (N, 3).
+    """
+    pts = np.asarray(points_map, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0:
+        raise ValueError(f"points_map must have shape (N>=1, 3), got {pts.shape}")
+    cxy, sxy, yaw = footprint_orientation(pts[:, :2], params.orientation_method)
+    zmin = 0.0 if params.boxes_on_floor else float(pts[:, 2].min())
+    zmax = max(float(pts[:, 2].max()), zmin)
+    center = (cxy[0], cxy[1], 0.5 * (zmin + zmax))
+    size = (sxy[0], sxy[1], zmax - zmin)
+    if prior is not None:
+        center, size = clamp_to_prior(center, size, yaw, prior, camera_xy,
+                                      0.0 if params.boxes_on_floor else None)
+    return Object3D(cls, float(score), tuple(center), tuple(size), yaw, int(len(pts)))
+
+
+# ----------------------------------------------------------------- per frame
+
+
+def frame_points(frame: DepthFrame, mask: npt.NDArray[np.bool_], max_depth_m: float
+                 ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64],
+                            npt.NDArray[np.float32]]:
+    """Map-frame points, pixel (u, v) and depth of the valid pixels under ``mask``.
+
+    Returns
+    -------
+    points_map : ndarray of float64, shape (N, 3)
+    pixels_uv : ndarray of float64, shape (N, 2)
+    depth : ndarray of float32, shape (N,)
+    """
+    d = frame.depth_m
+    with np.errstate(invalid="ignore"):
+        valid = mask & np.isfinite(d) & (d > 0) & (d <= max_depth_m)
+    rows, cols = np.nonzero(valid)
+    z = d[rows, cols]
+    k = frame.intrinsics
+    x = (cols - k.cx) * z / k.fx
+    y = (rows - k.cy) * z / k.fy
+    pts_opt = np.stack([x, y, z], axis=1)
+    pts_map = apply_transform(frame.map_from_optical, pts_opt)
+    return pts_map, np.stack([cols, rows], axis=1).astype(np.float64), z
+
+
+def segment_detection(frame: DepthFrame, box_xyxy: Sequence[float], cls: str,
+                      score: float, prior: SizePrior | None, params: ObjectParams
+                      ) -> tuple[Object3D, npt.NDArray[np.float64], npt.NDArray[np.float32]] | None:
+    """Run the detection -> 3D box pipeline for one 2D box, keeping the object's points.
+
+    Parameters
+    ----------
+    frame : DepthFrame
+    box_xyxy : sequence of 4 float
+        Pixel box ``(x0, y0, x1, y1)``.
+    cls : str
+    score : float
+    prior : SizePrior or None
+    params : ObjectParams
+
+    Returns
+    -------
+    (Object3D, points_map (N, 3) float64, depth_m (N,) float32) or None
+        The box and the (downsampled, outlier-free) cluster points it was fitted to with
+        their optical depth; None when no cluster of ``min_cluster_points`` remains.
+
+    Raises
+    ------
+    ValueError
+        When the box is malformed or outside the image (see :func:`box_mask`).
+    """
+    stride = box_stride(box_xyxy, params.pixel_stride, params.max_box_samples)
+    mask = box_mask(box_xyxy, frame.depth_m.shape, stride)
+    pts, uv, depth = frame_points(frame, mask, params.max_depth_m)
+    keep = (pts[:, 2] >= params.floor_height_m) & (pts[:, 2] <= params.ceiling_height_m)
+    pts, uv, depth = pts[keep], uv[keep], depth[keep]
+    # Links between neighbouring pixels (grazing surfaces), moved to voxel level.
+    k = frame.intrinsics
+    link_ratio = stride / (0.5 * (k.fx + k.fy)) / math.sin(params.min_grazing_angle_rad)
+    pix_edges = pixel_grid_edges(uv, pts, depth, stride, params.cluster_tolerance_m, link_ratio)
+    idx, voxel_of = voxel_downsample(pts, params.voxel_size_m, return_inverse=True)
+    pts, uv, depth = pts[idx], uv[idx], depth[idx]
+    if len(pts) < params.min_cluster_points:
+        return None
+    inl = statistical_outlier_mask(pts, params.sor_k, params.sor_std)
+    new_index = np.cumsum(inl) - 1
+    edges = voxel_of[pix_edges]
+    edges = edges[(edges[:, 0] != edges[:, 1]) & inl[edges[:, 0]] & inl[edges[:, 1]]]
+    pts, uv, depth = pts[inl], uv[inl], depth[inl]
+    labels = euclidean_clusters(pts, params.cluster_tolerance_m, params.min_cluster_points,
+                                new_index[edges])
+    best = select_cluster(labels, uv, depth, box_xyxy)
+    if best < 0:
+        return None
+    cam_xy = frame.camera_xyz[:2]
+    chosen = labels == best
+    obj = fit_box(pts[chosen], cls, score, prior, params, cam_xy)
+    if params.merge_parts_fraction < 1.0 and labels.max() > 0:
+        # Other parts of the same object (split at thin links) lie in the clamped box.
+        lab = labels[labels >= 0]
+        inside = points_in_rect(pts[labels >= 0, :2], obj.center_xyz[:2], obj.size_xyz[:2],
+                                obj.yaw, params.cluster_tolerance_m)
+        frac = np.bincount(lab, weights=inside) / np.bincount(lab)
+        parts = np.flatnonzero(frac >= params.merge_parts_fraction)
+        if len(parts) > 1 or (len(parts) == 1 and parts[0] != best):
+            chosen = np.isin(labels, np.union1d(parts, [best]))
+            obj = fit_box(pts[chosen], cls, score, prior, params, cam_xy)
+    return obj, pts[chosen], depth[chosen]
+
+
+def object_from_detection(frame: DepthFrame, box_xyxy: Sequence[float], cls: str,
+                          score: float, prior: SizePrior | None, params: ObjectParams
+                          ) -> Object3D | None:
+    """The box of :func:`segment_detection` alone (None when there is none).
+
+    Raises
+    ------
+    ValueError
+        When the box is malformed or outside the image (see :func:`box_mask`).
+    """
+    seg = segment_detection(frame, box_xyxy, cls, score, prior, params)
+    return None if seg is None else seg[0]
+
+
+def scan_legs(scan_xy: npt.NDArray[np.floating], params: ObjectParams,
+              robot_xy: Sequence[float] | None = None) -> npt.NDArray[np.float64]:
+    """Centres of leg-like clusters in a 2D scan.
+
+    A leg is a cluster (link distance ``leg_cluster_gap_m``) of ``leg_min_points`` or
+    more points whose extent is within [``leg_min_width_m``, ``leg_max_width_m``] and
+    with no other scan point within ``leg_isolation_m`` of its centre (walls, boxes and
+    people's bodies are wider or not isolated).
+
+    Parameters
+    ----------
+    scan_xy : ndarray, shape (N, 2)
+        Scan points (any planar frame, usually map).
+    params : ObjectParams
+    robot_xy : sequence of 2 float, optional
+        Points farther than ``leg_max_range_m`` from it are ignored.
+
+    Returns
+    -------
+    ndarray of float64, shape (M, 2)
+
+    Raises
+    ------
+    ValueError
+        If ``scan_xy`` is not (N, 2).
+    """
+    pts = np.asarray(scan_xy, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 2:
+        raise ValueError(f"scan_xy must have shape (N, 2), got {pts.shape}")
+    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    if robot_xy is not None and len(pts):
+        near = np.hypot(pts[:, 0] - robot_xy[0], pts[:, 1] - robot_xy[1]) <= params.leg_max_range_m
+        pts = pts[near]
+    if len(pts) == 0:
+        return np.zeros((0, 2))
+    labels = euclidean_clusters(pts, params.leg_cluster_gap_m, 1)
+    tree = cKDTree(pts)
+    centres = []
+    for lab in range(int(labels.max()) + 1):
+        sel = pts[labels == lab]
+        if len(sel) < params.leg_min_points:
+            continue
+        width = float(np.hypot(*np.ptp(sel, axis=0)))
+        if not params.leg_min_width_m <= width <= params.leg_max_width_m:
+            continue
+        centre = sel.mean(axis=0)
+        radius = params.leg_isolation_m + 0.5 * width
+        if len(tree.query_ball_point(centre, radius)) > len(sel):
+            continue
+        centres.append(centre)
+    return np.array(centres, dtype=np.float64).reshape(-1, 2)
+
+
+def group_legs(legs_xy: npt.NDArray[np.floating], max_distance_m: float, min_legs: int
+               ) -> list[npt.NDArray[np.float64]]:
+    """Group legs closer than ``max_distance_m`` (single linkage).
+
+    Returns
+    -------
+    list of ndarray, each shape (K, 2), K >= ``min_legs``
+        Largest group first.
+    """
+    legs = np.asarray(legs_xy, dtype=np.float64).reshape(-1, 2)
+    if len(legs) == 0:
+        return []
+    labels = euclidean_clusters(legs, max_distance_m, min_legs)
+    return [legs[labels == lab] for lab in range(int(labels.max()) + 1)] if labels.max() >= 0 \
+        else []
+
+
+def points_in_rect(points_xy: npt.NDArray[np.floating], center_xy: Sequence[float],
+                   size_xy: Sequence[float], yaw: float, margin_m: float = 0.0
+                   ) -> npt.NDArray[np.bool_]:
+    """True for points inside a rotated rectangle grown by ``margin_m`` on every side."""
+    pts = np.asarray(points_xy, dtype=np.float64)
+    c, s = math.cos(yaw), math.sin(yaw)
+    dx, dy = pts[:, 0] - center_xy[0], pts[:, 1] - center_xy[1]
+    u, v = dx * c + dy * s, -dx * s + dy * c
+    return (np.abs(u) <= 0.5 * size_xy[0] + margin_m) & (np.abs(v) <= 0.5 * size_xy[1] + margin_m)
+
+
+def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
+                    params: ObjectParams, known: Iterable[Object3D] = (),
+                    prior: SizePrior | None = None) -> list[Object3D]:
+    """Unclassified objects: leg groups in the scan with depth points above them.
+
+    Depth points (every ``unknown_pixel_stride``-th pixel) between
+    ``unknown_min_height_m`` and ``unknown_max_height_m`` inside the legs' minimum-area
+    rectangle grown by ``unknown_radius_m``, and farther than ``leg_max_width_m`` from
+    every leg (the legs alone are no top), make the object when there are at least
+    ``unknown_min_points`` of them; its box spans them and the legs.
+
+    Parameters
+    ----------
+    frame : DepthFrame
+    scan_xy_map : ndarray, shape (N, 2)
+        Laser points in the map frame.
+    params : ObjectParams
+    known : iterable of Object3D
+        Objects already found; leg groups lying inside one of them are skipped.
+    prior : SizePrior, optional
+        Prior of the ``unknown`` class (clamps the boxes).
+
+    Returns
+    -------
+    list of Object3D
+        With ``cls == UNKNOWN_CLASS`` and score 1.0.
+    """
+    cam_xy = frame.camera_xyz[:2]
+    legs = scan_legs(scan_xy_map, params, cam_xy)
+    groups = group_legs(legs, params.leg_group_distance_m, params.min_legs)
+    known = list(known)
+    kept = []
+    for g in groups:
+        inside = np.zeros(len(g), dtype=bool)
+        for obj in known:
+            inside |= points_in_rect(g, obj.center_xyz[:2], obj.size_xyz[:2], obj.yaw,
+                                     params.unknown_radius_m)
+        if not np.all(inside):
+            kept.append(g)
+    if not kept:
+        return []
+    stride = params.unknown_pixel_stride
+    mask = np.zeros(frame.depth_m.shape, dtype=bool)
+    mask[::stride, ::stride] = True
+    pts, _, _ = frame_points(frame, mask, params.max_depth_m)
+    band = (pts[:, 2] >= params.unknown_min_height_m) & (pts[:, 2] <= params.unknown_max_height_m)
+    pts = pts[band]
+    out = []
+    for g in kept:
+        if len(g) >= 3:
+            (rcx, rcy), (w, h), ang = cv2.minAreaRect(g.astype(np.float32))
+            rc, rs, ryaw = (rcx, rcy), (w, h), math.radians(ang)
+        else:
+            rc, rs, ryaw = footprint_orientation(g, "pca")
+        sel = pts[points_in_rect(pts[:, :2], rc, rs, ryaw, params.unknown_radius_m)]
+        # The legs themselves are not evidence of a top: drop points right above them.
+        if len(sel):
+            on_leg = cKDTree(g).query(sel[:, :2], distance_upper_bound=params.leg_max_width_m)[0]
+            sel = sel[~np.isfinite(on_leg)]
+        if len(sel) < params.unknown_min_points:
+            continue
+        inl = statistical_outlier_mask(sel, params.sor_k, params.sor_std)
+        sel = sel[inl]
+        legs3d = np.column_stack([g, np.full(len(g), float(sel[:, 2].min()))])
+        obj = fit_box(np.vstack([sel, legs3d]), UNKNOWN_CLASS, 1.0, prior, params, cam_xy)
+        out.append(replace(obj, n_points=int(len(sel))))
+    return out
+
+
+# ------------------------------------------------------------------------- fusion
+
+
+def footprint_iou(a: Object3D, b: Object3D) -> float:
+    """Intersection over union of two footprints (rotated rectangles)."""
+    pa = a.footprint().astype(np.float32)
+    pb = b.footprint().astype(np.float32)
+    area_a = a.size_xyz[0] * a.size_xyz[1]
+    area_b = b.size_xyz[0] * b.size_xyz[1]
+    if area_a <= 0 or area_b <= 0:
+        return 0.0
+    inter, _ = cv2.intersectConvexConvex(pa, pb)
+    inter = max(float(inter), 0.0)
+    union = area_a + area_b - inter
+    return inter / union if union > 0 else 0.0
+
+
+@dataclass
+class TrackedObject:
+    """An object of the :class:`ObjectMap` with its bookkeeping."""
+
+    id: int
+    obj: Object3D
+    hits: int = 1
+    misses: int = 0
+    last_seen_ns: int = 0
+
+
+def box_samples(obj: Object3D, spacing_m: float, surface_only: bool = True
+                ) -> npt.NDArray[np.float64]:
+    """Points on (or filling) a box on a grid of ``spacing_m`` (cell centres), shape (N, 3).
+
+    ``surface_only`` keeps only the outer layer of the grid.
+    """
+    n = [max(int(math.ceil(s / spacing_m)), 1) for s in obj.size_xyz]
+    axes = [((np.arange(k) + 0.5) / k - 0.5) * s for k, s in zip(n, obj.size_xyz)]
+    gx, gy, gz = np.meshgrid(*axes, indexing="ij")
+    if surface_only:
+        ix, iy, iz = np.meshgrid(*(np.arange(k) for k in n), indexing="ij")
+        outer = ((ix == 0) | (ix == n[0] - 1) | (iy == 0) | (iy == n[1] - 1)
+                 | (iz == 0) | (iz == n[2] - 1))
+        gx, gy, gz = gx[outer], gy[outer], gz[outer]
+    local = np.stack([gx.ravel(), gy.ravel(), gz.ravel()], axis=1)
+    c, s = math.cos(obj.yaw), math.sin(obj.yaw)
+    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return local @ rot.T + np.asarray(obj.center_xyz)
+
+
+class ObjectMap:
+    """Objects fused in the map frame.
+
+    Parameters
+    ----------
+    params : ObjectParams
+    priors : dict of str to SizePrior
+        Merged sizes are capped by the class's ``max_xy_m`` / ``max_z_m``.
+    """
+
+    def __init__(self, params: ObjectParams, priors: dict[str, SizePrior]) -> None:
+        self.params = params
+        self.priors = dict(priors)
+        self._objects: list[TrackedObject] = []
+        self._next_id = 0
+
+    def __len__(self) -> int:
+        return len(self._objects)
+
+    @property
+    def tracked(self) -> list[TrackedObject]:
+        """Current objects with bookkeeping (copy of the list)."""
+        return list(self._objects)
+
+    def objects(self) -> list[Object3D]:
+        """Current objects."""
+        return [t.obj for t in self._objects]
+
+    def clear(self) -> None:
+        """Forget every object."""
+        self._objects.clear()
+
+    # ------------------------------------------------------------------ update
+    def update(self, observations: Sequence[Object3D], frame: DepthFrame | None = None,
+               stamp_ns: int = 0) -> None:
+        """Fuse one frame's observations; count misses of unseen objects.
+
+        Parameters
+        ----------
+        observations : sequence of Object3D
+            Boxes found in this frame (detections and unclassified).
+        frame : DepthFrame, optional
+            The frame they came from; needed to count misses (objects in view that the
+            camera sees through). Without it nothing is missed.
+        stamp_ns : int
+            Frame time.
+        """
+        matched: set[int] = set()
+        for obs in observations:
+            t = self._best_match(obs)
+            if t is None:
+                t = TrackedObject(self._next_id, obs, last_seen_ns=stamp_ns)
+                self._next_id += 1
+                self._objects.append(t)
+            else:
+                t.obj = self._merge(t.obj, obs)
+                t.hits += 1
+                t.misses = 0
+                t.last_seen_ns = stamp_ns
+            matched.add(t.id)
+        self._merge_overlapping()
+        if frame is not None:
+            for t in self._objects:
+                if t.id not in matched and self._seen_through(t.obj, frame):
+                    t.misses += 1
+            self._objects = [t for t in self._objects
+                             if t.misses < self.params.clear_after_misses]
+        if len(self._objects) > self.params.max_objects:
+            self._objects.sort(key=lambda t: (t.misses, -t.hits, -t.last_seen_ns, t.id))
+            del self._objects[self.params.max_objects:]
+            self._objects.sort(key=lambda t: t.id)
+
+    @staticmethod
+    def _compatible(a: str, b: str) -> bool:
+        return a == b or a == UNKNOWN_CLASS or b == UNKNOWN_CLASS
+
+    def _best_match(self, obs: Object3D) -> TrackedObject | None:
+        best, best_key = None, None
+        for t in self._objects:
+            if not self._compatible(t.obj.cls, obs.cls):
+                continue
+            dist = math.dist(t.obj.center_xyz[:2], obs.center_xyz[:2])
+            iou = footprint_iou(t.obj, obs)
+            if dist <= self.params.merge_distance_m or iou > self.params.merge_iou:
+                key = (iou, -dist)
+                if best_key is None or key > best_key:
+                    best, best_key = t, key
+        return best
+
+    def _merge(self, old: Object3D, new: Object3D) -> Object3D:
+        """Weighted centre, max of sizes (capped by the prior), classified class wins."""
+        cls = old.cls if old.cls != UNKNOWN_CLASS else new.cls
+        w_old, w_new = float(max(old.n_points, 1)), float(max(new.n_points, 1))
+        # Align the new box's axes to the old one (boxes are symmetric under 90 degrees).
+        d = _wrap_half_pi(new.yaw - old.yaw)
+        nsx, nsy = new.size_xyz[0], new.size_xyz[1]
+        if abs(d) > 0.25 * math.pi:
+            nsx, nsy = nsy, nsx
+            d = d - math.copysign(0.5 * math.pi, d)
+        yaw = _wrap_half_pi(old.yaw + d * w_new / (w_old + w_new))
+        centre = tuple(float(v) for v in
+                       (np.asarray(old.center_xyz) * w_old + np.asarray(new.center_xyz) * w_new)
+                       / (w_old + w_new))
+        size = [max(old.size_xyz[0], nsx), max(old.size_xyz[1], nsy),
+                max(old.size_xyz[2], new.size_xyz[2])]
+        prior = self.priors.get(cls)
+        if prior is not None:
+            size = [min(size[0], prior.max_xy_m), min(size[1], prior.max_xy_m),
+                    min(size[2], prior.max_z_m)]
+        if self.params.boxes_on_floor:
+            centre = (centre[0], centre[1], 0.5 * size[2])
+        return Object3D(cls, max(old.score, new.score), centre, tuple(size), yaw,
+                        int(min(old.n_points + new.n_points, 2**31 - 1)))
+
+    def _merge_overlapping(self) -> None:
+        """Merge tracked objects that came to overlap (same class, IoU > merge_iou)."""
+        i = 0
+        while i < len(self._objects):
+            j = i + 1
+            while j < len(self._objects):
+                a, b = self._objects[i], self._objects[j]
+                if (self._compatible(a.obj.cls, b.obj.cls)
+                        and footprint_iou(a.obj, b.obj) > self.params.merge_iou):
+                    a.obj = self._merge(a.obj, b.obj)
+                    a.hits += b.hits
+                    a.misses = min(a.misses, b.misses)
+                    a.last_seen_ns = max(a.last_seen_ns, b.last_seen_ns)
+                    del self._objects[j]
+                else:
+                    j += 1
+            i += 1
+
+    def _seen_through(self, obj: Object3D, frame: DepthFrame) -> bool:
+        """True when the camera sees beyond most of the box's visible sample points."""
+        p = self.params
+        samples = box_samples(obj, p.miss_sample_spacing_m, surface_only=True)
+        opt = apply_transform(invert_transform(frame.map_from_optical), samples)
+        z = opt[:, 2]
+        k = frame.intrinsics
+        front = (z > 1e-6) & (z <= p.max_depth_m)
+        if not np.any(front):
+            return False
+        opt, z = opt[front], z[front]
+        u = np.round(k.fx * opt[:, 0] / z + k.cx).astype(np.int64)
+        v = np.round(k.fy * opt[:, 1] / z + k.cy).astype(np.int64)
+        inside = (u >= 0) & (u < k.width) & (v >= 0) & (v < k.height)
+        u, v, z = u[inside], v[inside], z[inside]
+        measured = frame.depth_m[v, u]
+        ok = np.isfinite(measured) & (measured > 0)
+        if np.count_nonzero(ok) < p.miss_min_samples:
+            return False
+        through = measured[ok] > z[ok] + p.miss_depth_margin_m
+        return float(np.mean(through)) >= p.miss_free_fraction
+
+    # ----------------------------------------------------------------- outputs
+    def rasterize(self, grid: GridMap) -> GridMap:
+        """The object layer on ``grid``'s geometry.
+
+        Parameters
+        ----------
+        grid : GridMap
+            Geometry (size, resolution, origin, frame, stamp) to align with; its data is
+            not read.
+
+        Returns
+        -------
+        GridMap
+            ``object_value`` inside every footprint (cells whose centre is inside, plus
+            the outline so thin objects keep at least one cell), ``background_value``
+            elsewhere.
+        """
+        p = self.params
+        img = np.full(grid.shape, p.background_value, dtype=np.int8)
+        shift = 4
+        polys = []
+        for t in self._objects:
+            corners = t.obj.footprint()
+            rows, cols = grid.world_to_cell_float(corners[:, 0], corners[:, 1])
+            # Cell (r, c) spans [c, c + 1): its centre is at c + 0.5 -> pixel c in cv2.
+            pts = np.stack([cols - 0.5, rows - 0.5], axis=1) * (1 << shift)
+            polys.append(np.round(pts).astype(np.int32))
+        if polys:
+            cv2.fillPoly(img, polys, int(p.object_value), lineType=cv2.LINE_8, shift=shift)
+            cv2.polylines(img, polys, True, int(p.object_value), lineType=cv2.LINE_8,
+                          shift=shift)
+        return grid.with_data(img)
+
+    def virtual_cloud(self, spacing_m: float | None = None) -> npt.NDArray[np.float32]:
+        """Points filling every box (for a Nav2 voxel/obstacle layer), shape (N, 3).
+
+        The spacing grows (doubling) until at most ``max_cloud_points`` points remain.
+
+        Raises
+        ------
+        ValueError
+            If ``spacing_m`` is not > 0.
+        """
+        spacing = self.params.cloud_spacing_m if spacing_m is None else float(spacing_m)
+        if not spacing > 0:
+            raise ValueError(f"spacing_m must be > 0, got {spacing_m}")
+        if not self._objects:
+            return np.zeros((0, 3), dtype=np.float32)
+        while True:
+            total = sum(int(np.prod([max(math.ceil(s / spacing), 1) for s in t.obj.size_xyz]))
+                        for t in self._objects)
+            if total <= self.params.max_cloud_points:
+                break
+            spacing *= 2.0
+        clouds = [box_samples(t.obj, spacing, surface_only=False) for t in self._objects]
+        return np.vstack(clouds).astype(np.float32)
+
+    def boxes(self) -> list[tuple[int, Object3D]]:
+        """``(id, Object3D)`` of every object (for markers)."""
+        return [(t.id, t.obj) for t in self._objects]
+
+
+# ---------------------------------------------------------------------- pipeline
+
+
+@dataclass
+class FrameResult:
+    """Objects found in one frame and the boxes dropped on the way (with reasons)."""
+
+    objects: list[Object3D]
+    unknown: list[Object3D]
+    dropped: list[str]
+
+
+def process_frame(frame: DepthFrame, detections: Iterable[BoxDetection],
+                  priors: dict[str, SizePrior], params: ObjectParams,
+                  scan_xy_map: npt.NDArray[np.floating] | None = None) -> FrameResult:
+    """Detections + depth (+ scan) of one frame -> 3D boxes in the map frame.
+
+    Detections below ``min_score`` or of classes without a prior are skipped; malformed
+    or out-of-image boxes are dropped and named in ``FrameResult.dropped``.
+
+    Parameters
+    ----------
+    frame : DepthFrame
+    detections : iterable of BoxDetection
+    priors : dict of str to SizePrior
+    params : ObjectParams
+    scan_xy_map : ndarray, shape (N, 2), optional
+        Laser points in the map frame; None or empty skips unclassified objects.
+
+    Returns
+    -------
+    FrameResult
+    """
+    objects: list[Object3D] = []
+    dropped: list[str] = []
+    for det in detections:
+        if det.score < params.min_score or det.cls_name == UNKNOWN_CLASS \
+                or det.cls_name not in priors:
+            continue
+        try:
+            obj = object_from_detection(frame, det.box_xyxy, det.cls_name, det.score,
+                                        priors[det.cls_name], params)
+        except ValueError as err:
+            dropped.append(f"{det.cls_name}: {err}")
+            continue
+        if obj is not None:
+            objects.append(obj)
+    unknown: list[Object3D] = []
+    if params.unknown_enabled and scan_xy_map is not None and len(scan_xy_map):
+        unknown = unknown_objects(frame, scan_xy_map, params, objects,
+                                  priors.get(UNKNOWN_CLASS))
+    return FrameResult(objects, unknown, dropped)

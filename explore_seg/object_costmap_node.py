@@ -1,0 +1,381 @@
+"""``object_costmap`` node: furniture boxes from YOLO + depth (+ laser legs) as a map layer.
+
+Callbacks only store the newest inputs. A timer on the ROS clock (``rate_hz``) takes the
+newest colour/depth pair whose stamps match (``sync_tolerance_s``), the robot pose nearest
+to it, runs the detector and :func:`explore_seg.core.objects.process_frame`, fuses the
+boxes into an :class:`~explore_seg.core.objects.ObjectMap` and publishes the layer
+(aligned with the latest ``map``), the virtual cloud, markers and timings. Frames that
+arrive while a frame is processed are dropped (only the newest few are kept for pairing).
+"""
+
+from __future__ import annotations
+
+import collections
+import math
+import time
+from enum import Enum
+from typing import Any
+
+import numpy as np
+from geometry_msgs.msg import PoseWithCovarianceStamped
+from nav_msgs.msg import OccupancyGrid, Odometry
+from rclpy.node import Node
+from sensor_msgs.msg import CameraInfo, Image, LaserScan, PointCloud2
+from std_msgs.msg import Float64MultiArray, MultiArrayDimension
+from visualization_msgs.msg import Marker, MarkerArray
+
+from explore_seg import convert
+from explore_seg.core.camera import base_from_optical, map_from_base
+from explore_seg.core.detector import Detector, DetectorParams
+from explore_seg.core.grid import GridMap, quaternion_from_yaw
+from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D, ObjectMap,
+                                      ObjectParams, load_priors, parse_class_ids,
+                                      process_frame)
+from explore_seg.node_util import run
+from explore_seg.params import ParamBinding
+from explore_seg.qos import MAP_QOS, RELIABLE_QOS, SENSOR_QOS, map_qos
+
+#: Colour/depth/semantic messages kept for stamp pairing (older ones are dropped).
+_PAIR_BUFFER = 4
+#: Robot poses kept for matching image stamps.
+_POSE_BUFFER = 200
+#: Seconds between repeated warnings of one kind.
+_WARN_PERIOD_S = 5.0
+#: Marker colours (r, g, b) per class; others use the last entry.
+_CLASS_RGB = {"chair": (0.9, 0.3, 0.2), "dining table": (0.6, 0.4, 0.2),
+              "couch": (0.5, 0.3, 0.6), "bed": (0.3, 0.5, 0.8), UNKNOWN_CLASS: (0.9, 0.8, 0.1),
+              "": (0.6, 0.6, 0.6)}
+
+
+class State(Enum):
+    """What the node is waiting for."""
+
+    WAITING_FOR_CAMERA_INFO = 0
+    WAITING_FOR_FRAMES = 1
+    RUNNING = 2
+
+
+def _stamp_ns(msg: Any) -> int:
+    return convert.stamp_to_ns(msg.header.stamp)
+
+
+class ObjectCostmapNode(Node):
+    """Object costmap layer (see module docstring)."""
+
+    def __init__(self, *, context=None, parameter_overrides=None,
+                 node_name: str = "object_costmap", namespace: str = "") -> None:
+        super().__init__(node_name, context=context,
+                         parameter_overrides=parameter_overrides or [], namespace=namespace)
+        self._p = ParamBinding(self, ObjectParams())
+        self._dp = ParamBinding(self, DetectorParams(), prefix="detector.")
+        p = self._p.params
+        self._priors = load_priors(p.priors_path or None)
+        self._objects = ObjectMap(p, self._priors)
+        self._detector: Detector | None = None
+        self._detector_failed = False
+
+        self._info = None
+        self._colors: collections.deque = collections.deque(maxlen=_PAIR_BUFFER)
+        self._depths: collections.deque = collections.deque(maxlen=_PAIR_BUFFER)
+        self._semantics: collections.deque = collections.deque(maxlen=_PAIR_BUFFER)
+        self._poses: collections.deque = collections.deque(maxlen=_POSE_BUFFER)
+        self._scan: LaserScan | None = None
+        self._grid: GridMap | None = None
+        self._grid_published: GridMap | None = None
+        self._last_depth_ns: int | None = None
+        self._state = State.WAITING_FOR_CAMERA_INFO
+        #: Count of dropped inputs per reason (bounded by the fixed set of reasons).
+        self.dropped: collections.Counter = collections.Counter()
+        #: Last message per drop reason.
+        self.last_drop: dict[str, str] = {}
+        self.frames_processed = 0
+        self._last_warn: dict[str, float] = {}
+
+        self._pub_grid = self.create_publisher(OccupancyGrid, "object_costmap", MAP_QOS)
+        self._pub_cloud = self.create_publisher(PointCloud2, "object_costmap/cloud", 1)
+        self._pub_markers = self.create_publisher(MarkerArray, "object_costmap/markers", 1)
+        self._pub_timing = self.create_publisher(Float64MultiArray, "~/timing", 10)
+
+        self.create_subscription(Image, "camera/color/image_raw", self._on_color, SENSOR_QOS)
+        self.create_subscription(Image, "camera/depth/image_raw", self._on_depth, SENSOR_QOS)
+        self.create_subscription(CameraInfo, "camera/color/camera_info", self._on_info,
+                                 SENSOR_QOS)
+        self.create_subscription(LaserScan, "scan", self._on_scan, SENSOR_QOS)
+        self.create_subscription(OccupancyGrid, "map", self._on_map,
+                                 map_qos(p.map_transient_local))
+        if p.pose_source == "odom":
+            self.create_subscription(Odometry, "odom", self._on_odom, RELIABLE_QOS)
+        else:
+            self.create_subscription(PoseWithCovarianceStamped, "pose", self._on_pose,
+                                     RELIABLE_QOS)
+        if self._dp.params.backend == "oracle":
+            self.create_subscription(Image, "camera/semantic/image_raw", self._on_semantic,
+                                     SENSOR_QOS)
+        self._timer = self.create_timer(1.0 / p.rate_hz, self._tick)
+        self._p.on_change(self._params_changed)
+        self._dp.on_change(self._detector_params_changed)
+
+    # ---------------------------------------------------------------- helpers
+    @property
+    def params(self) -> ObjectParams:
+        """Current parameters."""
+        return self._p.params
+
+    @property
+    def state(self) -> State:
+        """Current state of the tick state machine."""
+        return self._state
+
+    def objects(self) -> list[Object3D]:
+        """Fused objects (map frame)."""
+        return self._objects.objects()
+
+    def _drop(self, reason: str, detail: str) -> None:
+        """Count a dropped input and warn at most every _WARN_PERIOD_S per reason."""
+        self.dropped[reason] += 1
+        self.last_drop[reason] = detail
+        now = time.monotonic()
+        if now - self._last_warn.get(reason, -math.inf) >= _WARN_PERIOD_S:
+            self._last_warn[reason] = now
+            self.get_logger().warn(f"dropped {reason}: {detail}")
+
+    def _params_changed(self, old: ObjectParams, new: ObjectParams) -> None:
+        self._objects.params = new
+        if new.rate_hz != old.rate_hz:
+            self._timer.cancel()
+            self.destroy_timer(self._timer)
+            self._timer = self.create_timer(1.0 / new.rate_hz, self._tick)
+
+    def _detector_params_changed(self, old: DetectorParams, new: DetectorParams) -> None:
+        self._detector = None
+        self._detector_failed = False
+
+    # -------------------------------------------------------------- callbacks
+    def _on_color(self, msg: Image) -> None:
+        self._colors.append(msg)
+
+    def _on_depth(self, msg: Image) -> None:
+        self._depths.append(msg)
+
+    def _on_semantic(self, msg: Image) -> None:
+        self._semantics.append(msg)
+
+    def _on_info(self, msg: CameraInfo) -> None:
+        try:
+            self._info = convert.intrinsics_from_msg(msg)
+        except ValueError as err:
+            self._drop("camera_info", str(err))
+
+    def _on_scan(self, msg: LaserScan) -> None:
+        self._scan = msg
+
+    def _on_map(self, msg: OccupancyGrid) -> None:
+        try:
+            self._grid = convert.grid_from_msg(msg)
+        except ValueError as err:
+            self._drop("map", str(err))
+
+    def _on_odom(self, msg: Odometry) -> None:
+        try:
+            self._poses.append((_stamp_ns(msg), convert.pose2d_from_odometry(msg)))
+        except ValueError as err:
+            self._drop("pose", str(err))
+
+    def _on_pose(self, msg: PoseWithCovarianceStamped) -> None:
+        try:
+            self._poses.append((_stamp_ns(msg), convert.pose2d_from_pose_msg(msg)))
+        except ValueError as err:
+            self._drop("pose", str(err))
+
+    # ------------------------------------------------------------------- tick
+    def _tick(self) -> None:
+        if self._info is None:
+            self._state = State.WAITING_FOR_CAMERA_INFO
+            if self._depths:
+                self._drop("frame", "no CameraInfo received yet")
+                self._depths.clear()
+            return
+        pair = self._newest_pair()
+        if pair is None:
+            if self._state != State.RUNNING:
+                self._state = State.WAITING_FOR_FRAMES
+            self._publish_grid_if_map_changed()
+            return
+        self._state = State.RUNNING
+        self._process(*pair)
+
+    def _newest_pair(self) -> tuple[Image, Image, Image | None] | None:
+        """Newest unprocessed depth with a colour (and semantic) image close in time."""
+        tol_ns = int(self.params.sync_tolerance_s * 1e9)
+        oracle = self._dp.params.backend == "oracle"
+        for depth in sorted(self._depths, key=_stamp_ns, reverse=True):
+            t = _stamp_ns(depth)
+            if self._last_depth_ns is not None and t <= self._last_depth_ns:
+                return None
+            color = _closest(self._colors, t, tol_ns)
+            semantic = _closest(self._semantics, t, tol_ns) if oracle else None
+            if color is not None and (semantic is not None or not oracle):
+                return depth, color, semantic
+        return None
+
+    def _pose_at(self, t_ns: int) -> tuple[float, float, float] | None:
+        tol_ns = int(self.params.pose_tolerance_s * 1e9)
+        best = min(self._poses, key=lambda sp: abs(sp[0] - t_ns), default=None)
+        if best is None or abs(best[0] - t_ns) > tol_ns:
+            return None
+        return best[1]
+
+    def _ensure_detector(self) -> Detector | None:
+        if self._detector is None and not self._detector_failed:
+            dp = self._dp.params
+            try:
+                ids = parse_class_ids(self.params.oracle_sim_class_ids) \
+                    if dp.backend == "oracle" else None
+                self._detector = Detector(dp, sim_class_ids=ids)
+                self.get_logger().info(f"detector backend: {self._detector.backend_name}")
+            except (FileNotFoundError, ValueError, ImportError, RuntimeError) as err:
+                self._detector_failed = True
+                self.get_logger().error(
+                    f"detector unavailable ({err}); only unclassified objects are found")
+        return self._detector
+
+    def _process(self, depth_msg: Image, color_msg: Image, semantic_msg: Image | None) -> None:
+        p = self.params
+        t_ns = _stamp_ns(depth_msg)
+        self._last_depth_ns = t_ns
+        pose = self._pose_at(t_ns)
+        if pose is None:
+            self._drop("frame", f"no robot pose within {p.pose_tolerance_s} s of the image")
+            return
+        try:
+            depth = convert.depth_from_msg(depth_msg)
+            rgb = convert.rgb_from_msg(color_msg)
+            semantic = convert.image_from_msg(semantic_msg) if semantic_msg is not None else None
+            if depth.shape != self._info.shape:
+                raise ValueError(f"depth is {depth.shape[1]}x{depth.shape[0]}, CameraInfo says "
+                                 f"{self._info.width}x{self._info.height}")
+            if rgb.shape[:2] != depth.shape:
+                raise ValueError(f"colour {rgb.shape[1]}x{rgb.shape[0]} and depth "
+                                 f"{depth.shape[1]}x{depth.shape[0]} differ in size")
+            if semantic is not None and semantic.shape[:2] != depth.shape:
+                raise ValueError(f"semantic image {semantic.shape[1]}x{semantic.shape[0]} and "
+                                 f"depth {depth.shape[1]}x{depth.shape[0]} differ in size")
+            if not np.isfinite(depth).any():
+                raise ValueError("depth image has no valid pixel")
+        except ValueError as err:
+            self._drop("frame", str(err))
+            return
+        t0 = time.perf_counter()
+        detections = []
+        detector = self._ensure_detector()
+        if detector is not None:
+            try:
+                sem = semantic if semantic is None or semantic.ndim == 2 else semantic[:, :, 0]
+                detections = detector.detect(rgb, semantic=sem) \
+                    if self._dp.params.backend == "oracle" else detector.detect(rgb)
+            except ValueError as err:
+                self._drop("detection", str(err))
+        t1 = time.perf_counter()
+        transform = map_from_base(*pose) @ base_from_optical(
+            p.camera_x_m, p.camera_y_m, p.camera_z_m, p.camera_roll_rad, p.camera_pitch_rad,
+            p.camera_yaw_rad)
+        frame = DepthFrame(depth, self._info, transform)
+        scan_xy = self._scan_points(t_ns, pose)
+        result = process_frame(frame, detections, self._priors, p, scan_xy)
+        for reason in result.dropped:
+            self._drop("box", reason)
+        self._objects.update(result.objects + result.unknown, frame, t_ns)
+        t2 = time.perf_counter()
+        self.frames_processed += 1
+        self._publish(t_ns)
+        timing = Float64MultiArray()
+        timing.layout.dim = [MultiArrayDimension(label="detect_ms,update_ms", size=2, stride=2)]
+        timing.data = [(t1 - t0) * 1e3, (t2 - t1) * 1e3]
+        self._pub_timing.publish(timing)
+
+    def _scan_points(self, t_ns: int, frame_pose: tuple[float, float, float]):
+        p = self.params
+        if not p.unknown_enabled or self._scan is None:
+            return None
+        pose = self._pose_at(_stamp_ns(self._scan)) or frame_pose
+        try:
+            return convert.scan_to_points(self._scan, pose,
+                                          (p.lidar_x_m, p.lidar_y_m, p.lidar_yaw_rad))
+        except ValueError as err:
+            self._drop("scan", str(err))
+            return None
+
+    # ---------------------------------------------------------------- outputs
+    def _publish_grid_if_map_changed(self) -> None:
+        if self._grid is not None and (self._grid_published is None
+                                       or not self._grid.same_geometry(self._grid_published)):
+            self._publish_grid()
+
+    def _publish_grid(self) -> None:
+        if self._grid is None:
+            return
+        layer = self._objects.rasterize(self._grid)
+        self._pub_grid.publish(convert.grid_to_msg(layer))
+        self._grid_published = self._grid
+
+    def _publish(self, t_ns: int) -> None:
+        p = self.params
+        self._publish_grid()
+        header = convert.make_header(p.map_frame, t_ns)
+        cloud = self._objects.virtual_cloud()
+        self._pub_cloud.publish(convert.cloud_to_msg(convert.xyz_cloud(cloud), header))
+        self._pub_markers.publish(_markers(self._objects.boxes(), header))
+
+
+def _closest(msgs, t_ns: int, tol_ns: int):
+    best = min(msgs, key=lambda m: abs(_stamp_ns(m) - t_ns), default=None)
+    if best is None or abs(_stamp_ns(best) - t_ns) > tol_ns:
+        return None
+    return best
+
+
+def _markers(boxes: list[tuple[int, Object3D]], header) -> MarkerArray:
+    """A DELETEALL, then a CUBE and a class label per object (marker id = object id)."""
+    out = MarkerArray()
+    clear = Marker()
+    clear.header = header
+    clear.action = Marker.DELETEALL
+    out.markers.append(clear)
+    for oid, obj in boxes:
+        qx, qy, qz, qw = quaternion_from_yaw(obj.yaw)
+        r, g, b = _CLASS_RGB.get(obj.cls, _CLASS_RGB[""])
+        cube = Marker()
+        cube.header = header
+        cube.ns = "objects"
+        cube.id = int(oid)
+        cube.type = Marker.CUBE
+        cube.action = Marker.ADD
+        cube.pose.position.x, cube.pose.position.y, cube.pose.position.z = obj.center_xyz
+        cube.pose.orientation.x, cube.pose.orientation.y = qx, qy
+        cube.pose.orientation.z, cube.pose.orientation.w = qz, qw
+        cube.scale.x, cube.scale.y, cube.scale.z = (max(float(s), 1e-3) for s in obj.size_xyz)
+        cube.color.r, cube.color.g, cube.color.b, cube.color.a = r, g, b, 0.5
+        out.markers.append(cube)
+        text = Marker()
+        text.header = header
+        text.ns = "labels"
+        text.id = int(oid)
+        text.type = Marker.TEXT_VIEW_FACING
+        text.action = Marker.ADD
+        text.pose.position.x, text.pose.position.y = obj.center_xyz[0], obj.center_xyz[1]
+        text.pose.position.z = obj.center_xyz[2] + 0.5 * obj.size_xyz[2] + 0.15
+        text.pose.orientation.w = 1.0
+        text.scale.z = 0.15
+        text.color.r = text.color.g = text.color.b = text.color.a = 1.0
+        text.text = f"{obj.cls} {obj.score:.2f}"
+        out.markers.append(text)
+    return out
+
+
+def main(args: list[str] | None = None) -> int:
+    """Console script ``object_costmap``."""
+    return run(ObjectCostmapNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

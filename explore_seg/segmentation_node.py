@@ -1,0 +1,159 @@
+"""``segmentation`` node: DuDe room segmentation of the map, with persistent region ids.
+
+The ``map`` callback only stores the newest message; a timer on the ROS clock
+(``process_period_s``) processes the newest one not yet processed, so when maps arrive
+faster than they can be segmented the stale ones are skipped and at most one result is
+published per map update. Each result is published as
+
+* ``regions`` (sensor_msgs/Image, 32SC1): region id per map cell, aligned cell-for-cell
+  with the map (row = y, not flipped), header = the map's frame and stamp;
+* ``regions/info`` (nav_msgs/MapMetaData): the map geometry, ``map_load_time`` = the map
+  stamp (pairs the two);
+* ``regions/color`` (nav_msgs/OccupancyGrid): a visualisation for RViz (``costmap``
+  colour scheme): every region id hashed to 1..99, -1 where there is no region;
+* ``~/timing`` (std_msgs/Float64): wall time of the update in milliseconds.
+
+Ids of regions that did not change stay the same between updates (docs/dude.md §12).
+"""
+
+from __future__ import annotations
+
+import time
+from enum import Enum
+
+import numpy as np
+import numpy.typing as npt
+from nav_msgs.msg import MapMetaData, OccupancyGrid
+from rclpy.node import Node
+from sensor_msgs.msg import Image
+from std_msgs.msg import Float64
+
+from explore_seg import convert
+from explore_seg.core.grid import GridMap
+from explore_seg.core.segmentation import (IncrementalSegmenter, SegmentationNodeParams,
+                                           SegmentationParams)
+from explore_seg.node_util import run
+from explore_seg.params import ParamBinding
+from explore_seg.qos import MAP_QOS, map_qos
+
+#: Seconds between repeated warnings of one kind.
+_WARN_PERIOD_S = 5.0
+#: Colour grid: ids are hashed to 1..COLOR_LEVELS; the multiplier spreads neighbours.
+COLOR_LEVELS = 99
+_COLOR_STRIDE = 37
+
+
+class State(Enum):
+    """What the node is doing."""
+
+    WAITING_FOR_MAP = 0
+    RUNNING = 1
+
+
+def color_grid(labels: npt.NDArray[np.int32], grid: GridMap) -> GridMap:
+    """Visualisation grid of region labels: id hashed to 1..99, -1 where no region."""
+    data = np.where(labels > 0, (labels.astype(np.int64) * _COLOR_STRIDE) % COLOR_LEVELS + 1,
+                    -1).astype(np.int8)
+    return grid.with_data(data)
+
+
+class SegmentationNode(Node):
+    """Room segmentation node (see module docstring)."""
+
+    def __init__(self, *, context=None, parameter_overrides=None,
+                 node_name: str = "segmentation", namespace: str = "") -> None:
+        super().__init__(node_name, context=context,
+                         parameter_overrides=parameter_overrides or [], namespace=namespace)
+        self._p = ParamBinding(self, SegmentationNodeParams())
+        p = self._p.params
+        self._seg = IncrementalSegmenter(self._algo_params(p))
+        self._latest: OccupancyGrid | None = None
+        self._state = State.WAITING_FOR_MAP
+        self._last_warn: dict[str, float] = {}
+        #: Number of maps segmented and of maps skipped as stale.
+        self.processed = 0
+        self.skipped = 0
+        self.last_labels: npt.NDArray[np.int32] | None = None
+
+        self._pub_regions = self.create_publisher(Image, "regions", MAP_QOS)
+        self._pub_info = self.create_publisher(MapMetaData, "regions/info", MAP_QOS)
+        self._pub_color = self.create_publisher(OccupancyGrid, "regions/color", MAP_QOS)
+        self._pub_timing = self.create_publisher(Float64, "~/timing", 10)
+        self.create_subscription(OccupancyGrid, "map", self._on_map,
+                                 map_qos(p.map_transient_local))
+        self._timer = self.create_timer(p.process_period_s, self._tick)
+        self._p.on_change(self._params_changed)
+
+    @staticmethod
+    def _algo_params(p: SegmentationNodeParams) -> SegmentationParams:
+        names = SegmentationParams.__dataclass_fields__
+        return SegmentationParams(**{k: getattr(p, k) for k in names})
+
+    @property
+    def params(self) -> SegmentationNodeParams:
+        """Current parameters."""
+        return self._p.params
+
+    @property
+    def state(self) -> State:
+        """Current state."""
+        return self._state
+
+    @property
+    def segmenter(self) -> IncrementalSegmenter:
+        """The segmenter (its ``last_update_info`` tells what the last update did)."""
+        return self._seg
+
+    def _warn(self, key: str, msg: str) -> None:
+        now = time.monotonic()
+        if now - self._last_warn.get(key, -1e18) >= _WARN_PERIOD_S:
+            self._last_warn[key] = now
+            self.get_logger().warn(msg)
+
+    def _params_changed(self, old: SegmentationNodeParams,
+                        new: SegmentationNodeParams) -> None:
+        algo_old, algo_new = self._algo_params(old), self._algo_params(new)
+        if algo_new != algo_old:
+            self._seg.set_params(algo_new)
+        if new.process_period_s != old.process_period_s:
+            self._timer.cancel()
+            self.destroy_timer(self._timer)
+            self._timer = self.create_timer(new.process_period_s, self._tick)
+
+    def _on_map(self, msg: OccupancyGrid) -> None:
+        if self._latest is not None:
+            self.skipped += 1
+        self._latest = msg
+
+    def _tick(self) -> None:
+        msg, self._latest = self._latest, None
+        if msg is None:
+            return
+        try:
+            grid = convert.grid_from_msg(msg)
+        except ValueError as err:
+            self._warn("map", f"dropped map: {err}")
+            return
+        self._state = State.RUNNING
+        t0 = time.perf_counter()
+        if not self.params.incremental:
+            self._seg.set_params(self._seg.params)      # next update is a full run
+        labels = self._seg.update(grid)
+        elapsed_ms = (time.perf_counter() - t0) * 1000.0
+        self.last_labels = labels
+        self.processed += 1
+        img, info = convert.labels_to_msgs(labels, grid, msg.header.stamp)
+        self._pub_regions.publish(img)
+        self._pub_info.publish(info)
+        self._pub_color.publish(convert.grid_to_msg(color_grid(labels, grid),
+                                                    msg.header.stamp))
+        self._pub_timing.publish(Float64(data=elapsed_ms))
+
+
+def main(args: list[str] | None = None) -> int:
+    """Console script ``segmentation``."""
+    return run(SegmentationNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

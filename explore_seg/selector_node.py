@@ -1,0 +1,386 @@
+"""``target_selector`` node: picks the next frontier goal and sends it as ``goal_pose``.
+
+Self-contained: it detects frontiers from ``map`` (+ ``object_costmap``) itself with the
+core (no ``frontier_detector`` needed), computes path lengths robot -> cPoints in one
+sweep, scores them (``strategy``: the paper's eq. 1-3 with region labels from
+``regions``, nearest, or explore_lite) and lets a
+:class:`~explore_seg.core.selection.GoalManager` keep, switch, blacklist and finish.
+
+One timer ``_tick`` on the ROS clock (``rate_hz``) runs the state machine::
+
+    WAITING_FOR_MAP -> WAITING_FOR_POSE -> SELECTING <-> NAVIGATING -> DONE
+    (any) -> STOPPED via ~/stop; STOPPED/DONE -> running via ~/resume or ~/start
+
+Bad input never raises out of a callback: malformed messages are dropped (throttled
+warning), the last good map/pose/labels are kept; labels whose geometry differs from the
+map are ignored; a robot outside the map or walled in gets no new goal (the current one
+is kept and its progress still checked).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from enum import Enum
+
+import numpy as np
+from geometry_msgs.msg import Point, PoseStamped, PoseWithCovarianceStamped
+from nav_msgs.msg import MapMetaData, OccupancyGrid, Odometry
+from rclpy.node import Node
+from sensor_msgs.msg import Image
+from std_msgs.msg import Bool, ColorRGBA, Float64MultiArray, MultiArrayDimension
+from std_srvs.srv import Trigger
+from visualization_msgs.msg import Marker, MarkerArray
+
+from explore_seg import convert
+from explore_seg.core.frontiers import Frontier, find_frontiers, traversable_mask
+from explore_seg.core.grid import GridMap
+from explore_seg.core.paths import BlockGraph
+from explore_seg.core.selection import (Action, Goal, GoalManager, SelectionParams,
+                                        frontier_distances)
+from explore_seg.frontier_node import object_obstacles
+from explore_seg.node_util import run
+from explore_seg.params import ParamBinding
+from explore_seg.qos import MAP_QOS, RELIABLE_QOS, map_qos
+
+#: Seconds between repeated warnings of one kind.
+_WARN_PERIOD_S = 5.0
+#: Marker sizes (m): goal arrow length / width, blacklist spheres.
+_ARROW_M = (0.5, 0.08)
+_BLACKLIST_MARKER_M = 0.2
+
+
+class State(Enum):
+    """State of the decision loop."""
+
+    WAITING_FOR_MAP = "waiting_for_map"
+    WAITING_FOR_POSE = "waiting_for_pose"
+    SELECTING = "selecting"
+    NAVIGATING = "navigating"
+    DONE = "done"
+    STOPPED = "stopped"
+
+
+class TargetSelectorNode(Node):
+    """Frontier goal selection node (see module docstring)."""
+
+    def __init__(self, *, context=None, parameter_overrides=None,
+                 node_name: str = "target_selector", namespace: str = "") -> None:
+        super().__init__(node_name, context=context,
+                         parameter_overrides=parameter_overrides or [], namespace=namespace)
+        self._p = ParamBinding(self, SelectionParams())
+        p = self._p.params
+        self._manager = GoalManager(p)
+        self._grid: GridMap | None = None
+        self._layer: GridMap | None = None
+        self._regions_img: Image | None = None
+        self._regions_info: MapMetaData | None = None
+        self._labels: np.ndarray | None = None
+        self._labels_dirty = False
+        self._pose: tuple[float, float, float] | None = None
+        self._pose_time_ns = 0
+        self._dirty = True
+        self._graph: BlockGraph | None = None
+        self.frontiers: list[Frontier] = []
+        self._state = State.STOPPED if not p.autostart else State.WAITING_FOR_MAP
+        self._done_published: bool | None = None
+        self._last_goal_pub_s = -math.inf
+        self._region_warned = False
+        self._last_warn: dict[str, float] = {}
+        self.last_reason = ""
+        self.goals_sent = 0
+
+        self._pub_goal = self.create_publisher(PoseStamped, "goal_pose", RELIABLE_QOS)
+        self._pub_done = self.create_publisher(Bool, "exploration_done", MAP_QOS)
+        self._pub_markers = self.create_publisher(MarkerArray, "~/markers", 1)
+        self._pub_timing = self.create_publisher(Float64MultiArray, "~/timing", 10)
+        qos = map_qos(p.map_transient_local)
+        self.create_subscription(OccupancyGrid, "map", self._on_map, qos)
+        self.create_subscription(OccupancyGrid, "object_costmap", self._on_layer, qos)
+        self.create_subscription(Image, "regions", self._on_regions, qos)
+        self.create_subscription(MapMetaData, "regions/info", self._on_regions_info, qos)
+        if p.pose_topic_type == "odom":
+            self.create_subscription(Odometry, "odom", self._on_odom, RELIABLE_QOS)
+        else:
+            self.create_subscription(PoseWithCovarianceStamped, "pose", self._on_pose,
+                                     RELIABLE_QOS)
+        self.create_service(Trigger, "~/start", self._srv_start)
+        self.create_service(Trigger, "~/stop", self._srv_stop)
+        self.create_service(Trigger, "~/resume", self._srv_resume)
+        self._timer = self.create_timer(1.0 / p.rate_hz, self._tick)
+        self._p.on_change(self._params_changed)
+        self._publish_done(False)
+
+    # ---------------------------------------------------------------- helpers
+    @property
+    def params(self) -> SelectionParams:
+        """Current parameters."""
+        return self._p.params
+
+    @property
+    def state(self) -> State:
+        """Current state of the decision loop."""
+        return self._state
+
+    @property
+    def manager(self) -> GoalManager:
+        """The goal manager (current goal, blacklist)."""
+        return self._manager
+
+    def _warn(self, key: str, msg: str) -> None:
+        now = time.monotonic()
+        if now - self._last_warn.get(key, -math.inf) >= _WARN_PERIOD_S:
+            self._last_warn[key] = now
+            self.get_logger().warn(msg)
+
+    def _now_s(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def _params_changed(self, old: SelectionParams, new: SelectionParams) -> None:
+        self._manager.set_params(new)
+        self._dirty = True
+        self._graph = None
+        if new.rate_hz != old.rate_hz:
+            self._timer.cancel()
+            self.destroy_timer(self._timer)
+            self._timer = self.create_timer(1.0 / new.rate_hz, self._tick)
+        if new.pose_topic_type != old.pose_topic_type:
+            self._warn("pose_type", "pose_topic_type changes take effect after a restart")
+
+    def _publish_done(self, done: bool) -> None:
+        if self._done_published is done:
+            return
+        self._done_published = done
+        self._pub_done.publish(Bool(data=done))
+
+    # -------------------------------------------------------------- callbacks
+    def _on_map(self, msg: OccupancyGrid) -> None:
+        try:
+            self._grid = convert.grid_from_msg(msg)
+        except ValueError as err:
+            self._warn("map", f"dropped map: {err}")
+            return
+        self._dirty = True
+        self._labels_dirty = True
+
+    def _on_layer(self, msg: OccupancyGrid) -> None:
+        try:
+            self._layer = convert.grid_from_msg(msg)
+        except ValueError as err:
+            self._warn("object_costmap", f"dropped object_costmap: {err}")
+            return
+        self._dirty = True
+
+    def _on_regions(self, msg: Image) -> None:
+        self._regions_img = msg
+        self._labels_dirty = True
+
+    def _on_regions_info(self, msg: MapMetaData) -> None:
+        self._regions_info = msg
+        self._labels_dirty = True
+
+    def _set_pose(self, pose: tuple[float, float, float]) -> None:
+        self._pose = pose
+        self._pose_time_ns = self.get_clock().now().nanoseconds
+
+    def _on_odom(self, msg: Odometry) -> None:
+        try:
+            self._set_pose(convert.pose2d_from_odometry(msg))
+        except ValueError as err:
+            self._warn("pose", f"dropped odom: {err}")
+
+    def _on_pose(self, msg: PoseWithCovarianceStamped) -> None:
+        try:
+            self._set_pose(convert.pose2d_from_pose_msg(msg))
+        except ValueError as err:
+            self._warn("pose", f"dropped pose: {err}")
+
+    # --------------------------------------------------------------- services
+    def _srv_start(self, request: Trigger.Request, response: Trigger.Response
+                   ) -> Trigger.Response:
+        self._manager.reset(clear_blacklist=True)
+        self._state = State.WAITING_FOR_MAP
+        self._publish_done(False)
+        response.success, response.message = True, "exploration (re)started"
+        return response
+
+    def _srv_stop(self, request: Trigger.Request, response: Trigger.Response
+                  ) -> Trigger.Response:
+        was = self._state
+        self._state = State.STOPPED
+        response.success = True
+        response.message = ("already stopped" if was is State.STOPPED else
+                            "stopped (no new goals; the navigator keeps its current goal)")
+        return response
+
+    def _srv_resume(self, request: Trigger.Request, response: Trigger.Response
+                    ) -> Trigger.Response:
+        if self._state is State.DONE or self._manager.done:
+            goal_kept = False
+            self._manager.reset(clear_blacklist=False)
+            self._publish_done(False)
+        else:
+            goal_kept = self._manager.goal is not None
+        if self._state in (State.STOPPED, State.DONE):
+            self._state = State.WAITING_FOR_MAP
+            response.message = "resumed" + (" with the previous goal" if goal_kept else "")
+        else:
+            response.message = "already running"
+        response.success = True
+        return response
+
+    # ------------------------------------------------------------------- tick
+    def _update_labels(self, grid: GridMap) -> None:
+        if not self._labels_dirty:
+            return
+        self._labels_dirty = False
+        self._labels = None
+        if self._regions_img is None or self._regions_info is None:
+            return
+        try:
+            labels, geom = convert.labels_from_msgs(self._regions_img, self._regions_info)
+        except ValueError as err:
+            self._warn("regions", f"dropped regions: {err}")
+            return
+        if not geom.same_geometry(grid):
+            self._warn("regions_geometry", "regions do not match the map's geometry "
+                                           f"({geom.width}x{geom.height} vs "
+                                           f"{grid.width}x{grid.height}): ignored until "
+                                           "they do")
+            self._labels_dirty = True   # retry with the next map
+            return
+        self._labels = labels
+
+    def _update_frontiers(self, grid: GridMap) -> float:
+        """Recompute frontiers and the path graph after a map/layer change; seconds."""
+        p = self.params
+        t0 = time.perf_counter()
+        extra = None
+        if p.use_object_costmap and self._layer is not None:
+            if self._layer.frame_id != grid.frame_id:
+                self._warn("layer_frame", f"object_costmap frame {self._layer.frame_id!r} "
+                                          f"differs from map frame {grid.frame_id!r}: ignored")
+            else:
+                extra = object_obstacles(self._layer, grid, p.object_occupied_threshold)
+        fp = p.frontier_params()
+        passable = traversable_mask(grid, extra, fp)
+        self.frontiers = find_frontiers(grid, extra, fp, passable=passable)
+        t1 = time.perf_counter()
+        self._graph = BlockGraph(passable, grid.resolution_m, p.path_block_cells)
+        self._dirty = False
+        return t1 - t0
+
+    def _tick(self) -> None:
+        if self._state is State.STOPPED:
+            return
+        grid = self._grid
+        if grid is None:
+            self._state = State.WAITING_FOR_MAP
+            return
+        p = self.params
+        now_ns = self.get_clock().now().nanoseconds
+        if self._pose is None or (now_ns - self._pose_time_ns) * 1e-9 > p.pose_timeout_s:
+            if self._state is not State.DONE:
+                self._state = State.WAITING_FOR_POSE
+            return
+        if self._state is State.DONE:
+            return
+        x, y, yaw = self._pose
+        if self._manager.start_xy_m is None:
+            self._manager.set_start((x, y), yaw)
+
+        t_detect = 0.0
+        if self._dirty or self._graph is None:
+            t_detect = self._update_frontiers(grid)
+        t0 = time.perf_counter()
+        self._update_labels(grid)
+        robot_rc = grid.world_to_cell(x, y)
+        graph = self._graph
+        dist = None
+        if not grid.in_bounds(*robot_rc):
+            self._warn("robot_outside", f"robot at ({x:.2f}, {y:.2f}) lies outside the map")
+        elif graph is not None:
+            radius = int(math.floor(p.start_search_radius_m / grid.resolution_m + 1e-9))
+            if graph.nearest_passable(robot_rc, radius) is None:
+                self._warn("robot_blocked", f"robot cell {robot_rc} is not passable and has "
+                                            "no passable cell nearby: no new goals")
+            else:
+                dist = frontier_distances(graph, robot_rc, self.frontiers, p)
+        result = self._manager.step(self._now_s(), (x, y), grid, self.frontiers, dist,
+                                    self._labels, robot_rc)
+        t1 = time.perf_counter()
+        self.last_reason = result.reason
+        sel = result.selection
+        if (sel is not None and p.strategy == "paper" and not sel.region_gain_active
+                and not self._region_warned and self.frontiers):
+            self._region_warned = True
+            self.get_logger().info("regionGain is 0 (no region labels for the map or the "
+                                   "robot's cell): ranking by distance and size only")
+        self._act(result.action, result.goal, result.reason, grid)
+        timing = Float64MultiArray()
+        timing.layout.dim = [MultiArrayDimension(
+            label="detect_cluster_ms,selection_ms,frontiers", size=3, stride=3)]
+        timing.data = [t_detect * 1e3, (t1 - t0) * 1e3, float(len(self.frontiers))]
+        self._pub_timing.publish(timing)
+
+    def _act(self, action: Action, goal: Goal | None, reason: str, grid: GridMap) -> None:
+        p = self.params
+        now_s = self._now_s()
+        if action is Action.NEW_GOAL and goal is not None:
+            self._send_goal(goal, grid)
+            self._state = State.NAVIGATING
+            self.get_logger().info(f"goal ({goal.xy_m[0]:.2f}, {goal.xy_m[1]:.2f}): {reason}")
+        elif action is Action.KEEP and goal is not None:
+            self._state = State.NAVIGATING
+            if p.goal_republish_s > 0 and now_s - self._last_goal_pub_s >= p.goal_republish_s:
+                self._send_goal(goal, grid)
+        elif action is Action.DONE:
+            self._state = State.DONE
+            self._publish_done(True)
+            self.get_logger().info(f"exploration done: {reason}")
+        else:
+            self._state = State.SELECTING
+        self._publish_markers(grid)
+
+    def _send_goal(self, goal: Goal, grid: GridMap) -> None:
+        self._pub_goal.publish(convert.pose_stamped(goal.xy_m[0], goal.xy_m[1], goal.yaw_rad,
+                                                    grid.frame_id,
+                                                    self.get_clock().now().to_msg()))
+        self._last_goal_pub_s = self._now_s()
+        self.goals_sent += 1
+
+    def _publish_markers(self, grid: GridMap) -> None:
+        header = convert.make_header(grid.frame_id, self.get_clock().now().to_msg())
+        out = MarkerArray()
+        clear = Marker()
+        clear.header, clear.action = header, Marker.DELETEALL
+        out.markers.append(clear)
+        goal = self._manager.goal
+        if goal is not None:
+            arrow = Marker()
+            arrow.header, arrow.ns, arrow.id = header, "goal", 0
+            arrow.type, arrow.action = Marker.ARROW, Marker.ADD
+            arrow.pose = convert.pose_from_2d(goal.xy_m[0], goal.xy_m[1], goal.yaw_rad)
+            arrow.scale.x, arrow.scale.y = _ARROW_M
+            arrow.scale.z = _ARROW_M[1]
+            arrow.color = ColorRGBA(r=0.1, g=0.9, b=0.2, a=1.0)
+            out.markers.append(arrow)
+        if self._manager.blacklist:
+            bl = Marker()
+            bl.header, bl.ns, bl.id = header, "blacklist", 0
+            bl.type, bl.action = Marker.SPHERE_LIST, Marker.ADD
+            bl.pose.orientation.w = 1.0
+            bl.scale.x = bl.scale.y = bl.scale.z = _BLACKLIST_MARKER_M
+            bl.color = ColorRGBA(r=0.9, g=0.1, b=0.1, a=0.8)
+            bl.points = [Point(x=bx, y=by, z=0.0) for bx, by in self._manager.blacklist]
+            out.markers.append(bl)
+        self._pub_markers.publish(out)
+
+
+def main(args: list[str] | None = None) -> int:
+    """Console script ``target_selector``."""
+    return run(TargetSelectorNode, args)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,612 @@
+"""Lock-step exploration runs: the simulator and the explorer's core code in one loop.
+
+:func:`run_exploration` drives a :class:`~sim_bridge.engine.SimEngine` without any
+real-time waiting and, at the explorer's rates, runs the SAME core code the ROS nodes
+run:
+
+* frontier detection and grouping (:func:`explore_seg.core.frontiers.find_frontiers`,
+  object layer as extra obstacles) - the ``frontier_detector`` node;
+* path lengths (:class:`~explore_seg.core.paths.BlockGraph`), costs and goal keeping
+  (:class:`~explore_seg.core.selection.GoalManager`) - the ``target_selector`` node; a
+  NEW_GOAL is sent to the engine's navigation stand-in like a ``goal_pose`` message;
+* DuDe regions (:class:`~explore_seg.core.segmentation.IncrementalSegmenter`) - the
+  ``segmentation`` node;
+* the object costmap (:func:`~explore_seg.core.objects.process_frame` +
+  :class:`~explore_seg.core.objects.ObjectMap`) fed by the oracle detector backend from
+  the engine's camera frames and by the latest scan (unclassified objects from laser
+  legs), rasterised onto the map and given both to target selection and, as an
+  obstacle layer, to the navigation stand-in - the ``object_costmap`` node.
+
+Strategies (:data:`STRATEGY_SPECS`): ``paper`` (eq. 1-3, regions and object costmap),
+``paper_noseg`` (regions off, i.e. gamma = 0), ``paper_noobj`` (no object costmap),
+``nearest`` and ``explore_lite``. The two baselines run as their original packages
+would: no object costmap anywhere (not in frontier detection, not in the planner) and
+no regions.
+
+A run stops at completion (coverage >= ``coverage_target_pct`` of the ground-truth
+explorable area, measured by the engine's metrics), when the goal manager reports
+DONE (no reachable frontier left) or at ``max_sim_time_s``. Runs are deterministic for
+a seed; the seed perturbs the start pose (position within ``start_jitter_m``, heading
+within ``start_yaw_jitter_rad``), the lidar noise and the oracle's misses and jitter,
+so seeded runs differ from one another.
+
+Differences from the ROS pipeline (documented, intentional): everything is synchronous
+(every decision sees the frontiers, regions and object layer of the current map, where
+the nodes see their latest messages); the camera is rendered only when the object
+costmap would process a frame (``object_period_s``) and, by default, at half the
+camera resolution (the intrinsics scaled with it) to keep runs cheap.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field, replace
+from typing import Any, Callable
+
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.camera import CameraIntrinsics
+from explore_seg.core.detector import Detector, DetectorParams
+from explore_seg.core.frontiers import Frontier, find_frontiers, traversable_mask
+from explore_seg.core.grid import GridMap
+from explore_seg.core.objects import DepthFrame, ObjectMap, ObjectParams, load_priors, \
+    process_frame
+from explore_seg.core.paths import BlockGraph
+from explore_seg.core.segmentation import IncrementalSegmenter, SegmentationParams
+from explore_seg.core.selection import Action, GoalManager, SelectionParams, \
+    frontier_distances
+from sim_bridge import worlds
+from sim_bridge.engine import Collider, SimEngine, SimParams
+from sim_bridge.sensors import CLASS_IDS
+from sim_bridge.world import World
+
+#: Layer name of the object costmap in the navigation stand-in.
+OBJECT_LAYER = "object_costmap"
+#: Timing keys of :attr:`RunResult.timings_ms` (one list entry per update).
+TIMING_KEYS = ("frontier", "selection", "segmentation", "objects", "decision")
+
+
+@dataclass(frozen=True)
+class StrategySpec:
+    """How one benchmark strategy configures the explorer.
+
+    Attributes
+    ----------
+    selection : str
+        ``SelectionParams.strategy`` (paper | nearest | explore_lite).
+    use_regions : bool
+        Run the segmentation and use regionGain.
+    use_objects : bool
+        Run the object costmap; its layer blocks frontiers, selection paths and plans.
+    description : str
+    """
+
+    selection: str
+    use_regions: bool
+    use_objects: bool
+    description: str
+
+
+#: The strategies of the benchmark.
+STRATEGY_SPECS: dict[str, StrategySpec] = {
+    "paper": StrategySpec("paper", True, True,
+                          "eq. 1-3 with DuDe regions and the object costmap"),
+    "paper_noseg": StrategySpec("paper", False, True,
+                                "eq. 1-3 without regions (gamma = 0), with the object costmap"),
+    "paper_noobj": StrategySpec("paper", True, False,
+                                "eq. 1-3 with regions, without the object costmap"),
+    "nearest": StrategySpec("nearest", False, False,
+                            "nearest frontier by path length (no object costmap)"),
+    "explore_lite": StrategySpec("explore_lite", False, False,
+                                 "explore_lite cost 3 * dist - 1 * length (no object costmap)"),
+}
+STRATEGIES: tuple[str, ...] = tuple(STRATEGY_SPECS)
+
+
+@dataclass(frozen=True)
+class LockstepParams:
+    """Parameters of a lock-step run (rates, stop rule, seeded perturbations)."""
+
+    max_sim_time_s: float = field(default=1800.0, metadata={
+        "doc": "stop after this much sim time", "unit": "s"})
+    decision_period_s: float = field(default=1.0, metadata={
+        "doc": "frontier detection + segmentation + goal decision period (selector rate)",
+        "unit": "s"})
+    object_period_s: float = field(default=0.5, metadata={
+        "doc": "object costmap update period (camera frame processed)", "unit": "s"})
+    coverage_target_pct: float = field(default=99.0, metadata={
+        "doc": "run completed at this coverage of the explorable area", "unit": "%"})
+    milestones_pct: tuple[float, ...] = field(default=(50.0, 90.0, 95.0, 99.0), metadata={
+        "doc": "coverages at which time and path length are recorded", "unit": "%"})
+    sample_period_s: float = field(default=5.0, metadata={
+        "doc": "coverage-vs-time sampling period", "unit": "s"})
+    start_jitter_m: float = field(default=0.2, metadata={
+        "doc": "seeded start position perturbation (uniform per axis)", "unit": "m"})
+    start_yaw_jitter_rad: float = field(default=math.pi, metadata={
+        "doc": "seeded start heading perturbation (uniform)", "unit": "rad"})
+    start_min_clearance_m: float = field(default=0.35, metadata={
+        "doc": "a perturbed start keeps at least this distance to every solid", "unit": "m"})
+    oracle_miss_prob: float = field(default=0.1, metadata={
+        "doc": "probability that the oracle detector misses an object in a frame"})
+    oracle_jitter_px: float = field(default=2.0, metadata={
+        "doc": "std of the oracle's box corner noise", "unit": "px"})
+    camera_scale: float = field(default=0.5, metadata={
+        "doc": "camera resolution relative to the simulator default (intrinsics scaled)"})
+    object_update_tolerance_m: float = field(default=0.05, metadata={
+        "doc": "the planner's object layer is replaced only when a box moved or grew "
+               "by more than this (or appeared/vanished)", "unit": "m"})
+
+    def __post_init__(self) -> None:
+        for name in ("max_sim_time_s", "decision_period_s", "object_period_s",
+                     "sample_period_s", "camera_scale"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be finite and > 0, got {v}")
+        for name in ("start_jitter_m", "start_yaw_jitter_rad", "start_min_clearance_m",
+                     "oracle_jitter_px", "object_update_tolerance_m"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be finite and >= 0, got {v}")
+        if not 0.0 < self.coverage_target_pct <= 100.0:
+            raise ValueError(f"coverage_target_pct must be in (0, 100], got "
+                             f"{self.coverage_target_pct}")
+        if not 0.0 <= self.oracle_miss_prob <= 1.0:
+            raise ValueError(f"oracle_miss_prob must be in [0, 1], got {self.oracle_miss_prob}")
+        if not all(0.0 < m <= 100.0 for m in self.milestones_pct):
+            raise ValueError(f"milestones_pct must be in (0, 100], got {self.milestones_pct}")
+        if self.camera_scale > 1.0:
+            raise ValueError(f"camera_scale must be <= 1, got {self.camera_scale}")
+
+
+@dataclass
+class RunResult:
+    """Outcome and measurements of one run (JSON-able through :meth:`to_dict`).
+
+    Attributes
+    ----------
+    world, strategy : str
+    seed : int
+    completed : bool
+        Coverage reached ``coverage_target_pct``.
+    stop_reason : str
+        ``"coverage"``, ``"done"`` (no reachable frontier left) or ``"timeout"``.
+    sim_time_s, wall_time_s : float
+        Sim time at the stop and wall time the run took.
+    coverage_pct : float
+        Final coverage (% of the explorable area known free).
+    explorable_area_m2 : float
+    path_length_m : float
+        Distance travelled.
+    time_to_s, path_to_m : dict of str to float
+        Per milestone (key ``"50"``, ``"90"``, ...): sim time and path length when the
+        coverage first reached it (NaN when never).
+    collisions : int
+    collision_places : list of (x, y, what)
+    goals_sent, goal_switches : int
+        Goals sent to navigation; goals replaced while the previous one was still
+        pursued (better frontier, or its frontier vanished).
+    goals_blacklisted, nav_aborts : int
+    start_pose : (x, y, yaw)
+    n_objects : int
+        Objects in the object map at the end (0 without it).
+    timings_ms : dict of str to list of float
+        Per-update wall times of frontier detect+cluster, selection (graph, path
+        lengths, costs, goal manager), segmentation, object costmap and the whole
+        decision.
+    coverage_samples : list of (t_s, coverage_pct, path_m)
+    goals : list of (x, y)
+    """
+
+    world: str
+    strategy: str
+    seed: int
+    completed: bool = False
+    stop_reason: str = ""
+    sim_time_s: float = 0.0
+    wall_time_s: float = 0.0
+    coverage_pct: float = 0.0
+    explorable_area_m2: float = 0.0
+    path_length_m: float = 0.0
+    time_to_s: dict[str, float] = field(default_factory=dict)
+    path_to_m: dict[str, float] = field(default_factory=dict)
+    collisions: int = 0
+    collision_places: list[tuple[float, float, str]] = field(default_factory=list)
+    goals_sent: int = 0
+    goal_switches: int = 0
+    goals_blacklisted: int = 0
+    nav_aborts: int = 0
+    start_pose: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    n_objects: int = 0
+    timings_ms: dict[str, list[float]] = field(default_factory=dict)
+    coverage_samples: list[tuple[float, float, float]] = field(default_factory=list)
+    goals: list[tuple[float, float]] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """All fields as plain JSON-able values (NaN -> None)."""
+        return _json_clean(asdict(self))
+
+    def summary_row(self) -> dict[str, Any]:
+        """One flat CSV row: scalars, milestones and p50/p95 of every timing."""
+        row: dict[str, Any] = {
+            "world": self.world, "strategy": self.strategy, "seed": self.seed,
+            "completed": int(self.completed), "stop_reason": self.stop_reason,
+            "sim_time_s": round(self.sim_time_s, 2), "wall_time_s": round(self.wall_time_s, 2),
+            "coverage_pct": round(self.coverage_pct, 2),
+            "explorable_area_m2": round(self.explorable_area_m2, 2),
+            "path_length_m": round(self.path_length_m, 2),
+        }
+        for key in sorted(self.time_to_s, key=float):
+            row[f"time_to_{key}_s"] = _round(self.time_to_s[key])
+            row[f"path_to_{key}_m"] = _round(self.path_to_m.get(key, math.nan))
+        row.update({"collisions": self.collisions, "goals_sent": self.goals_sent,
+                    "goal_switches": self.goal_switches,
+                    "goals_blacklisted": self.goals_blacklisted, "nav_aborts": self.nav_aborts,
+                    "n_objects": self.n_objects,
+                    "collision_places": ";".join(f"{x:.2f},{y:.2f},{w}"
+                                                 for x, y, w in self.collision_places)})
+        for key in TIMING_KEYS:
+            vals = self.timings_ms.get(key, [])
+            row[f"{key}_ms_p50"] = _round(float(np.percentile(vals, 50)) if vals else math.nan, 3)
+            row[f"{key}_ms_p95"] = _round(float(np.percentile(vals, 95)) if vals else math.nan, 3)
+        return row
+
+
+@dataclass
+class LockstepState:
+    """What an observer sees after every decision (for pictures and checks).
+
+    The objects are live: copy what must outlive the call.
+    """
+
+    engine: SimEngine
+    grid: GridMap
+    frontiers: list[Frontier]
+    labels: npt.NDArray[np.int32] | None
+    object_layer: GridMap | None
+    object_map: ObjectMap | None
+    goal_xy: tuple[float, float] | None
+    goals: list[tuple[float, float]]
+
+
+def _round(v: float, nd: int = 2) -> float:
+    return round(v, nd) if math.isfinite(v) else math.nan
+
+
+def _json_clean(v: Any) -> Any:
+    if isinstance(v, float):
+        return v if math.isfinite(v) else None
+    if isinstance(v, dict):
+        return {str(k): _json_clean(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_json_clean(x) for x in v]
+    return v
+
+
+# --------------------------------------------------------------------------- set-up
+
+
+def perturbed_start(world: World, seed: int, params: LockstepParams,
+                    radius_m: float = 0.22, height_m: float = 1.1
+                    ) -> tuple[float, float, float]:
+    """The world's start pose moved by the seed (see :class:`LockstepParams`).
+
+    Positions are drawn until one keeps ``start_min_clearance_m`` to every solid that
+    reaches below ``height_m`` (at most 50 draws; then the original position is kept).
+
+    Parameters
+    ----------
+    world : World
+    seed : int
+    params : LockstepParams
+    radius_m, height_m : float
+        Robot disk radius and height of the collision test.
+
+    Returns
+    -------
+    (x, y, yaw)
+    """
+    rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, 0x5EED])
+    x0, y0, yaw0 = (float(v) for v in world.start_pose)
+    yaw = yaw0 + float(rng.uniform(-params.start_yaw_jitter_rad, params.start_yaw_jitter_rad))
+    yaw = (yaw + math.pi) % (2.0 * math.pi) - math.pi
+    collider = Collider(world, radius_m, height_m)
+    for _ in range(50):
+        dx, dy = rng.uniform(-params.start_jitter_m, params.start_jitter_m, 2)
+        x, y = x0 + float(dx), y0 + float(dy)
+        if collider.clearance(x, y)[0] >= params.start_min_clearance_m:
+            return (x, y, yaw)
+    return (x0, y0, yaw)
+
+
+def scan_points_map(engine: SimEngine) -> npt.NDArray[np.float64]:
+    """Latest scan's returns in the map frame, shape (N, 2) (empty before the first)."""
+    scan = engine.latest_scan
+    if scan is None:
+        return np.zeros((0, 2))
+    g = engine.scan_geometry
+    r = np.asarray(scan.ranges, dtype=np.float64)
+    ang = g.angle_min_rad + g.angle_increment_rad * np.arange(r.shape[0])
+    ok = np.isfinite(r) & (r >= g.range_min_m) & (r < g.range_max_m)
+    x, y, yaw = scan.pose
+    mx = engine.params.lidar_mount_x_m
+    ox, oy = x + mx * math.cos(yaw), y + mx * math.sin(yaw)
+    a = yaw + ang[ok]
+    return np.column_stack([ox + r[ok] * np.cos(a), oy + r[ok] * np.sin(a)])
+
+
+def _sim_params(seed: int, spec: StrategySpec, p: LockstepParams,
+                base: SimParams | None) -> SimParams:
+    sp = base if base is not None else SimParams()
+    cam = sp.camera_params()
+    s = p.camera_scale
+    w, h = max(16, int(round(cam.width * s))), max(16, int(round(cam.height * s)))
+    fx = cam.fx * w / cam.width
+    fy = cam.fy * h / cam.height
+    return replace(sp, seed=int(seed), enable_camera=spec.use_objects,
+                   camera_rate_hz=1.0 / p.object_period_s,
+                   camera_width_px=w, camera_height_px=h, camera_fx_px=fx, camera_fy_px=fy,
+                   camera_cx_px=(w - 1) / 2.0, camera_cy_px=(h - 1) / 2.0)
+
+
+class _ObjectPipeline:
+    """The object costmap node's work on one engine: oracle detections + depth + scan."""
+
+    def __init__(self, engine: SimEngine, params: ObjectParams, seed: int,
+                 lp: LockstepParams) -> None:
+        self.engine = engine
+        self.params = params
+        self.priors = load_priors(params.priors_path or None)
+        self.detector = Detector(DetectorParams(
+            backend="oracle", oracle_miss_prob=lp.oracle_miss_prob,
+            oracle_jitter_px=lp.oracle_jitter_px, oracle_seed=int(seed)),
+            sim_class_ids=CLASS_IDS)
+        self.map = ObjectMap(params, self.priors)
+        cp = engine.params.camera_params()
+        self.intrinsics: CameraIntrinsics = cp.intrinsics()
+        self.tolerance_m = lp.object_update_tolerance_m
+        self._last_stamp = -1.0
+        self._published: list[tuple[float, ...]] = []
+
+    def update(self) -> bool:
+        """Process the newest camera frame if unseen; True when one was processed."""
+        cam = self.engine.latest_camera
+        if cam is None or cam.stamp_s <= self._last_stamp:
+            return False
+        self._last_stamp = cam.stamp_s
+        fr = cam.frame
+        tf = np.eye(4)
+        tf[:3, :3] = fr.rotation
+        tf[:3, 3] = fr.translation
+        depth = DepthFrame(fr.depth_m, self.intrinsics, tf)
+        dets = self.detector.detect(fr.rgb, semantic=fr.semantic, instance=fr.instance)
+        res = process_frame(depth, dets, self.priors, self.params, scan_points_map(self.engine))
+        self.map.update(res.objects + res.unknown, depth, int(round(cam.stamp_s * 1e9)))
+        return True
+
+    def changed(self) -> bool:
+        """True when the boxes differ from the last :meth:`mark_published` ones by more
+        than the tolerance (or their number changed)."""
+        cur = self._signature()
+        if len(cur) != len(self._published):
+            return True
+        if not cur:
+            return False
+        a, b = np.asarray(cur), np.asarray(self._published)
+        return bool(np.abs(a - b).max() > self.tolerance_m)
+
+    def mark_published(self) -> None:
+        self._published = self._signature()
+
+    def _signature(self) -> list[tuple[float, ...]]:
+        return [(o.center_xyz[0], o.center_xyz[1], o.size_xyz[0], o.size_xyz[1],
+                 math.sin(2 * o.yaw), math.cos(2 * o.yaw)) for _, o in self.map.boxes()]
+
+
+# ------------------------------------------------------------------------------ run
+
+
+def run_exploration(world: World, strategy: str, seed: int, *,
+                    max_sim_time_s: float | None = None,
+                    decision_period_s: float | None = None,
+                    params: LockstepParams | None = None,
+                    sim_params: SimParams | None = None,
+                    selection_params: SelectionParams | None = None,
+                    segmentation_params: SegmentationParams | None = None,
+                    object_params: ObjectParams | None = None,
+                    ground_truth: Any = None,
+                    observer: Callable[[LockstepState], None] | None = None) -> RunResult:
+    """Explore ``world`` with ``strategy`` in lock step and measure the run.
+
+    Parameters
+    ----------
+    world : World
+        Not modified (the perturbed start goes into a copy).
+    strategy : str
+        One of :data:`STRATEGIES`.
+    seed : int
+        Seeds the start perturbation, the simulator noise and the oracle.
+    max_sim_time_s, decision_period_s : float, optional
+        Override the fields of ``params``.
+    params : LockstepParams, optional
+    sim_params : SimParams, optional
+        Base simulator parameters (seed, camera and world fields are set here).
+    selection_params, segmentation_params, object_params : optional
+        Explorer parameters (defaults: the dataclass defaults, i.e. the nodes'); the
+        strategy fields (``strategy``, ``use_regions``, ``use_object_costmap``) are
+        set from :data:`STRATEGY_SPECS`.
+    ground_truth : worlds.GroundTruth, optional
+        Precomputed ``worlds.ground_truth(world)`` (its ``inside`` must hold the start).
+    observer : callable, optional
+        Called with a :class:`LockstepState` after every decision.
+
+    Returns
+    -------
+    RunResult
+
+    Raises
+    ------
+    ValueError
+        On an unknown strategy or invalid parameters.
+    """
+    if strategy not in STRATEGY_SPECS:
+        raise ValueError(f"strategy must be one of {STRATEGIES}, got {strategy!r}")
+    spec = STRATEGY_SPECS[strategy]
+    p = params if params is not None else LockstepParams()
+    if max_sim_time_s is not None:
+        p = replace(p, max_sim_time_s=float(max_sim_time_s))
+    if decision_period_s is not None:
+        p = replace(p, decision_period_s=float(decision_period_s))
+    sel_p = replace(selection_params if selection_params is not None else SelectionParams(),
+                    strategy=spec.selection, use_regions=spec.use_regions,
+                    use_object_costmap=spec.use_objects)
+    fr_p = sel_p.frontier_params()
+    sp = _sim_params(seed, spec, p, sim_params)
+    start = perturbed_start(world, seed, p, sp.robot_radius_m, sp.robot_height_m)
+    run_world = replace(world, start_pose=start)
+    if ground_truth is None and sp.compute_coverage:
+        ground_truth = worlds.ground_truth(run_world, resolution_m=sp.map_resolution_m)
+    engine = SimEngine(run_world, sp, ground_truth=ground_truth)
+    manager = GoalManager(sel_p)
+    segmenter = (IncrementalSegmenter(segmentation_params or SegmentationParams())
+                 if spec.use_regions else None)
+    objects = (_ObjectPipeline(engine, object_params or ObjectParams(), seed, p)
+               if spec.use_objects else None)
+
+    res = RunResult(world=world.name, strategy=strategy, seed=int(seed), start_pose=start,
+                    timings_ms={k: [] for k in TIMING_KEYS})
+    ref = engine.metrics.reference
+    res.explorable_area_m2 = ref.area_m2 if ref is not None else math.nan
+    milestones = sorted(p.milestones_pct)
+    res.time_to_s = {_key(m): math.nan for m in milestones}
+    res.path_to_m = {_key(m): math.nan for m in milestones}
+    tick = min(p.decision_period_s, p.object_period_s) if objects else p.decision_period_s
+    next_decision = 0.0
+    next_sample = 0.0
+    graph_key: tuple[int, int] | None = None
+    graph: BlockGraph | None = None
+    labels: npt.NDArray[np.int32] | None = None
+    seg_version = -1
+    layer_version = 0
+    layer: GridMap | None = None
+    wall0 = time.perf_counter()
+
+    def record_coverage() -> float:
+        cov = engine.metrics.coverage_pct
+        if not math.isfinite(cov):
+            return cov
+        t = engine.metrics.sim_time_s
+        for m in milestones:
+            k = _key(m)
+            if cov >= m and not math.isfinite(res.time_to_s[k]):
+                res.time_to_s[k] = t
+                res.path_to_m[k] = engine.metrics.path_length_m
+        return cov
+
+    engine.step(0.0)
+    engine.run_until(lambda e: e.latest_scan is not None, 1.0)
+    while True:
+        now = engine.time_s
+        cov = record_coverage()
+        if now >= next_sample - 1e-9:
+            res.coverage_samples.append((now, cov, engine.metrics.path_length_m))
+            next_sample += p.sample_period_s
+        if math.isfinite(cov) and cov >= p.coverage_target_pct:
+            res.completed, res.stop_reason = True, "coverage"
+            break
+        if now >= p.max_sim_time_s - 1e-9:
+            res.stop_reason = "timeout"
+            break
+        if objects is not None:
+            t0 = time.perf_counter()
+            if objects.update() and objects.changed():
+                layer = objects.map.rasterize(engine.map)
+                engine.add_costmap_layer(OBJECT_LAYER, layer)
+                objects.mark_published()
+                layer_version += 1
+            res.timings_ms["objects"].append((time.perf_counter() - t0) * 1e3)
+        if now >= next_decision - 1e-9:
+            next_decision += p.decision_period_s
+            t_dec = time.perf_counter()
+            grid = engine.map
+            extra = None
+            if layer is not None:
+                extra = layer.resample_to(grid, fill=0) >= fr_p.object_occupied_threshold
+            # --- segmentation node
+            if segmenter is not None and engine.map_version != seg_version:
+                t0 = time.perf_counter()
+                labels = segmenter.update(grid)
+                seg_version = engine.map_version
+                res.timings_ms["segmentation"].append((time.perf_counter() - t0) * 1e3)
+            # --- frontier node
+            t0 = time.perf_counter()
+            passable = traversable_mask(grid, extra, fr_p)
+            frontiers = find_frontiers(grid, extra, fr_p, passable)
+            res.timings_ms["frontier"].append((time.perf_counter() - t0) * 1e3)
+            # --- selector node
+            t0 = time.perf_counter()
+            key = (engine.map_version, layer_version)
+            if graph is None or key != graph_key:
+                graph = BlockGraph(passable, grid.resolution_m, sel_p.path_block_cells)
+                graph_key = key
+            x, y, _ = engine.pose
+            robot_rc = grid.world_to_cell(x, y)
+            dist = (frontier_distances(graph, robot_rc, frontiers, sel_p)
+                    if grid.in_bounds(*robot_rc) else None)
+            use_labels = labels if (labels is not None and labels.shape == grid.shape) else None
+            old_goal = manager.goal
+            black_before = manager.blacklist
+            step = manager.step(now, (x, y), grid, frontiers, dist, use_labels, robot_rc)
+            res.timings_ms["selection"].append((time.perf_counter() - t0) * 1e3)
+            newly_black = _blacklist_growth(black_before, manager.blacklist)
+            res.goals_blacklisted += newly_black
+            if step.action is Action.NEW_GOAL and step.goal is not None:
+                # A switch: the previous goal was neither reached nor given up.
+                if (old_goal is not None and not newly_black and math.hypot(
+                        x - old_goal.xy_m[0], y - old_goal.xy_m[1])
+                        > sel_p.goal_reached_tolerance_m):
+                    res.goal_switches += 1
+                gx, gy = step.goal.xy_m
+                try:
+                    engine.set_goal(gx, gy, step.goal.yaw_rad)
+                    res.goals_sent += 1
+                    res.goals.append((gx, gy))
+                except ValueError:
+                    manager.abandon_goal(blacklist=True)
+            res.timings_ms["decision"].append((time.perf_counter() - t_dec) * 1e3)
+            if observer is not None:
+                observer(LockstepState(engine, grid, frontiers, use_labels, layer,
+                                       objects.map if objects else None,
+                                       manager.goal.xy_m if manager.goal else None,
+                                       res.goals))
+            if step.action is Action.DONE:
+                res.stop_reason = "done"
+                break
+        engine.step(tick)
+
+    res.sim_time_s = engine.time_s
+    res.wall_time_s = time.perf_counter() - wall0
+    res.coverage_pct = float(engine.metrics.coverage_pct)
+    res.path_length_m = engine.metrics.path_length_m
+    res.collisions = engine.metrics.n_collisions
+    res.collision_places = [(e.x_m, e.y_m, e.object or e.cls) for e in engine.metrics.collisions]
+    res.nav_aborts = engine.metrics.goals_aborted
+    res.n_objects = len(objects.map) if objects is not None else 0
+    if not res.coverage_samples or res.coverage_samples[-1][0] < engine.time_s:
+        res.coverage_samples.append((engine.time_s, res.coverage_pct, res.path_length_m))
+    return res
+
+
+def _key(m: float) -> str:
+    return f"{m:g}"
+
+
+def _blacklist_growth(before: tuple, after: tuple) -> int:
+    """Entries added to a bounded blacklist between two snapshots (oldest first)."""
+    if after == before:
+        return 0
+    for k in range(len(after), 0, -1):   # longest suffix of `before` that prefixes `after`
+        if k <= len(before) and tuple(before[len(before) - k:]) == tuple(after[:k]):
+            return len(after) - k
+    return len(after)

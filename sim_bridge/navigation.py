@@ -1,0 +1,690 @@
+"""Navigation stand-in: what Nav2's bt_navigator + planner + controller do, in a few lines.
+
+:class:`Navigator` takes a goal (x, y, yaw) like ``goal_pose``, plans on the current map
+plus any extra occupancy layers (e.g. the object costmap) whose occupied cells are
+obstacles, follows the plan with a pure-pursuit controller within the speed limits,
+replans periodically and when the plan gets blocked, and reports ``ACTIVE`` /
+``SUCCEEDED`` / ``ABORTED`` with a reason.
+
+Planning mirrors Nav2's NavFn on an inflated costmap:
+
+* cells closer than ``robot_radius_m + inflation_margin_m`` to an obstacle are lethal
+  (obstacles inflated by the robot radius, :func:`explore_seg.core.paths.inflate`
+  semantics);
+* beyond that, out to ``inflation_radius_m``, a cell costs
+  ``1 + inflation_cost_weight * exp(-inflation_cost_scale * (d - lethal))`` (Nav2's
+  exponential inflation decay), which keeps plans off walls;
+* unknown cells are traversable (``allow_unknown: true``) at ``1 + unknown_cost``
+  (NavFn gives unknown cells a near-lethal cost, so known free space is preferred);
+* a goal inside a lethal cell moves to the nearest free cell within
+  ``planner_goal_tolerance_m``.
+
+The cost-weighted 8-connected Dijkstra runs on a window around start and goal that grows
+until it provably holds the cheapest path. A new plan replaces the current one only when
+it is clearly cheaper (``switch_cost_ratio``) or the current one got blocked, which
+avoids the back-and-forth a planner through unknown space otherwise shows as walls
+appear piece by piece.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from explore_seg.core.grid import OCCUPIED_THRESHOLD, GridMap
+from explore_seg.core.paths import SQRT2, extract_path, inflate
+
+
+class NavState(enum.Enum):
+    """Goal status, as Nav2's action reports it."""
+
+    IDLE = "idle"
+    ACTIVE = "active"
+    SUCCEEDED = "succeeded"
+    ABORTED = "aborted"
+    CANCELED = "canceled"
+
+
+@dataclass(frozen=True)
+class NavStatus:
+    """Current state, a human reason for ABORTED/CANCELED, and the goal (x, y, yaw)."""
+
+    state: NavState
+    reason: str = ""
+    goal: tuple[float, float, float] | None = None
+
+
+@dataclass(frozen=True)
+class NavParams:
+    """Planner and controller parameters (defaults follow a TurtleBot3 waffle + Nav2)."""
+
+    robot_radius_m: float = field(default=0.22, metadata={
+        "doc": "radius of the robot's collision disk", "unit": "m"})
+    inflation_margin_m: float = field(default=0.05, metadata={
+        "doc": "clearance beyond the radius every plan keeps (lethal zone = radius + this)",
+        "unit": "m"})
+    inflation_radius_m: float = field(default=0.6, metadata={
+        "doc": "obstacle cost decays to zero at this distance (Nav2 inflation_radius)",
+        "unit": "m"})
+    inflation_cost_weight: float = field(default=3.0, metadata={
+        "doc": "extra cost per metre at the edge of the lethal zone"})
+    inflation_cost_scale: float = field(default=6.0, metadata={
+        "doc": "exponential decay rate of the inflation cost (Nav2 cost_scaling_factor)",
+        "unit": "1/m"})
+    allow_unknown: bool = field(default=True, metadata={
+        "doc": "plan through unknown cells (Nav2 planner allow_unknown)"})
+    unknown_cost: float = field(default=4.0, metadata={
+        "doc": "extra cost per metre through unknown cells (NavFn: near-lethal)"})
+    occupied_threshold: int = field(default=OCCUPIED_THRESHOLD, metadata={
+        "doc": "map/layer cells at or above this value are obstacles", "unit": "%"})
+    planner_goal_tolerance_m: float = field(default=0.5, metadata={
+        "doc": "a blocked goal is replaced by the nearest free cell within this", "unit": "m"})
+    plan_downsample: int = field(default=1, metadata={
+        "doc": "plan on cells this many times coarser (1 = map resolution)"})
+    plan_window_margin_m: float = field(default=3.0, metadata={
+        "doc": "first search window: path costs up to 1.5 x straight line + this", "unit": "m"})
+    replan_period_s: float = field(default=1.0, metadata={
+        "doc": "replan when the map changed, at most this often (sim time)", "unit": "s"})
+    switch_cost_ratio: float = field(default=0.8, metadata={
+        "doc": "a replan replaces a still-valid plan only when cheaper than this x its cost"})
+    blocked_check_period_s: float = field(default=0.2, metadata={
+        "doc": "how often the rest of the plan is checked against new obstacles", "unit": "s"})
+    goal_tolerance_xy_m: float = field(default=0.25, metadata={
+        "doc": "goal reached within this distance (Nav2 xy_goal_tolerance)", "unit": "m"})
+    goal_tolerance_yaw_rad: float = field(default=0.25, metadata={
+        "doc": "final heading tolerance (Nav2 yaw_goal_tolerance)", "unit": "rad"})
+    lookahead_m: float = field(default=0.4, metadata={
+        "doc": "pure-pursuit lookahead distance", "unit": "m"})
+    max_linear_speed_mps: float = field(default=0.26, metadata={
+        "doc": "forward speed limit (TurtleBot3 waffle)", "unit": "m/s"})
+    max_angular_speed_radps: float = field(default=1.82, metadata={
+        "doc": "turn rate limit (TurtleBot3 waffle)", "unit": "rad/s"})
+    rotate_in_place_angle_rad: float = field(default=0.8, metadata={
+        "doc": "turn on the spot first when the carrot is further off the heading", "unit": "rad"})
+    heading_gain: float = field(default=2.5, metadata={
+        "doc": "turn rate per rad of heading error when rotating on the spot", "unit": "1/s"})
+    approach_gain: float = field(default=1.0, metadata={
+        "doc": "speed per metre of remaining distance near the goal", "unit": "1/s"})
+    min_approach_speed_mps: float = field(default=0.05, metadata={
+        "doc": "speed floor while approaching the goal", "unit": "m/s"})
+    progress_radius_m: float = field(default=0.5, metadata={
+        "doc": "must move this far within progress_timeout_s (Nav2 progress checker)", "unit": "m"})
+    progress_timeout_s: float = field(default=10.0, metadata={
+        "doc": "abort when no progress for this long (0 = off)", "unit": "s"})
+    goal_timeout_s: float = field(default=600.0, metadata={
+        "doc": "abort a goal after this much sim time (0 = off)", "unit": "s"})
+
+    def __post_init__(self) -> None:
+        positive = ("robot_radius_m", "lookahead_m", "max_linear_speed_mps",
+                    "max_angular_speed_radps", "goal_tolerance_xy_m", "goal_tolerance_yaw_rad",
+                    "replan_period_s", "blocked_check_period_s", "heading_gain",
+                    "approach_gain", "progress_radius_m", "inflation_cost_scale")
+        for name in positive:
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be finite and > 0, got {v}")
+        non_negative = ("inflation_margin_m", "inflation_cost_weight", "unknown_cost",
+                        "planner_goal_tolerance_m", "plan_window_margin_m",
+                        "progress_timeout_s", "goal_timeout_s", "min_approach_speed_mps")
+        for name in non_negative:
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be finite and >= 0, got {v}")
+        if not self.inflation_radius_m >= self.robot_radius_m + self.inflation_margin_m:
+            raise ValueError(
+                f"inflation_radius_m ({self.inflation_radius_m}) must be >= robot_radius_m + "
+                f"inflation_margin_m ({self.robot_radius_m + self.inflation_margin_m})")
+        if not 0 < self.switch_cost_ratio <= 1:
+            raise ValueError(f"switch_cost_ratio must be in (0, 1], got {self.switch_cost_ratio}")
+        if not 0 < self.rotate_in_place_angle_rad <= math.pi:
+            raise ValueError(f"rotate_in_place_angle_rad must be in (0, pi], got "
+                             f"{self.rotate_in_place_angle_rad}")
+        if not 1 <= self.occupied_threshold <= 100:
+            raise ValueError(f"occupied_threshold must be in 1..100, got {self.occupied_threshold}")
+        if not 1 <= self.plan_downsample <= 8:
+            raise ValueError(f"plan_downsample must be in 1..8, got {self.plan_downsample}")
+
+    @property
+    def lethal_radius_m(self) -> float:
+        """Cells closer than this to an obstacle are never planned through."""
+        return self.robot_radius_m + self.inflation_margin_m
+
+
+def wrap_angle(a: float) -> float:
+    """Angle wrapped to [-pi, pi)."""
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+# ------------------------------------------------------------------ cost planning
+
+
+def cost_grid(blocked: npt.NDArray[np.bool_], unknown: npt.NDArray[np.bool_] | None,
+              resolution_m: float, params: NavParams) -> npt.NDArray[np.float64]:
+    """Per-cell traversal cost (per metre) of an inflated costmap; ``inf`` = lethal.
+
+    Parameters
+    ----------
+    blocked : ndarray of bool, shape (H, W)
+        Obstacle cells.
+    unknown : ndarray of bool, shape (H, W), or None
+        Unknown cells (extra ``unknown_cost``); None when unknown cells are not allowed
+        (the caller then marks them blocked).
+    resolution_m : float
+    params : NavParams
+
+    Returns
+    -------
+    ndarray of float64, shape (H, W)
+        ``>= 1`` for traversable cells, ``inf`` within the lethal radius of an obstacle.
+    """
+    lethal = inflate(blocked, params.lethal_radius_m, resolution_m)
+    cost = np.ones(blocked.shape, dtype=np.float64)
+    if blocked.any() and params.inflation_cost_weight > 0:
+        free = np.ascontiguousarray(~blocked, dtype=np.uint8)
+        d = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * resolution_m
+        band = ~lethal & (d < params.inflation_radius_m)
+        excess = np.maximum(d[band] - params.lethal_radius_m, 0.0)
+        cost[band] += params.inflation_cost_weight * np.exp(-params.inflation_cost_scale * excess)
+    if unknown is not None and params.unknown_cost > 0:
+        cost[unknown] += params.unknown_cost
+    cost[lethal] = np.inf
+    return cost
+
+
+def cost_distance_field(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
+                        resolution_m: float = 1.0, limit: float = math.inf
+                        ) -> npt.NDArray[np.float64]:
+    """Cheapest 8-connected path cost from ``start_rc`` to every cell.
+
+    A move between neighbours costs ``step length * mean of the two cell costs``; cells
+    with infinite cost are impassable; diagonal moves need both side cells passable (no
+    corner cutting). The start is passable (cost 1 if it was lethal).
+
+    Parameters
+    ----------
+    cost : ndarray of float64, shape (H, W)
+        Per-metre cost, >= 1, ``inf`` = impassable.
+    start_rc : (int, int)
+    resolution_m : float
+        Step length of one cell.
+    limit : float
+        Cells costlier than this are not expanded (reported ``inf``).
+
+    Returns
+    -------
+    ndarray of float64, shape (H, W)
+        ``inf`` for unreachable cells.
+
+    Raises
+    ------
+    ValueError
+        When the start lies outside the grid.
+    """
+    h, w = cost.shape
+    r, c = start_rc
+    if not (0 <= r < h and 0 <= c < w):
+        raise ValueError(f"start cell {start_rc} outside grid of shape {cost.shape}")
+    cst = cost.copy()
+    if not np.isfinite(cst[r, c]):
+        cst[r, c] = 1.0
+    pas = np.isfinite(cst)
+    idx = np.full((h, w), -1, dtype=np.int64)
+    n = int(pas.sum())
+    idx[pas] = np.arange(n)
+    src_l, dst_l, wt_l = [], [], []
+    for dr, dc, step in ((0, 1, 1.0), (1, 0, 1.0), (1, 1, SQRT2), (1, -1, SQRT2)):
+        r0, r1 = max(0, -dr), h - max(0, dr)
+        c0, c1 = max(0, -dc), w - max(0, dc)
+        a = pas[r0:r1, c0:c1]
+        b = pas[r0 + dr:r1 + dr, c0 + dc:c1 + dc]
+        ok = a & b
+        if dr and dc:
+            ok &= pas[r0 + dr:r1 + dr, c0:c1] & pas[r0:r1, c0 + dc:c1 + dc]
+        src_l.append(idx[r0:r1, c0:c1][ok])
+        dst_l.append(idx[r0 + dr:r1 + dr, c0 + dc:c1 + dc][ok])
+        wt_l.append(0.5 * step * resolution_m
+                    * (cst[r0:r1, c0:c1][ok] + cst[r0 + dr:r1 + dr, c0 + dc:c1 + dc][ok]))
+    graph = csr_matrix((np.concatenate(wt_l), (np.concatenate(src_l), np.concatenate(dst_l))),
+                       shape=(n, n))
+    d = dijkstra(graph, directed=False, indices=int(idx[r, c]), limit=limit)
+    out = np.full((h, w), np.inf)
+    out[pas] = d
+    return out
+
+
+def plan_path(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
+              goal_rc: tuple[int, int], resolution_m: float, window_margin_m: float
+              ) -> tuple[npt.NDArray[np.int64], float] | None:
+    """Cheapest path from start to goal over a cost grid, searched in a growing window.
+
+    Costs are >= 1 per metre, so a path of cost <= L is at most L long and lies in the
+    ellipse of points whose distances to start and goal sum to <= L. The search runs on
+    that ellipse's bounding box for ``L = 1.5 * |goal - start| + window_margin_m``; a
+    path found there with cost <= L is the global optimum. Otherwise L doubles, up to
+    the whole grid.
+
+    Returns
+    -------
+    (cells, cost) or None
+        cells: ndarray of int64, shape (N, 2), (row, col), start first; cost: its total
+        cost. None when the goal is unreachable.
+    """
+    h, w = cost.shape
+    (sr, sc), (gr, gc) = start_rc, goal_rc
+    budget = 1.5 * math.hypot(gr - sr, gc - sc) * resolution_m + window_margin_m
+    while True:
+        half = budget / resolution_m / 2.0 + 1.0
+        cr, cc = (sr + gr) / 2.0, (sc + gc) / 2.0
+        r0, r1 = max(0, int(cr - half)), min(h, int(math.ceil(cr + half)) + 1)
+        c0, c1 = max(0, int(cc - half)), min(w, int(math.ceil(cc + half)) + 1)
+        whole = r0 == 0 and c0 == 0 and r1 == h and c1 == w
+        dist = cost_distance_field(cost[r0:r1, c0:c1], (sr - r0, sc - c0), resolution_m,
+                                   math.inf if whole else budget)
+        g = float(dist[gr - r0, gc - c0])
+        if math.isfinite(g) and (g <= budget or whole):
+            cells = extract_path(dist, (gr - r0, gc - c0))
+            return cells + np.array([r0, c0], dtype=np.int64), g
+        if whole:
+            return None
+        budget *= 2.0
+
+
+def path_cost(xy: npt.NDArray[np.float64], cost: npt.NDArray[np.float64], grid: GridMap
+              ) -> float:
+    """Cost of a world polyline on a cost grid (``inf`` if it crosses a lethal cell or
+    leaves the grid); each segment is charged its length times its end cell's cost."""
+    if len(xy) < 2:
+        return 0.0
+    rows, cols = grid.world_to_cells(xy[:, 0], xy[:, 1])
+    if (rows.min() < 0 or cols.min() < 0 or rows.max() >= cost.shape[0]
+            or cols.max() >= cost.shape[1]):
+        return math.inf
+    seg = np.hypot(np.diff(xy[:, 0]), np.diff(xy[:, 1]))
+    return float((seg * cost[rows[1:], cols[1:]]).sum())
+
+
+# ---------------------------------------------------------------------- navigator
+
+
+class Navigator:
+    """Goal handling, planning and path following for one robot.
+
+    The engine calls :meth:`update` every physics step with the true pose and the sim
+    time; it returns the (v, w) command. Planning uses the latest map given through
+    :meth:`set_map` and the layers given through :meth:`set_layer`.
+    """
+
+    def __init__(self, params: NavParams | None = None) -> None:
+        self.params = params if params is not None else NavParams()
+        self._map_src: GridMap | Callable[[], GridMap] | None = None
+        self._map_cache: GridMap | None = None
+        self._map_cache_version = -1
+        self._map_version = 0
+        self._layer_version = 0
+        self._layers: dict[str, GridMap] = {}
+        self._status = NavStatus(NavState.IDLE)
+        self._plan_xy = np.zeros((0, 2), dtype=np.float64)
+        self._plan_index = 0
+        self._planned_key: tuple[int, int] = (-1, -1)
+        self._last_plan_s = -math.inf
+        self._last_check_s = -math.inf
+        self._goal_start_s = 0.0
+        self._progress_xy = (0.0, 0.0)
+        self._progress_s = 0.0
+        self._plan_count = 0
+        self._need_plan = False
+        self._final_turn = False
+        self._target_xy: tuple[float, float] | None = None
+        self._plan_version = 0
+
+    # ---------------------------------------------------------------- inputs
+    @property
+    def status(self) -> NavStatus:
+        """Current goal status."""
+        return self._status
+
+    @property
+    def plan_xy(self) -> npt.NDArray[np.float64]:
+        """Current plan as world points, shape (N, 2) (empty without a plan)."""
+        return self._plan_xy
+
+    @property
+    def plan_version(self) -> int:
+        """Changes whenever :attr:`plan_xy` is replaced."""
+        return self._plan_version
+
+    @property
+    def plan_count(self) -> int:
+        """Number of plans computed so far (kept or not; for diagnostics)."""
+        return self._plan_count
+
+    def set_params(self, params: NavParams) -> None:
+        """Swap parameters (takes effect at the next plan / control step)."""
+        self.params = params
+        self._need_plan = self._status.state is NavState.ACTIVE
+
+    def set_map(self, grid: GridMap | Callable[[], GridMap], version: int) -> None:
+        """Latest map, or a function returning it (called only when a plan needs it);
+        ``version`` must change whenever the map content changes."""
+        self._map_src = grid
+        self._map_version = int(version)
+
+    def _content_key(self) -> tuple[int, int]:
+        return (self._map_version, self._layer_version)
+
+    @property
+    def _map(self) -> GridMap | None:
+        if self._map_src is None or isinstance(self._map_src, GridMap):
+            return self._map_src
+        if self._map_cache is None or self._map_cache_version != self._map_version:
+            self._map_cache = self._map_src()
+            self._map_cache_version = self._map_version
+        return self._map_cache
+
+    def set_layer(self, name: str, grid: GridMap | None) -> None:
+        """Add/replace (or with None remove) an obstacle layer; forces a replan."""
+        if grid is None:
+            self._layers.pop(name, None)
+        else:
+            self._layers[name] = grid
+        self._layer_version += 1
+        self._need_plan = self._status.state is NavState.ACTIVE
+
+    def set_goal(self, x: float, y: float, yaw: float, now_s: float,
+                 pose: tuple[float, float, float]) -> None:
+        """Accept a new goal (replacing any active one) or raise ValueError.
+
+        Raises
+        ------
+        ValueError
+            When a coordinate is not finite, no map exists yet, or the goal lies outside
+            the current map.
+        """
+        vals = (float(x), float(y), float(yaw))
+        if not all(math.isfinite(v) for v in vals):
+            raise ValueError(f"goal must be finite, got (x, y, yaw) = {vals}")
+        g = self._map
+        if g is None:
+            raise ValueError("no map yet: goals are accepted once the first scan is mapped")
+        if not g.in_bounds(*g.world_to_cell(vals[0], vals[1])):
+            xmax = g.origin_xy_m[0] + g.width * g.resolution_m
+            ymax = g.origin_xy_m[1] + g.height * g.resolution_m
+            raise ValueError(
+                f"goal ({vals[0]:.2f}, {vals[1]:.2f}) outside the map "
+                f"[{g.origin_xy_m[0]:.2f}, {xmax:.2f}] x [{g.origin_xy_m[1]:.2f}, {ymax:.2f}]")
+        self._status = NavStatus(NavState.ACTIVE, "", vals)
+        self._goal_start_s = now_s
+        self._progress_xy = (pose[0], pose[1])
+        self._progress_s = now_s
+        self._plan_xy = np.zeros((0, 2))
+        self._plan_version += 1
+        self._plan_index = 0
+        self._need_plan = True
+        self._final_turn = False
+        self._target_xy = None
+
+    def cancel(self, reason: str = "canceled") -> None:
+        """Cancel the active goal (no-op otherwise)."""
+        if self._status.state is NavState.ACTIVE:
+            self._finish(NavState.CANCELED, reason)
+
+    def abort(self, reason: str) -> None:
+        """Abort the active goal (e.g. after a collision)."""
+        if self._status.state is NavState.ACTIVE:
+            self._finish(NavState.ABORTED, reason)
+
+    def _finish(self, state: NavState, reason: str) -> None:
+        self._status = NavStatus(state, reason, self._status.goal)
+        self._plan_xy = np.zeros((0, 2))
+        self._plan_version += 1
+        self._plan_index = 0
+
+    # -------------------------------------------------------------- planning
+    def _obstacles(self, grid: GridMap, window: tuple[int, int, int, int] | None = None
+                   ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
+        """(blocked, unknown) masks of the map (or a window r0, r1, c0, c1 of it)."""
+        p = self.params
+        r0, r1, c0, c1 = window if window is not None else (0, grid.height, 0, grid.width)
+        data = grid.data[r0:r1, c0:c1]
+        blocked = data >= p.occupied_threshold
+        unknown = data < 0
+        if self._layers:
+            corner = grid.cells_to_world(r0 - 0.5, c0 - 0.5)
+            geom = GridMap(np.zeros_like(data),
+                           grid.resolution_m, corner, grid.origin_yaw_rad, grid.frame_id)
+            for layer in self._layers.values():
+                blocked |= layer.resample_to(geom, fill=0) >= p.occupied_threshold
+        if not p.allow_unknown:
+            blocked |= unknown
+        return blocked, unknown
+
+    def _cost(self, grid: GridMap) -> npt.NDArray[np.float64]:
+        blocked, unknown = self._obstacles(grid)
+        return cost_grid(blocked, unknown if self.params.allow_unknown else None,
+                         grid.resolution_m, self.params)
+
+    def _plan(self, pose: tuple[float, float, float], now_s: float) -> bool:
+        """Plan from the pose to the goal; False (and ABORTED) when impossible."""
+        p = self.params
+        grid = self._map
+        assert grid is not None and self._status.goal is not None
+        gx, gy, _ = self._status.goal
+        res = grid.resolution_m
+        start = grid.world_to_cell(pose[0], pose[1])
+        goal = grid.world_to_cell(gx, gy)
+        self._last_plan_s = now_s
+        self._planned_key = self._content_key()
+        self._plan_count += 1
+        if not grid.in_bounds(*start):
+            self._finish(NavState.ABORTED, f"robot at ({pose[0]:.2f}, {pose[1]:.2f}) is "
+                                           "outside the map")
+            return False
+        if not grid.in_bounds(*goal):
+            self._finish(NavState.ABORTED, "goal outside the map")
+            return False
+        cost = self._cost(grid)
+        self._escape_start(cost, start, res)
+        k = p.plan_downsample
+        coarse, s_rc, g_rc = _coarsen(cost, start, goal, k)
+        known = grid.data >= 0
+        if k > 1:  # a coarse cell is known when all its fine cells are
+            known = np.isfinite(_coarsen(np.where(known, 0.0, np.inf), start, goal, k)[0])
+        g_rc = self._reachable_goal(coarse, g_rc, res * k, known)
+        found = (plan_path(coarse, s_rc, g_rc, res * k, p.plan_window_margin_m)
+                 if g_rc is not None else None)
+        if found is None:
+            self._finish(NavState.ABORTED, f"no path to ({gx:.2f}, {gy:.2f}): goal "
+                                           "unreachable or blocked")
+            return False
+        cells, new_cost = found
+        rows = (cells[:, 0].astype(np.float64) + 0.5) * k - 0.5
+        cols = (cells[:, 1].astype(np.float64) + 0.5) * k - 0.5
+        x, y = grid.cells_to_world(rows, cols)
+        xy = np.column_stack([x, y])
+        xy[0] = pose[0], pose[1]
+        if math.hypot(xy[-1, 0] - gx, xy[-1, 1] - gy) <= res * k:
+            xy[-1] = gx, gy
+        # Hysteresis: keep a still-valid current plan unless the new one is clearly cheaper.
+        if len(self._plan_xy) >= 2:
+            rest = np.vstack([[pose[0], pose[1]], self._plan_xy[self._plan_index + 1:]])
+            old_cost = path_cost(rest, cost, grid)
+            if math.isfinite(old_cost) and not new_cost < p.switch_cost_ratio * old_cost:
+                return True
+        self._plan_xy = xy
+        self._plan_version += 1
+        self._target_xy = (float(xy[-1, 0]), float(xy[-1, 1]))
+        self._plan_index = 0
+        return True
+
+    def _escape_start(self, cost: npt.NDArray[np.float64], start: tuple[int, int],
+                      res: float) -> None:
+        """Let a robot standing in the lethal margin drive out of it: lethal cells near
+        the start that keep half a robot radius from true obstacles get a high finite
+        cost (Nav2 likewise lets a robot leave the inscribed zone)."""
+        if np.isfinite(cost[start]):
+            return
+        p = self.params
+        rad = int(math.ceil(p.lethal_radius_m / res))
+        r, c = start
+        h, w = cost.shape
+        r0, r1 = max(0, r - rad), min(h, r + rad + 1)
+        c0, c1 = max(0, c - rad), min(w, c + rad + 1)
+        grid = self._map
+        assert grid is not None
+        blocked, _ = self._obstacles(grid, (r0, r1, c0, c1))
+        hard = inflate(blocked, 0.5 * p.robot_radius_m, res)
+        rr, cc = np.ogrid[r0:r1, c0:c1]
+        disk = (rr - r) ** 2 + (cc - c) ** 2 <= rad * rad
+        sub = cost[r0:r1, c0:c1]
+        sub[disk & ~hard & ~np.isfinite(sub)] = 1.0 + p.inflation_cost_weight
+
+    def _reachable_goal(self, cost: npt.NDArray[np.float64], goal_rc: tuple[int, int],
+                        res: float, known: npt.NDArray[np.bool_]) -> tuple[int, int] | None:
+        """The goal cell, or the nearest passable cell within the planner tolerance.
+
+        Known cells are preferred over unknown ones, so a goal next to a wall is moved
+        into the room, not behind the wall (where unknown space is also "passable").
+        """
+        if np.isfinite(cost[goal_rc]):
+            return goal_rc
+        rad = int(math.floor(self.params.planner_goal_tolerance_m / res))
+        if rad <= 0:
+            return None
+        h, w = cost.shape
+        r, c = goal_rc
+        r0, r1 = max(0, r - rad), min(h, r + rad + 1)
+        c0, c1 = max(0, c - rad), min(w, c + rad + 1)
+        ok = np.isfinite(cost[r0:r1, c0:c1])
+        rr, cc = np.nonzero(ok)
+        if rr.size == 0:
+            return None
+        d2 = ((rr + r0 - r) ** 2 + (cc + c0 - c) ** 2).astype(np.float64)
+        d2[d2 > rad * rad] = np.inf
+        d2[~known[r0:r1, c0:c1][rr, cc]] += 4.0 * rad * rad  # unknown only as a fallback
+        i = int(np.argmin(d2))
+        if not np.isfinite(d2[i]):
+            return None
+        return int(rr[i] + r0), int(cc[i] + c0)
+
+    def _plan_blocked(self) -> bool:
+        """True when a remaining plan point lies in the lethal zone of an obstacle."""
+        grid = self._map
+        if grid is None or len(self._plan_xy) < 2:
+            return False
+        pts = self._plan_xy[self._plan_index + 1:]
+        if len(pts) == 0:
+            return False
+        rows, cols = grid.world_to_cells(pts[:, 0], pts[:, 1])
+        ok = (rows >= 0) & (rows < grid.height) & (cols >= 0) & (cols < grid.width)
+        if not ok.all():
+            return True  # the map moved under the plan: replan
+        rad = int(math.ceil(self.params.lethal_radius_m / grid.resolution_m))
+        r0, r1 = max(0, int(rows.min()) - rad), min(grid.height, int(rows.max()) + rad + 1)
+        c0, c1 = max(0, int(cols.min()) - rad), min(grid.width, int(cols.max()) + rad + 1)
+        blocked, _ = self._obstacles(grid, (r0, r1, c0, c1))
+        if not blocked.any():
+            return False
+        lethal = inflate(blocked, self.params.lethal_radius_m, grid.resolution_m)
+        return bool(lethal[rows - r0, cols - c0].any())
+
+    # ------------------------------------------------------------- following
+    def update(self, pose: tuple[float, float, float], now_s: float
+               ) -> tuple[float, float]:
+        """Advance the state machine; returns the command (v m/s, w rad/s)."""
+        st = self._status
+        if st.state is not NavState.ACTIVE or st.goal is None:
+            return 0.0, 0.0
+        p = self.params
+        gx, gy, gyaw = st.goal
+        x, y, yaw = pose
+        if p.goal_timeout_s and now_s - self._goal_start_s > p.goal_timeout_s:
+            self._finish(NavState.ABORTED, f"timeout after {p.goal_timeout_s:.0f} s")
+            return 0.0, 0.0
+        # Like Nav2's controller, success is judged at the end of the plan, which differs
+        # from the goal when the planner moved a blocked goal within its tolerance.
+        tx, ty = self._target_xy if self._target_xy is not None else (gx, gy)
+        if math.hypot(tx - x, ty - y) <= p.goal_tolerance_xy_m or self._final_turn:
+            self._final_turn = True
+            err = wrap_angle(gyaw - yaw)
+            if abs(err) <= p.goal_tolerance_yaw_rad:
+                self._finish(NavState.SUCCEEDED, "")
+                return 0.0, 0.0
+            return 0.0, _clip(p.heading_gain * err, p.max_angular_speed_radps)
+        # Progress checker.
+        if math.hypot(x - self._progress_xy[0], y - self._progress_xy[1]) >= p.progress_radius_m:
+            self._progress_xy, self._progress_s = (x, y), now_s
+        elif p.progress_timeout_s and now_s - self._progress_s > p.progress_timeout_s:
+            self._finish(NavState.ABORTED, f"no progress for {p.progress_timeout_s:.0f} s")
+            return 0.0, 0.0
+        # Replanning: when the plan got blocked, else periodically while the map changes.
+        if (not self._need_plan and len(self._plan_xy)
+                and now_s - self._last_check_s >= p.blocked_check_period_s):
+            self._last_check_s = now_s
+            if self._planned_key != self._content_key() and self._plan_blocked():
+                self._plan_xy = np.zeros((0, 2))
+                self._plan_version += 1
+                self._need_plan = True
+        if (self._need_plan or len(self._plan_xy) == 0
+                or (self._planned_key != self._content_key()
+                    and now_s - self._last_plan_s >= p.replan_period_s)):
+            self._need_plan = False
+            if not self._plan(pose, now_s):
+                return 0.0, 0.0
+        assert self._target_xy is not None
+        return self._pursue(pose, math.hypot(self._target_xy[0] - x, self._target_xy[1] - y))
+
+    def _pursue(self, pose: tuple[float, float, float], dist_goal: float
+                ) -> tuple[float, float]:
+        p = self.params
+        x, y, yaw = pose
+        path = self._plan_xy
+        # Advance the progress index to the closest point in a window ahead.
+        i0 = self._plan_index
+        i1 = min(len(path), i0 + 64)
+        d = np.hypot(path[i0:i1, 0] - x, path[i0:i1, 1] - y)
+        self._plan_index = i0 + int(np.argmin(d))
+        rest = path[self._plan_index:]
+        dr = np.hypot(rest[:, 0] - x, rest[:, 1] - y)
+        beyond = np.nonzero(dr >= p.lookahead_m)[0]
+        tx, ty = rest[beyond[0]] if beyond.size else rest[-1]
+        alpha = wrap_angle(math.atan2(ty - y, tx - x) - yaw)
+        if abs(alpha) > p.rotate_in_place_angle_rad:
+            return 0.0, _clip(p.heading_gain * alpha, p.max_angular_speed_radps)
+        ld = max(math.hypot(tx - x, ty - y), 1e-3)
+        curvature = 2.0 * math.sin(alpha) / ld
+        v = min(p.max_linear_speed_mps,
+                p.approach_gain * dist_goal + p.min_approach_speed_mps)
+        if abs(curvature) > 1e-6:
+            v = min(v, p.max_angular_speed_radps / abs(curvature))
+        w = _clip(v * curvature, p.max_angular_speed_radps)
+        return v, w
+
+
+def _clip(v: float, limit: float) -> float:
+    return max(-limit, min(limit, v))
+
+
+def _coarsen(cost: npt.NDArray[np.float64], start: tuple[int, int], goal: tuple[int, int],
+             k: int) -> tuple[npt.NDArray[np.float64], tuple[int, int], tuple[int, int]]:
+    """Block-max downsampling by ``k`` (a coarse cell costs its worst fine cell; cells
+    past the border count as lethal)."""
+    if k == 1:
+        return cost, start, goal
+    h, w = cost.shape
+    hp, wp = -(-h // k) * k, -(-w // k) * k
+    pad = np.full((hp, wp), np.inf)
+    pad[:h, :w] = cost
+    coarse = pad[0::k, 0::k].copy()
+    for dr in range(k):
+        for dc in range(k):
+            if dr or dc:
+                np.maximum(coarse, pad[dr::k, dc::k], out=coarse)
+    return coarse, (start[0] // k, start[1] // k), (goal[0] // k, goal[1] // k)

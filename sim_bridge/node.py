@@ -1,0 +1,289 @@
+"""``sim_bridge`` node: the 2.5D simulator on ROS topics, in place of Gazebo + SLAM + Nav2.
+
+It owns the clock: a wall-clock (steady) timer advances the :class:`SimEngine` by
+``real_time_factor`` x the elapsed wall time (or by ``lockstep_dt_s`` per tick in
+lock-step mode) and publishes ``/clock``; every stamp is sim time, so the other nodes
+run with ``use_sim_time: true``. Exploration nodes need none of the ``sim/*`` topics.
+
+Published: ``/clock``, ``scan``, ``odom`` (pose in ``map``), ``map``, ``plan``,
+``camera/*`` (with ``enable_camera``), ``sim/metrics``. Subscribed: ``goal_pose`` and
+the OccupancyGrid layers named in ``costmap_layers``. Service: ``sim/save_metrics``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import OccupancyGrid, Odometry, Path as PathMsg
+from rclpy.clock import Clock, ClockType
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock as ClockMsg
+from sensor_msgs.msg import CameraInfo, Image, LaserScan
+from std_srvs.srv import Trigger
+
+from explore_seg import convert
+from explore_seg.node_util import run
+from explore_seg.params import ParamBinding
+from explore_seg.qos import MAP_QOS, RELIABLE_QOS, SENSOR_QOS
+from sim_bridge.engine import CameraSample, ScanFrame, SimEngine, SimParams, engine_from_params
+from sim_bridge.metrics import CollisionEvent
+from sim_bridge.navigation import NavState
+from sim_bridge.render import engine_overlays, render_map_png
+
+MAP_FRAME = "map"
+BASE_FRAME = "base_footprint"
+SCAN_FRAME = "base_scan"
+CAMERA_FRAME = "camera_color_optical_frame"
+#: /clock: reliable, depth 1 (matches rclpy's best-effort and reliable subscribers).
+CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
+_NS_PER_S = 1_000_000_000
+
+
+def _ns(t_s: float) -> int:
+    return int(round(t_s * _NS_PER_S))
+
+
+def _odometry_msg(pose: tuple[float, float, float], vel: tuple[float, float],
+                  stamp_ns: int) -> Odometry:
+    """nav_msgs/Odometry: pose in ``map``, body twist in ``base_footprint``.
+
+    (Belongs in explore_seg.convert; kept private here until it moves.)
+    """
+    msg = Odometry()
+    msg.header = convert.make_header(MAP_FRAME, stamp_ns)
+    msg.child_frame_id = BASE_FRAME
+    msg.pose.pose = convert.pose_from_2d(*pose)
+    msg.twist.twist.linear.x = float(vel[0])
+    msg.twist.twist.angular.z = float(vel[1])
+    return msg
+
+
+def _path_msg(xy, stamp_ns: int) -> PathMsg:
+    """nav_msgs/Path of world points (headings along the path)."""
+    msg = PathMsg()
+    msg.header = convert.make_header(MAP_FRAME, stamp_ns)
+    n = len(xy)
+    for i in range(n):
+        j = min(i + 1, n - 1)
+        k = j - 1 if j == i else i
+        yaw = math.atan2(xy[j][1] - xy[k][1], xy[j][0] - xy[k][0]) if n > 1 else 0.0
+        msg.poses.append(convert.pose_stamped(float(xy[i][0]), float(xy[i][1]), yaw,
+                                              MAP_FRAME, stamp_ns))
+    return msg
+
+
+class SimBridgeNode(Node):
+    """The simulator node (see the module docstring)."""
+
+    def __init__(self, *, context=None, parameter_overrides=None, node_name: str = "sim_bridge",
+                 namespace: str = "") -> None:
+        super().__init__(node_name, context=context,
+                         parameter_overrides=parameter_overrides or [], namespace=namespace)
+        self._p = ParamBinding(self, SimParams())
+        p = self._p.params
+        self._engine: SimEngine = engine_from_params(p)
+        self._engine.on_collision(self._on_collision)
+        self._wall = Clock(clock_type=ClockType.STEADY_TIME)
+        self._last_wall_ns: int | None = None
+        self._next_map_s = 0.0
+        self._next_metrics_s = 0.0
+        self._published_plan_version = -1
+        self._nav_state = NavState.IDLE
+
+        self._clock_pub = self.create_publisher(ClockMsg, "/clock", CLOCK_QOS)
+        self._scan_pub = self.create_publisher(LaserScan, "scan", SENSOR_QOS)
+        self._odom_pub = self.create_publisher(Odometry, "odom", RELIABLE_QOS)
+        self._map_pub = self.create_publisher(OccupancyGrid, "map", MAP_QOS)
+        self._plan_pub = self.create_publisher(PathMsg, "plan", RELIABLE_QOS)
+        self._metrics_pub = self.create_publisher(DiagnosticArray, "sim/metrics", RELIABLE_QOS)
+        self._cam_pubs: dict[str, object] = {}
+        if p.enable_camera:
+            self._cam_pubs = {
+                "rgb": self.create_publisher(Image, "camera/color/image_raw", SENSOR_QOS),
+                "depth": self.create_publisher(Image, "camera/depth/image_raw", SENSOR_QOS),
+                "semantic": self.create_publisher(Image, "camera/semantic/image_raw",
+                                                  SENSOR_QOS),
+                "info": self.create_publisher(CameraInfo, "camera/color/camera_info",
+                                              SENSOR_QOS),
+                "depth_info": self.create_publisher(CameraInfo, "camera/depth/camera_info",
+                                                    SENSOR_QOS),
+            }
+        self.create_subscription(PoseStamped, "goal_pose", self._on_goal, RELIABLE_QOS)
+        self._layer_subs: dict[str, object] = {}
+        self._subscribe_layers(p.costmap_layers)
+        self.create_service(Trigger, "sim/save_metrics", self._on_save_metrics)
+        self._p.on_change(self._on_params)
+        # Wall-clock timer: the sim is the clock, so it must not wait for /clock itself.
+        self._timer = self.create_timer(p.tick_period_s, self._tick, clock=self._wall)
+        self.get_logger().info(
+            f"world {p.world!r} ({len(self._engine.world.primitives)} primitives), start "
+            f"{self._engine.pose}, real_time_factor {p.real_time_factor}"
+            + (" (lock-step)" if p.lockstep else ""))
+
+    # ------------------------------------------------------------- accessors
+    @property
+    def engine(self) -> SimEngine:
+        """The simulated world (for tests and composed launches)."""
+        return self._engine
+
+    # ------------------------------------------------------------- callbacks
+    def _on_goal(self, msg: PoseStamped) -> None:
+        try:
+            frame = msg.header.frame_id.lstrip("/")
+            if frame not in ("", MAP_FRAME):
+                raise ValueError(f"goal frame must be {MAP_FRAME!r}, got {msg.header.frame_id!r}")
+            x, y, yaw = convert.pose2d_from_pose_msg(msg)
+        except ValueError as err:
+            self._engine.metrics.goal_rejected()
+            self.get_logger().warn(f"rejected goal_pose: {err}", throttle_duration_sec=5.0)
+            return
+        try:
+            self._engine.set_goal(x, y, yaw)
+        except ValueError as err:
+            self.get_logger().warn(f"rejected goal_pose: {err}", throttle_duration_sec=5.0)
+            return
+        self.get_logger().info(f"goal ({x:.2f}, {y:.2f}, {yaw:.2f})")
+
+    def _make_layer_cb(self, name: str):
+        def cb(msg: OccupancyGrid) -> None:
+            try:
+                grid = convert.grid_from_msg(msg)
+                if grid.frame_id.lstrip("/") != MAP_FRAME:
+                    raise ValueError(f"layer frame must be {MAP_FRAME!r}, got {grid.frame_id!r}")
+                self._engine.add_costmap_layer(name, grid)
+            except ValueError as err:
+                self.get_logger().warn(f"dropped layer {name!r}: {err}",
+                                       throttle_duration_sec=5.0)
+        return cb
+
+    def _subscribe_layers(self, names: tuple[str, ...]) -> None:
+        for name in list(self._layer_subs):
+            if name not in names:
+                self.destroy_subscription(self._layer_subs.pop(name))
+                self._engine.remove_costmap_layer(name)
+        for name in names:
+            if name not in self._layer_subs:
+                self._layer_subs[name] = self.create_subscription(
+                    OccupancyGrid, name, self._make_layer_cb(name), MAP_QOS)
+
+    def _on_params(self, old: SimParams, new: SimParams) -> None:
+        try:
+            self._engine.update_params(new)
+        except ValueError as err:  # read-only fields are rejected by rclpy already
+            self.get_logger().warn(f"parameters not applied: {err}")
+            return
+        if new.costmap_layers != old.costmap_layers:
+            self._subscribe_layers(new.costmap_layers)
+
+    def _on_collision(self, ev: CollisionEvent) -> None:
+        self.get_logger().warn(
+            f"collision #{self._engine.metrics.n_collisions} at t={ev.t_s:.2f} s "
+            f"({ev.x_m:.2f}, {ev.y_m:.2f}) with {ev.object or ev.cls} ({ev.part})",
+            throttle_duration_sec=1.0)
+
+    def _on_save_metrics(self, request: Trigger.Request, response: Trigger.Response
+                         ) -> Trigger.Response:
+        p = self._p.params
+        stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", Path(p.world).name.split(".")[0]) or "world"
+        out = Path(p.output_dir)
+        try:
+            js = self._engine.metrics.to_json(out / f"{stem}_metrics.json")
+            png = render_map_png(out / f"{stem}_map.png", self._engine.map,
+                                 engine_overlays(self._engine, path_xy=self._engine.trail))
+        except OSError as err:
+            response.success = False
+            response.message = f"could not write to {out}: {err}"
+            return response
+        response.success = True
+        response.message = f"{js} {png}"
+        return response
+
+    # ------------------------------------------------------------------ tick
+    def _tick(self) -> None:
+        p = self._p.params
+        now_ns = self._wall.now().nanoseconds
+        if p.lockstep:
+            dt = p.lockstep_dt_s
+        else:
+            if self._last_wall_ns is None:
+                self._last_wall_ns = now_ns
+                return
+            dt = min(p.real_time_factor * (now_ns - self._last_wall_ns) / _NS_PER_S,
+                     p.max_sim_step_per_tick_s)
+        self._last_wall_ns = now_ns
+        eng = self._engine
+        eng.step(dt)
+        t = eng.time_s
+        stamp = _ns(t)
+        if p.publish_clock:
+            clk = ClockMsg()
+            clk.clock = convert.ns_to_stamp(stamp)
+            self._clock_pub.publish(clk)
+        for scan in eng.drain_scans():
+            self._publish_scan(scan)
+        for frame in eng.drain_camera():
+            self._publish_camera(frame)
+        self._odom_pub.publish(_odometry_msg(eng.pose, eng.velocity, stamp))
+        if t >= self._next_map_s:
+            self._next_map_s = t + 1.0 / p.map_rate_hz
+            self._map_pub.publish(convert.grid_to_msg(eng.map))
+        if eng.plan_version != self._published_plan_version:
+            self._published_plan_version = eng.plan_version
+            self._plan_pub.publish(_path_msg(eng.plan, stamp))
+        state = eng.nav_status.state
+        if state is not self._nav_state:
+            self._nav_state = state
+            reason = eng.nav_status.reason
+            self.get_logger().info(f"navigation {state.value}" + (f": {reason}" if reason else ""))
+        if t >= self._next_metrics_s:
+            self._next_metrics_s = t + 1.0 / p.metrics_rate_hz
+            eng.metrics.set_time(t)
+            self._publish_metrics(stamp)
+
+    def _publish_scan(self, scan: ScanFrame) -> None:
+        g = self._engine.scan_geometry
+        msg = convert.scan_to_msg(scan.ranges, g.angle_min_rad, g.angle_increment_rad,
+                                  g.range_min_m, g.range_max_m,
+                                  convert.make_header(SCAN_FRAME, _ns(scan.stamp_s)),
+                                  scan_time_s=1.0 / self._p.params.scan_rate_hz)
+        self._scan_pub.publish(msg)
+
+    def _publish_camera(self, sample: CameraSample) -> None:
+        header = convert.make_header(CAMERA_FRAME, _ns(sample.stamp_s))
+        f = sample.frame
+        self._cam_pubs["rgb"].publish(convert.image_to_msg(f.rgb, "rgb8", header))
+        self._cam_pubs["depth"].publish(convert.image_to_msg(f.depth_m, "32FC1", header))
+        self._cam_pubs["semantic"].publish(convert.image_to_msg(f.semantic, "mono8", header))
+        info = convert.intrinsics_to_msg(self._p.params.camera_params().intrinsics(), header)
+        self._cam_pubs["info"].publish(info)
+        self._cam_pubs["depth_info"].publish(info)
+
+    def _publish_metrics(self, stamp_ns: int) -> None:
+        eng = self._engine
+        status = DiagnosticStatus()
+        status.name = "sim_bridge"
+        status.hardware_id = self._p.params.world
+        n = eng.metrics.n_collisions
+        status.level = DiagnosticStatus.WARN if n else DiagnosticStatus.OK
+        status.message = f"coverage {eng.metrics.coverage_pct:.1f} %, {n} collisions"
+        pairs = eng.metrics.to_diagnostics() + [("nav_state", eng.nav_status.state.value),
+                                                ("nav_reason", eng.nav_status.reason)]
+        status.values = [KeyValue(key=k, value=v) for k, v in pairs]
+        arr = DiagnosticArray()
+        arr.header = convert.make_header("", stamp_ns)
+        arr.status = [status]
+        self._metrics_pub.publish(arr)
+
+
+def main(args: list[str] | None = None) -> int:
+    """Console entry point ``sim_bridge``."""
+    return run(SimBridgeNode, args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

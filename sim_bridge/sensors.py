@@ -1,0 +1,648 @@
+"""Simulated sensors of the 2.5D world: a planar lidar and an RGB-D camera.
+
+* :class:`Lidar` casts ``num_beams`` rays in the scan plane against the rectangles and
+  circles that the plane cuts out of the world's primitives (analytic ray/segment and
+  ray/circle intersection). Each scan first culls primitives beyond the range and then
+  tests every primitive only against the beams inside its angular extent, so the work
+  grows with what the robot sees, not with the size of the world.
+* :class:`DepthCamera` ray-casts every pixel against the upright boxes and cylinders in
+  3D (slab test) and the floor ``z = 0``. Primitives are culled by range and view
+  frustum, projected to a screen rectangle (exactly, with near-plane clipping) and
+  drawn front to back; only the pixels of that rectangle are tested, and a primitive
+  wholly behind what is already drawn in its rectangle is skipped.
+
+Conventions: robot poses are ``(x, y, yaw)`` of ``base_footprint`` in the world frame;
+mounts are given relative to ``base_footprint``. Beam ``k`` of a scan points at
+``angle_min + k * angle_increment`` from the robot heading with ``angle_min = -pi`` and
+``angle_increment = 2 pi / num_beams``. The camera optical frame is REP-103 optical
+(x right, y down, z forward); depth is the optical z, NaN where nothing is hit within
+``range_max_m``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.camera import CameraIntrinsics, base_from_optical, map_from_base
+from sim_bridge.world import Primitive, World
+
+#: Semantic class ids of the camera's ``semantic`` image (0 = floor / nothing).
+CLASS_IDS: dict[str, int] = {"none": 0, "wall": 1, "chair": 2, "table": 3, "desk": 4,
+                             "cabinet": 5, "sofa": 6, "other": 7}
+#: Inverse of :data:`CLASS_IDS`.
+CLASS_NAMES: dict[int, str] = {v: k for k, v in CLASS_IDS.items()}
+#: RGB colour of each class id (floor = id 0 uses :data:`FLOOR_RGB` with a checker pattern).
+CLASS_RGB: dict[int, tuple[int, int, int]] = {
+    0: (40, 40, 48), 1: (205, 200, 185), 2: (200, 60, 40), 3: (150, 100, 50),
+    4: (90, 140, 60), 5: (60, 90, 170), 6: (120, 60, 140), 7: (140, 140, 140)}
+#: Floor colours of the two checker tiles.
+FLOOR_RGB = ((150, 150, 150), (120, 120, 120))
+
+
+def _pos(name: str, value: float) -> None:
+    if not (math.isfinite(value) and value > 0):
+        raise ValueError(f"{name} must be finite and > 0, got {value}")
+
+
+# ============================================================ lidar
+@dataclass(frozen=True)
+class LidarParams:
+    """Planar 360-degree lidar (TurtleBot3 LDS-like; the paper used a 5 m range)."""
+
+    num_beams: int = field(default=360, metadata={"doc": "beams per revolution"})
+    range_min_m: float = field(default=0.12, metadata={
+        "doc": "closer hits read -inf (REP 117 'too close')", "unit": "m"})
+    range_max_m: float = field(default=5.0, metadata={
+        "doc": "farther hits read +inf (LDS real: 3.5 m; the paper used 5 m)", "unit": "m"})
+    scan_height_m: float = field(default=0.17, metadata={
+        "doc": "height of the scan plane above the floor", "unit": "m"})
+    noise_std_m: float = field(default=0.0, metadata={
+        "doc": "std of Gaussian range noise (applied when an rng is given)", "unit": "m"})
+    rate_hz: float = field(default=10.0, metadata={"doc": "scan rate", "unit": "Hz"})
+    mount_xy_m: tuple[float, float] = field(default=(-0.064, 0.0), metadata={
+        "doc": "lidar position in base_footprint (TurtleBot3 waffle base_scan)", "unit": "m"})
+
+    def __post_init__(self) -> None:
+        if int(self.num_beams) != self.num_beams or self.num_beams < 3:
+            raise ValueError(f"num_beams must be an integer >= 3, got {self.num_beams}")
+        _pos("range_min_m", self.range_min_m)
+        _pos("rate_hz", self.rate_hz)
+        if not self.range_max_m > self.range_min_m or not math.isfinite(self.range_max_m):
+            raise ValueError(f"range_max_m must be finite and > range_min_m "
+                             f"{self.range_min_m}, got {self.range_max_m}")
+        if not (math.isfinite(self.scan_height_m) and self.scan_height_m >= 0):
+            raise ValueError(f"scan_height_m must be >= 0, got {self.scan_height_m}")
+        if not (math.isfinite(self.noise_std_m) and self.noise_std_m >= 0):
+            raise ValueError(f"noise_std_m must be >= 0, got {self.noise_std_m}")
+        if len(self.mount_xy_m) != 2 or not all(math.isfinite(v) for v in self.mount_xy_m):
+            raise ValueError(f"mount_xy_m must be 2 finite values, got {self.mount_xy_m}")
+
+    @property
+    def angle_min_rad(self) -> float:
+        """Angle of beam 0 from the robot heading."""
+        return -math.pi
+
+    @property
+    def angle_increment_rad(self) -> float:
+        """Angle between consecutive beams."""
+        return 2.0 * math.pi / self.num_beams
+
+    @property
+    def angle_max_rad(self) -> float:
+        """Angle of the last beam."""
+        return self.angle_min_rad + (self.num_beams - 1) * self.angle_increment_rad
+
+
+class Lidar:
+    """Analytic 2D ray caster of a world's scan-plane cross-section.
+
+    Parameters
+    ----------
+    world : World
+        Primitives with ``zmin <= scan_height_m <= zmax`` are seen (boxes as their four
+        edges, cylinders as circles).
+    params : LidarParams
+    """
+
+    def __init__(self, world: World, params: LidarParams | None = None) -> None:
+        self.params = params or LidarParams()
+        h = self.params.scan_height_m
+        seen = [(i, p) for i, p in enumerate(world.primitives) if p.zmin <= h <= p.zmax]
+        segs, seg_prim, circles, circ_prim = [], [], [], []
+        for i, p in seen:
+            if p.shape == "box":
+                c, s = math.cos(p.yaw), math.sin(p.yaw)
+                hx, hy = p.size[0] / 2, p.size[1] / 2
+                corners = [(p.x + c * u - s * v, p.y + s * u + c * v)
+                           for u, v in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))]
+                for k in range(4):
+                    (ax, ay), (bx, by) = corners[k], corners[(k + 1) % 4]
+                    segs.append((ax, ay, bx - ax, by - ay))
+                    seg_prim.append(i)
+            else:
+                circles.append((p.x, p.y, p.size[0]))
+                circ_prim.append(i)
+        self._seg = np.asarray(segs, np.float64).reshape(-1, 4)       # px, py, ex, ey
+        self._seg_prim = np.asarray(seg_prim, np.int64)
+        self._seg_mid = self._seg[:, :2] + 0.5 * self._seg[:, 2:]
+        self._seg_half = 0.5 * np.hypot(self._seg[:, 2], self._seg[:, 3])
+        self._circ = np.asarray(circles, np.float64).reshape(-1, 3)   # cx, cy, r
+        self._circ_prim = np.asarray(circ_prim, np.int64)
+        n = self.params.num_beams
+        self._rel = self.params.angle_min_rad + np.arange(n) * self.params.angle_increment_rad
+
+    @property
+    def num_segments(self) -> int:
+        """Number of segments (box edges) in the scan plane."""
+        return int(self._seg.shape[0])
+
+    @property
+    def num_circles(self) -> int:
+        """Number of circles (cylinders) in the scan plane."""
+        return int(self._circ.shape[0])
+
+    def origin(self, pose: tuple[float, float, float]) -> tuple[float, float]:
+        """World (x, y) of the lidar for a robot pose."""
+        x, y, yaw = pose
+        mx, my = self.params.mount_xy_m
+        c, s = math.cos(yaw), math.sin(yaw)
+        return x + c * mx - s * my, y + s * mx + c * my
+
+    def scan(self, pose: tuple[float, float, float],
+             rng: np.random.Generator | None = None) -> npt.NDArray[np.float32]:
+        """Ranges of one scan.
+
+        Parameters
+        ----------
+        pose : tuple of float
+            Robot (x, y, yaw) in the world.
+        rng : numpy.random.Generator, optional
+            Source of range noise (``noise_std_m``); no noise without it.
+
+        Returns
+        -------
+        ndarray of float32, shape (num_beams,)
+            Range of beam ``k`` (angle ``-pi + k * 2 pi / num_beams`` from the heading):
+            ``+inf`` when nothing lies within ``range_max_m``, ``-inf`` when the nearest
+            hit is closer than ``range_min_m``, else the distance in metres.
+        """
+        return self.scan_with_hits(pose, rng)[0]
+
+    def scan_with_hits(self, pose: tuple[float, float, float],
+                       rng: np.random.Generator | None = None
+                       ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.int64]]:
+        """:meth:`scan` plus the index (into ``world.primitives``) of what each beam hit.
+
+        Returns
+        -------
+        ranges : ndarray of float32, shape (num_beams,)
+        hit_index : ndarray of int64, shape (num_beams,)
+            -1 where the beam reads ``+inf``.
+        """
+        p = self.params
+        n = p.num_beams
+        inc = p.angle_increment_rad
+        ox, oy = self.origin(pose)
+        yaw = float(pose[2])
+        a0 = yaw + p.angle_min_rad
+        rmax = p.range_max_m
+        two_pi = 2.0 * math.pi
+        # ---- candidate (primitive, beam) pairs from the angular extents
+        firsts, counts, kinds, ids = [], [], [], []
+        if self._seg.shape[0]:
+            dmx = self._seg_mid[:, 0] - ox
+            dmy = self._seg_mid[:, 1] - oy
+            near = np.flatnonzero(dmx * dmx + dmy * dmy < (rmax + self._seg_half) ** 2)
+            if near.size:
+                sg = self._seg[near]
+                wx, wy = sg[:, 0] - ox, sg[:, 1] - oy
+                t0 = np.arctan2(wy, wx)
+                t1 = np.arctan2(wy + sg[:, 3], wx + sg[:, 2])
+                d = np.mod(t1 - t0 + math.pi, two_pi) - math.pi
+                lo = np.mod(np.where(d >= 0, t0, t1) - a0, two_pi)
+                k0 = np.floor(lo / inc).astype(np.int64)
+                k1 = np.floor((lo + np.abs(d)) / inc).astype(np.int64) + 1
+                firsts.append(k0)
+                counts.append(np.minimum(k1 - k0 + 1, n))
+                ids.append(near)
+                kinds.append(np.zeros(near.size, bool))
+        if self._circ.shape[0]:
+            cx = self._circ[:, 0] - ox
+            cy = self._circ[:, 1] - oy
+            r = self._circ[:, 2]
+            dist = np.hypot(cx, cy)
+            near = np.flatnonzero(dist < rmax + r)
+            if near.size:
+                dn, rn = dist[near], r[near]
+                half = np.where(dn > rn, np.arcsin(np.minimum(rn / np.maximum(dn, 1e-12), 1.0)),
+                                math.pi)
+                lo = np.mod(np.arctan2(cy[near], cx[near]) - half - a0, two_pi)
+                k0 = np.floor(lo / inc).astype(np.int64)
+                k1 = np.floor((lo + 2 * half) / inc).astype(np.int64) + 1
+                firsts.append(k0)
+                counts.append(np.minimum(k1 - k0 + 1, n))
+                ids.append(near)
+                kinds.append(np.ones(near.size, bool))
+        ranges = np.full(n, np.inf)
+        hit = np.full(n, -1, np.int64)
+        if firsts:
+            k0 = np.concatenate(firsts)
+            cnt = np.concatenate(counts)
+            idx = np.concatenate(ids)
+            is_circ = np.concatenate(kinds)
+            total = int(cnt.sum())
+            starts = np.cumsum(cnt) - cnt
+            owner = np.repeat(np.arange(cnt.size), cnt)
+            beam = (np.repeat(k0, cnt) + np.arange(total) - starts[owner]) % n
+            ang = a0 + beam * inc
+            dx, dy = np.cos(ang), np.sin(ang)
+            t = np.full(total, np.inf)
+            prim = np.empty(total, np.int64)
+            seg_pairs = ~is_circ[owner]
+            if seg_pairs.any():
+                sel = np.flatnonzero(seg_pairs)
+                s_id = idx[owner[sel]]
+                sg = self._seg[s_id]
+                wx, wy = sg[:, 0] - ox, sg[:, 1] - oy
+                ex, ey = sg[:, 2], sg[:, 3]
+                bx, by = dx[sel], dy[sel]
+                den = bx * ey - by * ex
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    tt = (wx * ey - wy * ex) / den
+                    ss = (wx * by - wy * bx) / den
+                ok = (den != 0) & (ss >= 0.0) & (ss <= 1.0) & (tt >= 0.0)
+                t[sel] = np.where(ok, tt, np.inf)
+                prim[sel] = self._seg_prim[s_id]
+            if (~seg_pairs).any():
+                sel = np.flatnonzero(~seg_pairs)
+                c_id = idx[owner[sel]]
+                cc = self._circ[c_id]
+                wx, wy = cc[:, 0] - ox, cc[:, 1] - oy
+                b = wx * dx[sel] + wy * dy[sel]
+                disc = b * b - (wx * wx + wy * wy - cc[:, 2] ** 2)
+                root = np.sqrt(np.maximum(disc, 0.0))
+                tin = b - root
+                tt = np.where(tin >= 0.0, tin, b + root)
+                ok = (disc >= 0.0) & (tt >= 0.0)
+                t[sel] = np.where(ok, tt, np.inf)
+                prim[sel] = self._circ_prim[c_id]
+            np.minimum.at(ranges, beam, t)
+            win = np.isfinite(t) & (t == ranges[beam])
+            hit[beam[win]] = prim[win]
+        if p.noise_std_m > 0 and rng is not None:
+            fin = np.isfinite(ranges)
+            ranges[fin] = np.maximum(ranges[fin] + rng.normal(0.0, p.noise_std_m, int(fin.sum())),
+                                     0.0)
+        too_close = ranges < p.range_min_m
+        beyond = ranges > rmax
+        ranges[too_close] = -np.inf
+        ranges[beyond] = np.inf
+        hit[beyond] = -1
+        return ranges.astype(np.float32), hit
+
+
+# ============================================================ camera
+@dataclass(frozen=True)
+class CameraParams:
+    """Pinhole RGB-D camera (RealSense-like) on the robot.
+
+    The default mount is a TurtleBot3-waffle-like camera raised to 0.2 m: at that height
+    chair seats and table tops (0.42-0.75 m) are in view from about 1 m on. The paper's
+    robot carried it 0.894 m up, pitched 0.1 rad down (set ``mount_z_m``/``pitch_rad``).
+    """
+
+    width: int = field(default=640, metadata={"doc": "image width", "unit": "px"})
+    height: int = field(default=480, metadata={"doc": "image height", "unit": "px"})
+    fx: float = field(default=525.0, metadata={"doc": "focal length x", "unit": "px"})
+    fy: float = field(default=525.0, metadata={"doc": "focal length y", "unit": "px"})
+    cx: float = field(default=319.5, metadata={"doc": "principal point x", "unit": "px"})
+    cy: float = field(default=239.5, metadata={"doc": "principal point y", "unit": "px"})
+    mount_x_m: float = field(default=0.064, metadata={
+        "doc": "camera x in base_footprint (forward)", "unit": "m"})
+    mount_y_m: float = field(default=0.0, metadata={
+        "doc": "camera y in base_footprint (left)", "unit": "m"})
+    mount_z_m: float = field(default=0.2, metadata={
+        "doc": "camera height above the floor", "unit": "m"})
+    pitch_rad: float = field(default=0.0, metadata={
+        "doc": "camera pitch, positive looks down (REP 103)", "unit": "rad"})
+    range_min_m: float = field(default=0.05, metadata={
+        "doc": "near plane: closer surfaces are not drawn", "unit": "m"})
+    range_max_m: float = field(default=6.0, metadata={
+        "doc": "depth (optical z) beyond which pixels read NaN", "unit": "m"})
+    rate_hz: float = field(default=15.0, metadata={"doc": "frame rate", "unit": "Hz"})
+    depth_noise_std_m: float = field(default=0.0, metadata={
+        "doc": "std of Gaussian depth noise (applied when an rng is given)", "unit": "m"})
+    floor_tile_m: float = field(default=0.5, metadata={
+        "doc": "checker tile size of the floor colour", "unit": "m"})
+
+    def __post_init__(self) -> None:
+        for name in ("width", "height"):
+            v = getattr(self, name)
+            if int(v) != v or v < 1:
+                raise ValueError(f"{name} must be an integer >= 1, got {v}")
+        for name in ("fx", "fy", "range_min_m", "rate_hz", "floor_tile_m"):
+            _pos(name, getattr(self, name))
+        for name in ("cx", "cy", "mount_x_m", "mount_y_m", "mount_z_m", "pitch_rad"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"{name} must be finite, got {getattr(self, name)}")
+        if not (math.isfinite(self.range_max_m) and self.range_max_m > self.range_min_m):
+            raise ValueError(f"range_max_m must be finite and > range_min_m {self.range_min_m}, "
+                             f"got {self.range_max_m}")
+        if not abs(self.pitch_rad) < math.pi / 2:
+            raise ValueError(f"pitch_rad must be within (-pi/2, pi/2), got {self.pitch_rad}")
+        if not (math.isfinite(self.depth_noise_std_m) and self.depth_noise_std_m >= 0):
+            raise ValueError(f"depth_noise_std_m must be >= 0, got {self.depth_noise_std_m}")
+
+    def intrinsics(self) -> CameraIntrinsics:
+        """Intrinsics for CameraInfo and back-projection."""
+        return CameraIntrinsics(self.fx, self.fy, self.cx, self.cy, int(self.width),
+                                int(self.height))
+
+
+def camera_pose_in_world(robot_pose: tuple[float, float, float], params: CameraParams
+                         ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """Rotation and position of the camera optical frame in the world.
+
+    Returns
+    -------
+    R : ndarray of float64, shape (3, 3)
+        ``p_world = R @ p_optical + t``.
+    t : ndarray of float64, shape (3,)
+    """
+    tf = map_from_base(*robot_pose) @ base_from_optical(
+        params.mount_x_m, params.mount_y_m, params.mount_z_m, 0.0, params.pitch_rad, 0.0)
+    return tf[:3, :3].copy(), tf[:3, 3].copy()
+
+
+@dataclass(frozen=True)
+class CameraFrame:
+    """One rendered RGB-D frame.
+
+    Attributes
+    ----------
+    depth_m : ndarray of float32, shape (H, W)
+        Optical z of the first surface (m); NaN where none within range.
+    rgb : ndarray of uint8, shape (H, W, 3)
+        Colour per class, shaded by face orientation and distance; floor checkered.
+    semantic : ndarray of uint8, shape (H, W)
+        :data:`CLASS_IDS` id per pixel (0 = floor / nothing).
+    instance : ndarray of int32, shape (H, W)
+        Index into ``world.objects`` of the object seen, -1 for walls, floor, nothing.
+    rotation, translation : ndarray of float64
+        Camera optical frame in the world (``p_world = rotation @ p_opt + translation``).
+    """
+
+    depth_m: npt.NDArray[np.float32]
+    rgb: npt.NDArray[np.uint8]
+    semantic: npt.NDArray[np.uint8]
+    instance: npt.NDArray[np.int32]
+    rotation: npt.NDArray[np.float64]
+    translation: npt.NDArray[np.float64]
+
+
+# 12 edges of a prism given as 8 corners: bottom 0..3, top 4..7
+_EDGES = np.array([(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4),
+                   (0, 4), (1, 5), (2, 6), (3, 7)])
+#: Brightness of faces facing local x, local y, up/down (boxes; cylinder sides use x),
+#: and of the floor.
+_FACE_SHADE = np.array([0.85, 0.65, 1.0, 1.0], np.float32)
+#: Distance fade levels of the colour look-up table.
+_SHADE_LEVELS = 64
+#: Colour-table rows of the two floor tiles and of "nothing hit".
+_FLOOR_INDEX = len(CLASS_IDS)
+_NONE_INDEX = _FLOOR_INDEX + 2
+
+
+class DepthCamera:
+    """Ray-casting RGB-D camera of a world's boxes, cylinders and floor.
+
+    Parameters
+    ----------
+    world : World
+    params : CameraParams
+    """
+
+    def __init__(self, world: World, params: CameraParams | None = None) -> None:
+        self.params = params or CameraParams()
+        p = self.params
+        obj_index = {o.name: k for k, o in enumerate(world.objects)}
+        prims: list[Primitive] = list(world.primitives)
+        n = len(prims)
+        self._n = n
+        self._is_box = np.array([q.shape == "box" for q in prims], bool)
+        self._xy = np.array([(q.x, q.y) for q in prims], np.float64).reshape(-1, 2)
+        yaw = np.array([q.yaw for q in prims], np.float64)
+        self._cos, self._sin = np.cos(yaw), np.sin(yaw)
+        self._half = np.array([(q.size[0] / 2, q.size[1] / 2) if q.shape == "box"
+                               else (q.size[0], q.size[0]) for q in prims],
+                              np.float64).reshape(-1, 2)
+        self._z = np.array([(q.zmin, q.zmax) for q in prims], np.float64).reshape(-1, 2)
+        self._cls = np.array([CLASS_IDS.get(q.cls, CLASS_IDS["other"]) for q in prims], np.uint8)
+        self._inst = np.array([obj_index.get(q.object, -1) if q.cls != "wall" else -1
+                               for q in prims], np.int32)
+        # axis-aligned boxes (yaw a multiple of pi/2): half sizes in world axes
+        quarter = np.round(yaw / (math.pi / 2))
+        self._aligned = self._is_box & (np.abs(yaw - quarter * math.pi / 2) < 1e-9)
+        swap = (np.mod(quarter, 2) == 1)
+        self._half_world = np.where(swap[:, None], self._half[:, ::-1], self._half)
+        # 8 corners of each prism (cylinders: the circumscribed square prism)
+        sx = np.array([1, -1, -1, 1], np.float64)
+        sy = np.array([1, 1, -1, -1], np.float64)
+        cos_c = np.where(self._is_box, self._cos, 1.0)
+        sin_c = np.where(self._is_box, self._sin, 0.0)
+        u = self._half[:, :1] * sx
+        v = self._half[:, 1:] * sy
+        cx = self._xy[:, :1] + cos_c[:, None] * u - sin_c[:, None] * v
+        cy = self._xy[:, 1:] + sin_c[:, None] * u + cos_c[:, None] * v
+        corners = np.zeros((n, 8, 3))
+        corners[:, :4, 0] = cx
+        corners[:, 4:, 0] = cx
+        corners[:, :4, 1] = cy
+        corners[:, 4:, 1] = cy
+        corners[:, :4, 2] = self._z[:, :1]
+        corners[:, 4:, 2] = self._z[:, 1:]
+        self._corners = corners
+        # pixel ray directions in the camera optical frame (z = 1)
+        self._a = ((np.arange(p.width) - p.cx) / p.fx).astype(np.float32)
+        self._b = ((np.arange(p.height) - p.cy) / p.fy).astype(np.float32)
+        base = np.array([CLASS_RGB.get(k, CLASS_RGB[CLASS_IDS["other"]])
+                         for k in range(_FLOOR_INDEX)] + list(FLOOR_RGB) + [CLASS_RGB[0]],
+                        np.float32)                                   # (classes + 3, 3)
+        fade = 0.5 + 0.5 * np.arange(_SHADE_LEVELS, dtype=np.float32) / (_SHADE_LEVELS - 1)
+        lut = base[:, None, None, :] * _FACE_SHADE[None, :, None, None] \
+            * fade[None, None, :, None]
+        lut[_NONE_INDEX] = base[_NONE_INDEX]
+        # (colour index, face, fade level) -> RGB
+        self._lut = np.clip(np.round(lut), 0, 255).astype(np.uint8)
+
+    # ------------------------------------------------------------------ helpers
+    def _screen_boxes(self, rot: npt.NDArray[np.float64], t: npt.NDArray[np.float64]
+                      ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
+        """Candidate primitives and their pixel rectangles + nearest depth.
+
+        Returns ``(ids, rects)`` with rects rows ``(u0, v0, u1, v1, dmin)``, u/v exclusive
+        ends, sorted front to back.
+        """
+        p = self.params
+        near, far = p.range_min_m, p.range_max_m
+        opt = (self._corners - t) @ rot                  # (n, 8, 3) optical coordinates
+        z = opt[..., 2]
+        keep = (z.max(axis=1) > near) & (z.min(axis=1) < far)
+        # 2D check that some corner lies within the horizontal frustum side planes is
+        # left to the rectangle clipping below (exact enough, cheap).
+        ids = np.flatnonzero(keep)
+        if ids.size == 0:
+            return ids, np.zeros((0, 5))
+        opt = opt[ids]
+        z = opt[..., 2]
+        a = opt[:, _EDGES[:, 0], :]
+        b = opt[:, _EDGES[:, 1], :]
+        za, zb = a[..., 2], b[..., 2]
+        cross = (za - near) * (zb - near) < 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f = np.where(cross, (near - za) / (zb - za), 0.0)
+        inter = a + f[..., None] * (b - a)               # on the near plane where cross
+        pts = np.concatenate([opt, inter], axis=1)       # (m, 20, 3)
+        valid = np.concatenate([z >= near, cross], axis=1)
+        zz = np.where(valid, np.maximum(pts[..., 2], near), 1.0)
+        u = np.where(valid, p.fx * pts[..., 0] / zz + p.cx, np.nan)
+        v = np.where(valid, p.fy * pts[..., 1] / zz + p.cy, np.nan)
+        u0 = np.floor(np.nanmin(u, axis=1)) - 1
+        u1 = np.ceil(np.nanmax(u, axis=1)) + 2
+        v0 = np.floor(np.nanmin(v, axis=1)) - 1
+        v1 = np.ceil(np.nanmax(v, axis=1)) + 2
+        u0 = np.clip(u0, 0, p.width)
+        u1 = np.clip(u1, 0, p.width)
+        v0 = np.clip(v0, 0, p.height)
+        v1 = np.clip(v1, 0, p.height)
+        dmin = np.where(valid, pts[..., 2], np.inf).min(axis=1)
+        ok = (u1 > u0) & (v1 > v0)
+        ids, rects = ids[ok], np.stack([u0, v0, u1, v1, dmin], axis=1)[ok]
+        order = np.argsort(rects[:, 4], kind="stable")
+        return ids[order], rects[order]
+
+    def render(self, pose: tuple[float, float, float],
+               rng: np.random.Generator | None = None) -> CameraFrame:
+        """Render the frame seen from a robot pose.
+
+        Parameters
+        ----------
+        pose : tuple of float
+            Robot (x, y, yaw) in the world.
+        rng : numpy.random.Generator, optional
+            Source of depth noise (``depth_noise_std_m``); none without it.
+
+        Returns
+        -------
+        CameraFrame
+        """
+        p = self.params
+        h, w = int(p.height), int(p.width)
+        rot, t = camera_pose_in_world(pose, p)
+        rf = rot.astype(np.float32)
+        a = self._a[None, :]
+        b = self._b[:, None]
+        # World ray directions (optical z component 1, so a ray's t is the depth). The
+        # camera has no roll, so the optical x axis is horizontal: dz depends on the row
+        # only, and with zero pitch dx, dy depend on the column only. Arrays keep the
+        # smallest broadcastable shape and every per-pixel expression broadcasts.
+        dz = rf[2, 1] * b + rf[2, 2]                                    # (h, 1)
+        if abs(rf[0, 1]) > 0 or abs(rf[1, 1]) > 0:
+            dx = rf[0, 0] * a + rf[0, 1] * b + rf[0, 2]                 # (h, w)
+            dy = rf[1, 0] * a + rf[1, 1] * b + rf[1, 2]
+        else:
+            dx = rf[0, 0] * a + rf[0, 2]                                # (1, w)
+            dy = rf[1, 0] * a + rf[1, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv_x = np.float32(1.0) / dx
+            inv_y = np.float32(1.0) / dy
+            inv_z = np.float32(1.0) / dz
+        tz = np.float32(t[2])
+        near = np.float32(p.range_min_m)
+        if tz > 0:
+            with np.errstate(invalid="ignore"):
+                tfl = -tz * inv_z
+            floor_col = np.where((dz < 0) & (tfl > near), tfl, np.float32(np.inf))
+        else:
+            floor_col = np.full((h, 1), np.inf, np.float32)
+        zbuf = np.ascontiguousarray(np.broadcast_to(floor_col, (h, w)), dtype=np.float32)
+        sem = np.zeros((h, w), np.uint8)
+        inst = np.full((h, w), -1, np.int32)
+        face = np.full((h, w), 3, np.uint8)     # 3 = floor / nothing
+        ids, rects = self._screen_boxes(rot, t)
+        ox, oy = float(t[0]), float(t[1])
+        for k, (u0, v0, u1, v1, dmin) in zip(ids.tolist(), rects.tolist()):
+            rs, cs = slice(int(v0), int(v1)), slice(int(u0), int(u1))
+            zb = zbuf[rs, cs]
+            if dmin >= zb.max():
+                continue
+            izr = inv_z[rs]
+            z0 = np.float32(self._z[k, 0] - tz) * izr
+            z1 = np.float32(self._z[k, 1] - tz) * izr
+            tn = np.minimum(z0, z1)
+            tfar = np.maximum(z0, z1)
+            px, py = ox - self._xy[k, 0], oy - self._xy[k, 1]
+            with np.errstate(invalid="ignore", divide="ignore"):
+                if self._is_box[k]:
+                    if self._aligned[k]:
+                        hx, hy = self._half_world[k]
+                        ix, iy = _cut(inv_x, rs, cs), _cut(inv_y, rs, cs)
+                    else:
+                        c, s = self._cos[k], self._sin[k]
+                        px, py = c * px + s * py, -s * px + c * py
+                        hx, hy = self._half[k]
+                        ddx, ddy = _cut(dx, rs, cs), _cut(dy, rs, cs)
+                        ix = np.float32(1.0) / (np.float32(c) * ddx + np.float32(s) * ddy)
+                        iy = np.float32(1.0) / (np.float32(-s) * ddx + np.float32(c) * ddy)
+                    x0 = np.float32(-hx - px) * ix
+                    x1 = np.float32(hx - px) * ix
+                    y0 = np.float32(-hy - py) * iy
+                    y1 = np.float32(hy - py) * iy
+                    txn = np.minimum(x0, x1)
+                    tyn = np.minimum(y0, y1)
+                    side_far = np.minimum(np.maximum(x0, x1), np.maximum(y0, y1))
+                    side = np.maximum(txn, tyn)
+                    side_face = np.where(txn >= tyn, np.uint8(0), np.uint8(1))
+                else:
+                    r = self._half[k, 0]
+                    ddx, ddy = _cut(dx, rs, cs), _cut(dy, rs, cs)
+                    qa = ddx * ddx + ddy * ddy
+                    qb = np.float32(px) * ddx + np.float32(py) * ddy
+                    qc = np.float32(px * px + py * py - r * r)
+                    root = np.sqrt(qb * qb - qa * qc)
+                    side = (-qb - root) / qa
+                    side_far = (-qb + root) / qa
+                    side_face = np.uint8(0)
+                tnear = np.maximum(tn, side)
+                hit = tnear <= np.minimum(tfar, side_far)
+                hit &= tnear > near
+                hit &= tnear < zb
+            if not hit.any():
+                continue
+            np.copyto(zb, tnear, where=hit)
+            np.copyto(sem[rs, cs], self._cls[k], where=hit)
+            np.copyto(inst[rs, cs], self._inst[k], where=hit)
+            np.copyto(face[rs, cs], np.where(tn >= side, np.uint8(2), side_face), where=hit)
+        valid = zbuf <= np.float32(p.range_max_m)
+        np.copyto(sem, 0, where=~valid)
+        np.copyto(inst, -1, where=~valid)
+        depth = np.where(valid, zbuf, np.float32(np.nan))
+        if p.depth_noise_std_m > 0 and rng is not None:
+            depth[valid] += rng.normal(0.0, p.depth_noise_std_m, int(valid.sum())).astype(
+                np.float32)
+        rgb = self._colour(zbuf, valid, sem, face, dx, dy, t)
+        return CameraFrame(depth, rgb, sem, inst, rot, t)
+
+    def _colour(self, zbuf: npt.NDArray[np.float32], valid: npt.NDArray[np.bool_],
+                sem: npt.NDArray[np.uint8], face: npt.NDArray[np.uint8],
+                dx: npt.NDArray[np.float32], dy: npt.NDArray[np.float32],
+                t: npt.NDArray[np.float64]) -> npt.NDArray[np.uint8]:
+        """Class colour x face shade x distance fade via one uint8 look-up table."""
+        p = self.params
+        levels = _SHADE_LEVELS
+        # colour index: class id for objects, floor tiles after the classes, no-hit last
+        ci = sem.copy()
+        floor = valid & (face == 3)
+        rows = np.flatnonzero(floor.any(axis=1))
+        if rows.size:
+            rs = slice(int(rows[0]), int(rows[-1]) + 1)
+            d = zbuf[rs]
+            inv_tile = np.float32(1.0 / p.floor_tile_m)
+            fx = (np.float32(t[0]) + _cut(dx, rs, slice(None)) * d) * inv_tile
+            fy = (np.float32(t[1]) + _cut(dy, rs, slice(None)) * d) * inv_tile
+            tile = ((np.floor(fx) + np.floor(fy)).astype(np.int32) & 1).astype(np.uint8)
+            np.copyto(ci[rs], _FLOOR_INDEX + tile, where=floor[rs])
+        np.copyto(ci, _NONE_INDEX, where=~valid)
+        fade = np.minimum(zbuf, np.float32(p.range_max_m)) * np.float32(
+            (levels - 1) * 0.5 / p.range_max_m)
+        q = (np.float32(levels - 1) - fade).astype(np.uint8)      # 0..levels-1
+        return self._lut[ci, face, q]
+
+
+def _cut(arr: npt.NDArray[np.float32], rs: slice, cs: slice) -> npt.NDArray[np.float32]:
+    """``arr[rs, cs]`` for an array that may be broadcast along rows or columns."""
+    return arr[rs if arr.shape[0] > 1 else slice(None), cs if arr.shape[1] > 1 else slice(None)]

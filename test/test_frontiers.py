@@ -1,0 +1,263 @@
+"""Frontier cells, groups and cPoints on ASCII grids and seeded random grids."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from explore_seg.core.frontiers import (FrontierParams, detect_frontier_cells, find_frontiers,
+                                        group_frontiers, obstacle_mask, traversable_mask)
+from explore_seg.core.grid import GridMap, grid_from_ascii
+
+P1 = FrontierParams(min_group_size_cells=1, robot_radius_m=0.0)
+
+
+def cells_of(mask: np.ndarray) -> list[tuple[int, int]]:
+    return [tuple(int(v) for v in rc) for rc in np.argwhere(mask)]
+
+
+# ------------------------------------------------------------------------- detection
+
+
+def test_detect_unknown_cells_next_to_free():
+    g, _ = grid_from_ascii("""
+    ?????
+    ?...?
+    ?.#.?
+    ?????
+    """)
+    # rows listed bottom-up: row 0 is the last text line
+    assert cells_of(detect_frontier_cells(g)) == [
+        (0, 1), (0, 3), (1, 0), (1, 4), (2, 0), (2, 4), (3, 1), (3, 2), (3, 3)]
+
+
+@pytest.mark.parametrize("conn,expected", [(4, []), (8, [(0, 1)])])
+def test_diagonal_free_neighbour_depends_on_connectivity(conn, expected):
+    g, _ = grid_from_ascii("""
+    .#
+    #?
+    """)
+    params = FrontierParams(free_neighbour_connectivity=conn)
+    assert cells_of(detect_frontier_cells(g, params=params)) == expected
+
+
+def test_uncertain_cells_are_neither_free_nor_unknown():
+    g, _ = grid_from_ascii("""
+    ???
+    ...
+    """)
+    data = g.data.copy()
+    data[0, 1] = 50  # between the free and occupied thresholds
+    g2 = g.with_data(data)
+    assert cells_of(detect_frontier_cells(g2)) == [(1, 0), (1, 2)]
+
+
+def test_object_layer_closes_frontier():
+    g, _ = grid_from_ascii("""
+    ????
+    ....
+    """)
+    extra = np.zeros(g.shape, bool)
+    extra[1, 0:2] = True        # unknown cells covered by an object
+    extra[0, 3] = True          # a free cell occupied by an object
+    assert cells_of(detect_frontier_cells(g, extra)) == [(1, 2)]
+
+
+@pytest.mark.parametrize("text", ["""
+    ???
+    ???
+    """, """
+    ...
+    .#.
+    """, """
+    ###
+    ?#?
+    """])
+def test_no_frontier_without_free_and_unknown_contact(text):
+    g, _ = grid_from_ascii(text)
+    assert not detect_frontier_cells(g).any()
+    assert find_frontiers(g, params=P1) == []
+
+
+def test_extra_layer_shape_mismatch_raises():
+    g, _ = grid_from_ascii("..?")
+    with pytest.raises(ValueError, match="extra_obstacles has shape"):
+        detect_frontier_cells(g, np.zeros((2, 2), bool))
+
+
+def test_frontier_mask_shape_mismatch_raises():
+    g, _ = grid_from_ascii("..?")
+    with pytest.raises(ValueError, match="frontier_mask has shape"):
+        group_frontiers(g, np.zeros((2, 2), bool))
+
+
+# -------------------------------------------------------------------------- grouping
+
+
+def test_groups_sizes_ids_and_min_size():
+    g, _ = grid_from_ascii("""
+    ??????#??
+    ......#..
+    ......#..
+    """)
+    fr = find_frontiers(g, params=P1)
+    assert [(f.id, f.size_cells) for f in fr] == [(0, 6), (1, 2)]
+    assert [f.id for f in find_frontiers(g, params=FrontierParams(
+        min_group_size_cells=3, robot_radius_m=0.0))] == [0]
+
+
+@pytest.mark.parametrize("conn,sizes", [(8, [2]), (4, [1, 1])])
+def test_group_connectivity(conn, sizes):
+    g, _ = grid_from_ascii("""
+    #?#
+    ?.#
+    ###
+    """)
+    params = FrontierParams(min_group_size_cells=1, robot_radius_m=0.0, group_connectivity=conn)
+    assert [f.size_cells for f in find_frontiers(g, params=params)] == sizes
+
+
+def test_cpoint_is_free_reachable_cell_next_to_group():
+    g, _ = grid_from_ascii("""
+    ??????
+    ......
+    ......
+    ......
+    """, resolution_m=0.1)
+    (f,) = find_frontiers(g, params=FrontierParams(min_group_size_cells=3, robot_radius_m=0.0))
+    assert f.point_rc == (2, 2) and f.point_passable
+    assert f.centroid_rc == pytest.approx((3.0, 2.5))
+    assert f.point_xy_m == pytest.approx(g.cell_to_world(2, 2))
+    assert f.length_m == pytest.approx(0.6)
+
+
+def test_cpoint_avoids_inflated_walls():
+    g, _ = grid_from_ascii("""
+    #??##
+    #...#
+    #...#
+    #...#
+    #####
+    """, resolution_m=0.1)
+    params = FrontierParams(min_group_size_cells=2, robot_radius_m=0.1)
+    (f,) = find_frontiers(g, params=params)
+    pas = traversable_mask(g, None, params)
+    assert not pas[3, 1]          # the free cell below the group touches the wall
+    assert f.point_passable and pas[f.point_rc]
+    assert f.point_rc == (3, 2)
+
+
+def test_cpoint_never_behind_a_thin_wall():
+    g, _ = grid_from_ascii("""
+    ....#..
+    ....#..
+    ...?#..
+    ....#..
+    ....#..
+    """)
+    passable = np.zeros(g.shape, bool)
+    passable[2, 5] = True   # 2 cells away but behind the wall
+    passable[2, 0] = True   # 3 cells away, in line of sight
+    (f,) = group_frontiers(g, detect_frontier_cells(g), P1, passable=passable)
+    assert f.point_rc == (2, 0)
+
+
+def test_cpoint_not_passable_when_no_room_for_the_robot():
+    g, _ = grid_from_ascii("""
+    #?#
+    #.#
+    #.#
+    ###
+    """, resolution_m=0.1)
+    params = FrontierParams(min_group_size_cells=1, robot_radius_m=0.2,
+                            cpoint_search_radius_m=0.5)
+    (f,) = find_frontiers(g, params=params)
+    assert not f.point_passable
+    assert f.point_rc == (3, 1)   # the group cell itself, flagged
+
+
+def test_cpoint_leaves_inflated_object():
+    g, _ = grid_from_ascii("""
+    ?????????
+    .........
+    .........
+    .........
+    .........
+    .........
+    """, resolution_m=0.1)
+    extra = np.zeros(g.shape, bool)
+    extra[3, 3:6] = True          # an object one cell below the frontier's free row
+    params = FrontierParams(min_group_size_cells=3, robot_radius_m=0.1)
+    (f,) = find_frontiers(g, extra, params)
+    assert f.size_cells == 9
+    assert f.point_passable and traversable_mask(g, extra, params)[f.point_rc]
+    assert f.point_rc == (4, 2)   # (4, 3..5) lie in the object's inflated margin
+
+
+# ------------------------------------------------------------------------ invariants
+
+
+def random_grid(seed: int, shape=(60, 70)) -> GridMap:
+    rng = np.random.default_rng(seed)
+    known = np.zeros(shape, bool)
+    for _ in range(12):  # known blobs
+        r, c = rng.integers(0, shape[0]), rng.integers(0, shape[1])
+        rad = rng.integers(3, 15)
+        yy, xx = np.ogrid[:shape[0], :shape[1]]
+        known |= (yy - r) ** 2 + (xx - c) ** 2 <= rad * rad
+    data = np.full(shape, -1, np.int8)
+    vals = np.where(rng.random(shape) < 0.12, 100, 0).astype(np.int8)
+    data[known] = vals[known]
+    return GridMap(data, 0.05, (1.0, -2.0))
+
+
+def reference_frontier(g: GridMap) -> np.ndarray:
+    free, unk = g.free_mask(), g.unknown_mask()
+    out = np.zeros(g.shape, bool)
+    h, w = g.shape
+    for r in range(h):
+        for c in range(w):
+            if unk[r, c]:
+                out[r, c] = any(0 <= r + dr < h and 0 <= c + dc < w and free[r + dr, c + dc]
+                                for dr, dc in ((1, 0), (-1, 0), (0, 1), (0, -1)))
+    return out
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_random_grid_invariants(seed):
+    g = random_grid(seed)
+    params = FrontierParams(min_group_size_cells=4, robot_radius_m=0.1)
+    mask = detect_frontier_cells(g, params=params)
+    np.testing.assert_array_equal(mask, reference_frontier(g))
+    fr = group_frontiers(g, mask, params)
+    assert [f.id for f in fr] == list(range(len(fr)))
+    seen = np.zeros(g.shape, int)
+    for f in fr:
+        assert f.size_cells == len(f.cells) >= params.min_group_size_cells
+        seen[f.cells[:, 0], f.cells[:, 1]] += 1
+    assert seen.max(initial=0) <= 1                     # groups are disjoint
+    assert not (seen.astype(bool) & ~mask).any()        # and made of frontier cells
+    small = FrontierParams(min_group_size_cells=1, robot_radius_m=0.1)
+    assert sum(f.size_cells for f in group_frontiers(g, mask, small)) == int(mask.sum())
+    pas = traversable_mask(g, None, params)
+    occ = obstacle_mask(g, None, params)
+    for f in fr:
+        if f.point_passable:
+            assert pas[f.point_rc] and g.free_mask()[f.point_rc] and not occ[f.point_rc]
+
+
+# ------------------------------------------------------------------------ parameters
+
+
+@pytest.mark.parametrize("kwargs,match", [
+    ({"free_threshold": -1}, "free_threshold must be in"),
+    ({"occupied_threshold": 102}, "occupied_threshold must be in"),
+    ({"free_threshold": 70, "occupied_threshold": 60}, "must be <= occupied_threshold"),
+    ({"min_group_size_cells": 0}, "min_group_size_cells"),
+    ({"group_connectivity": 6}, "group_connectivity must be 4 or 8"),
+    ({"robot_radius_m": -0.1}, "robot_radius_m"),
+    ({"cpoint_search_radius_m": float("nan")}, "cpoint_search_radius_m"),
+])
+def test_params_validation(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        FrontierParams(**kwargs)

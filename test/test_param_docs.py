@@ -1,0 +1,71 @@
+"""Defaults live only in the dataclasses: generated files, node declarations and profiles agree."""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "scripts"))
+import param_docs  # noqa: E402
+
+from explore_seg.params import flatten_params, coerce_value, ros_fields  # noqa: E402
+
+NODE_CLASSES = {
+    "frontier_detector": ("explore_seg.frontier_node", "FrontierDetectorNode"),
+    "segmentation": ("explore_seg.segmentation_node", "SegmentationNode"),
+    "object_costmap": ("explore_seg.object_costmap_node", "ObjectCostmapNode"),
+    "target_selector": ("explore_seg.selector_node", "TargetSelectorNode"),
+    "sim_bridge": ("sim_bridge.node", "SimBridgeNode"),
+}
+
+
+@pytest.mark.parametrize("path", list(param_docs.expected_files()), ids=lambda p: p.name)
+def test_generated_files_are_up_to_date(path):
+    want = param_docs.expected_files()[path]
+    assert path.exists(), f"{path} missing: run python scripts/param_docs.py --write"
+    assert path.read_text() == want, f"{path.name} is stale: run python scripts/param_docs.py --write"
+
+
+@pytest.mark.parametrize("node_name", sorted(NODE_CLASSES))
+def test_node_declares_exactly_the_documented_parameters(ros, node_name):
+    mod, cls = NODE_CLASSES[node_name]
+    node = ros.add(getattr(importlib.import_module(mod), cls)(context=ros.context))
+    declared = {n for n in node._parameters if n != "use_sim_time"}
+    documented = {name for name, *_ in param_docs.node_fields(node_name)}
+    assert declared == documented, (f"undocumented: {sorted(declared - documented)}; "
+                                    f"not declared: {sorted(documented - declared)}")
+
+
+def _validate_profile(path: Path) -> None:
+    data = yaml.safe_load(path.read_text())
+    for node, section in data.items():
+        key = node.strip("/")
+        if key == "**":
+            continue
+        assert key in param_docs.NODE_PARAMS, f"{path.name}: unknown node {node!r}"
+        values = flatten_params(section["ros__parameters"])
+        values.pop("use_sim_time", None)
+        for prefix, spec in param_docs.NODE_PARAMS[key]:
+            cls = param_docs.load_class(spec)
+            fields = {prefix + f.name: (f, kind) for f, kind in ros_fields(cls)}
+            changes = {}
+            for name in list(values):
+                if name in fields:
+                    f, kind = fields[name]
+                    changes[f.name] = coerce_value(kind, name, values.pop(name),
+                                                   as_tuple=isinstance(f.default, tuple))
+            dataclasses.replace(cls(), **changes)  # raises ValueError when invalid
+        assert not values, f"{path.name}: {node} has unknown parameters {sorted(values)}"
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "config").glob("*.yaml")), ids=lambda p: p.name)
+def test_parameter_files_hold_only_known_valid_parameters(path):
+    if path.name == "object_priors.yaml":
+        pytest.skip("not a ROS parameter file")
+    _validate_profile(path)
