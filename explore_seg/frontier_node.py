@@ -21,7 +21,7 @@ from std_msgs.msg import ColorRGBA, Float64MultiArray, MultiArrayDimension
 from visualization_msgs.msg import Marker, MarkerArray
 
 from explore_seg import convert
-from explore_seg.core.frontiers import Frontier, FrontierParams, find_frontiers, \
+from explore_seg.core.frontiers import Frontier, FrontierParams, find_frontiers, object_obstacles, \
     traversable_mask
 from explore_seg.core.grid import GridMap
 from explore_seg.node_util import run
@@ -41,15 +41,6 @@ class State(Enum):
 
     WAITING_FOR_MAP = 0
     RUNNING = 1
-
-
-def object_obstacles(layer: GridMap | None, grid: GridMap, threshold: int
-                     ) -> np.ndarray | None:
-    """Cells of ``grid`` occupied (>= threshold) in the object layer, resampled onto the
-    map's cells; None without a layer."""
-    if layer is None:
-        return None
-    return layer.resample_to(grid) >= threshold
 
 
 def frontier_clouds(frontiers: list[Frontier], grid: GridMap, z_m: float = 0.0

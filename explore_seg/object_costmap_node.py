@@ -103,14 +103,14 @@ class ObjectCostmapNode(Node):
         self.create_subscription(LaserScan, "scan", self._on_scan, SENSOR_QOS)
         self.create_subscription(OccupancyGrid, "map", self._on_map,
                                  map_qos(p.map_transient_local))
-        if p.pose_source == "odom":
+        if p.pose_topic_type == "odom":
             self.create_subscription(Odometry, "odom", self._on_odom, RELIABLE_QOS)
         else:
             self.create_subscription(PoseWithCovarianceStamped, "pose", self._on_pose,
                                      RELIABLE_QOS)
-        if self._dp.params.backend == "oracle":
-            self.create_subscription(Image, "camera/semantic/image_raw", self._on_semantic,
-                                     SENSOR_QOS)
+        # Used (and required for pairing) only by the oracle detector backend.
+        self.create_subscription(Image, "camera/semantic/image_raw", self._on_semantic,
+                                 SENSOR_QOS)
         self._timer = self.create_timer(1.0 / p.rate_hz, self._tick)
         self._p.on_change(self._params_changed)
         self._dp.on_change(self._detector_params_changed)
@@ -233,7 +233,7 @@ class ObjectCostmapNode(Node):
                     if dp.backend == "oracle" else None
                 self._detector = Detector(dp, sim_class_ids=ids)
                 self.get_logger().info(f"detector backend: {self._detector.backend_name}")
-            except (FileNotFoundError, ValueError, ImportError, RuntimeError) as err:
+            except (OSError, ValueError, ImportError, RuntimeError) as err:
                 self._detector_failed = True
                 self.get_logger().error(
                     f"detector unavailable ({err}); only unclassified objects are found")

@@ -198,6 +198,12 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         err.write(f"segment_map: error: {exc}\n")
         return 2
+    if Path(args.out).suffix.lower() != ".png":
+        err.write(f"segment_map: error: --out must be a .png file, got {args.out}\n")
+        return 2
+    if args.color and Path(args.color).suffix.lower() != ".png":
+        err.write(f"segment_map: error: --color must be a .png file, got {args.color}\n")
+        return 2
     if not (math.isfinite(args.resolution) and args.resolution > 0):
         err.write(f"segment_map: error: --resolution must be > 0, got {args.resolution}\n")
         return 2

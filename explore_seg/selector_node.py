@@ -33,12 +33,12 @@ from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 
 from explore_seg import convert
-from explore_seg.core.frontiers import Frontier, find_frontiers, traversable_mask
-from explore_seg.core.grid import GridMap
+from explore_seg.core.frontiers import (Frontier, find_frontiers, object_obstacles,
+                                         traversable_mask)
+from explore_seg.core.grid import GridMap, resample_array
 from explore_seg.core.paths import BlockGraph
 from explore_seg.core.selection import (Action, Goal, GoalManager, SelectionParams,
                                         frontier_distances)
-from explore_seg.frontier_node import object_obstacles
 from explore_seg.node_util import run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS, map_qos
@@ -242,13 +242,18 @@ class TargetSelectorNode(Node):
         except ValueError as err:
             self._warn("regions", f"dropped regions: {err}")
             return
-        if not geom.same_geometry(grid):
-            self._warn("regions_geometry", "regions do not match the map's geometry "
-                                           f"({geom.width}x{geom.height} vs "
-                                           f"{grid.width}x{grid.height}): ignored until "
-                                           "they do")
+        if geom.frame_id != grid.frame_id or abs(geom.resolution_m - grid.resolution_m) > 1e-9:
+            self._warn("regions_geometry", "regions are in frame "
+                                           f"{geom.frame_id!r} at {geom.resolution_m} m, the map "
+                                           f"in {grid.frame_id!r} at {grid.resolution_m} m: "
+                                           "ignored until they match")
             self._labels_dirty = True   # retry with the next map
             return
+        if not geom.same_geometry(grid):
+            # Labels of a slightly older map (the map grew or shifted since): carry them
+            # over cell by cell through world coordinates; new cells get no region (0).
+            labels = resample_array(labels, geom, grid, fill=0)
+            self._labels_dirty = True   # take the exact labels as soon as they arrive
         self._labels = labels
 
     def _update_frontiers(self, grid: GridMap) -> float:

@@ -69,6 +69,11 @@ class SimParams:
     robot_height_m: float = field(default=1.1, metadata=_doc(
         "parts whose zmin is below this collide (seats and table tops included)", "m",
         read_only=True))
+    collision_backup_m: float = field(default=0.15, metadata=_doc(
+        "after a collision the robot backs off this far (Nav2 BackUp recovery; 0 = stay)",
+        "m"))
+    collision_backup_speed_mps: float = field(default=0.1, metadata=_doc(
+        "speed of that back-off", "m/s"))
     max_linear_speed_mps: float = field(default=NavParams.max_linear_speed_mps, metadata=_doc(
         "forward speed limit", "m/s"))
     max_angular_speed_radps: float = field(default=NavParams.max_angular_speed_radps,
@@ -167,12 +172,13 @@ class SimParams:
         positive = ("physics_dt_s", "real_time_factor", "robot_radius_m", "robot_height_m",
                     "max_linear_speed_mps", "max_angular_speed_radps", "map_resolution_m",
                     "map_rate_hz", "coverage_period_s", "lockstep_dt_s", "tick_period_s",
-                    "max_sim_step_per_tick_s", "metrics_rate_hz")
+                    "max_sim_step_per_tick_s", "metrics_rate_hz",
+                    "collision_backup_speed_mps")
         for name in positive:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
-        non_negative = ("pose_noise_xy_m", "pose_noise_yaw_rad")
+        non_negative = ("pose_noise_xy_m", "pose_noise_yaw_rad", "collision_backup_m")
         for name in non_negative:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
@@ -415,6 +421,8 @@ class SimEngine:
         self._layers: dict[str, GridMap] = {}
         self._nav_prev_state = NavState.IDLE
         self._on_collision: list[Callable[[CollisionEvent], None]] = []
+        self._backup_left_m = 0.0
+        self._backup_dir = -1.0
         self._trail: list[tuple[float, float]] = [(x, y)]
         self._trail_spacing_m = trail_spacing_m
         self._trail_max = max(16, trail_max)
@@ -481,6 +489,11 @@ class SimEngine:
         return np.asarray(self._trail + [self._pose[:2]], dtype=np.float64)
 
     @property
+    def backing_up(self) -> bool:
+        """True while the robot backs off after a collision."""
+        return self._backup_left_m > 0.0
+
+    @property
     def in_contact(self) -> bool:
         """True while the robot is pressed against an obstacle (since the last contact)."""
         return self._in_contact
@@ -531,6 +544,7 @@ class SimEngine:
         if not (math.isfinite(v_mps) and math.isfinite(w_radps)):
             raise ValueError(f"cmd_vel must be finite, got ({v_mps}, {w_radps})")
         self._nav.cancel("replaced by cmd_vel")
+        self._backup_left_m = 0.0
         self._cmd = (float(v_mps), float(w_radps))
 
     def add_costmap_layer(self, name: str, grid: GridMap) -> None:
@@ -621,15 +635,21 @@ class SimEngine:
         if self.ground_truth is not None and t >= self._next_coverage_s - 1e-9:
             self._next_coverage_s += p.coverage_period_s
             self.metrics.update_coverage(self._mapper.grid(self.time_ns), t)
-        # Command: the navigator while a goal is active, else the direct command.
-        if self._nav.status.state is NavState.ACTIVE:
+        # Command: the post-collision back-up, else the navigator while a goal is active,
+        # else the direct command.
+        backing = self._backup_left_m > 0.0
+        if backing:
+            v, w = self._backup_dir * p.collision_backup_speed_mps, 0.0
+        elif self._nav.status.state is NavState.ACTIVE:
             v, w = self._nav.update(self._pose, t)
         else:
             v, w = self._cmd
         self._track_nav_outcome()
         v = max(-p.max_linear_speed_mps, min(p.max_linear_speed_mps, v))
         w = max(-p.max_angular_speed_radps, min(p.max_angular_speed_radps, w))
-        self._move(v, w, dt)
+        moved = self._move(v, w, dt)
+        if backing:
+            self._backup_left_m = 0.0 if moved == 0.0 else self._backup_left_m - moved
         self._step_count += 1
         self._time_s = self._step_count * dt  # no drift from summing dt
 
@@ -642,7 +662,8 @@ class SimEngine:
                 self.metrics.goal_aborted(self._nav.status.reason)
             self._nav_prev_state = state
 
-    def _move(self, v: float, w: float, dt: float) -> None:
+    def _move(self, v: float, w: float, dt: float) -> float:
+        """Integrate one step unless it runs into a solid; returns the distance moved."""
         x, y, yaw = self._pose
         if abs(w) > 1e-9:
             nyaw = yaw + w * dt
@@ -661,10 +682,10 @@ class SimEngine:
                 # Already overlapping (spawned in contact): moves that increase the
                 # clearance are allowed so the robot can back out.
                 if not (clear_old < r and clear_new > clear_old):
-                    self._collide(obj, cls, part)
+                    self._collide(obj, cls, part, v)
                     self._pose = (x, y, nyaw)
                     self._vel = (0.0, w)
-                    return
+                    return 0.0
             self._in_contact = False
             self.metrics.add_distance(moved)
             lx, ly = self._trail[-1]
@@ -675,10 +696,17 @@ class SimEngine:
                     self._trail_spacing_m *= 2.0
         self._pose = (nx, ny, nyaw)
         self._vel = (v, w)
+        return moved
 
-    def _collide(self, obj: str, cls: str, part: str) -> None:
-        """Stop: zero the command and abort the goal; count a new contact event once."""
+    def _collide(self, obj: str, cls: str, part: str, v: float) -> None:
+        """Stop: zero the command, abort the goal, back off (like Nav2's BackUp recovery)
+        unless already backing; count a new contact event once."""
         self._cmd = (0.0, 0.0)
+        if self._backup_left_m <= 0.0 and self.params.collision_backup_m > 0.0:
+            self._backup_left_m = self.params.collision_backup_m
+            self._backup_dir = -1.0 if v >= 0.0 else 1.0
+        else:
+            self._backup_left_m = 0.0
         self._nav.abort(f"collision with {obj or cls} ({part})")
         self._track_nav_outcome()
         if self._in_contact:

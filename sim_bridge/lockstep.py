@@ -268,6 +268,8 @@ class LockstepState:
     object_map: ObjectMap | None
     goal_xy: tuple[float, float] | None
     goals: list[tuple[float, float]]
+    action: str = ""
+    reason: str = ""
 
 
 def _round(v: float, nd: int = 2) -> float:
@@ -579,7 +581,7 @@ def run_exploration(world: World, strategy: str, seed: int, *,
                 observer(LockstepState(engine, grid, frontiers, use_labels, layer,
                                        objects.map if objects else None,
                                        manager.goal.xy_m if manager.goal else None,
-                                       res.goals))
+                                       res.goals, step.action.value, step.reason))
             if step.action is Action.DONE:
                 res.stop_reason = "done"
                 break

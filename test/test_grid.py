@@ -71,3 +71,16 @@ def test_random_round_trip_invariant():
         x, y = g.cells_to_world(r, c)
         rr, cc = g.world_to_cells(x, y)
         assert (rr == r).all() and (cc == c).all()
+
+
+def test_resample_array_carries_int32_labels_to_a_grown_map():
+    from explore_seg.core.grid import resample_array
+
+    old = GridMap(np.zeros((2, 3), np.int8), 0.05, (0.0, 0.0))
+    labels = np.array([[1, 1, 700], [2, 2, 700]], np.int32)
+    grown = GridMap(np.zeros((3, 4), np.int8), 0.05, (-0.05, 0.0))
+    out = resample_array(labels, old, grown, fill=0)
+    assert out.dtype == np.int32
+    assert out.tolist() == [[0, 1, 1, 700], [0, 2, 2, 700], [0, 0, 0, 0]]
+    with pytest.raises(ValueError, match=r"values shape \(3, 3\) differs from source grid \(2, 3\)"):
+        resample_array(np.zeros((3, 3), np.int32), old, grown)

@@ -274,7 +274,7 @@ def test_load_priors_rejects_bad_files(tmp_path, text, match):
     (dict(unknown_min_height_m=2.0), "below unknown_max_height_m"),
     (dict(leg_min_width_m=0.5), "must not exceed leg_max_width_m"),
     (dict(orientation_method="ransac"), "orientation_method"),
-    (dict(pose_source="tf"), "pose_source"),
+    (dict(pose_topic_type="tf"), "pose_topic_type"),
     (dict(object_value=101), "object_value"),
     (dict(background_value=-2), "background_value"),
     (dict(camera_z_m=float("inf")), "camera_z_m"),

@@ -109,8 +109,9 @@ def test_driving_into_a_part_above_the_scan_plane_is_one_collision_at_contact(
     step_m = 0.26 * eng.params.physics_dt_s
     assert contact_x - step_m - 1e-6 <= ev.x_m <= contact_x
     assert ev.y_m == pytest.approx(2.0, abs=1e-6)
-    # Stopped: the command was zeroed, the robot stays put.
+    # Stopped: the command was zeroed; the robot backed off 0.15 m and stays there.
     x_stop = eng.pose[0]
+    assert x_stop == pytest.approx(ev.x_m - 0.15, abs=0.1 * eng.params.physics_dt_s + 1e-6)
     eng.step(2.0)
     assert eng.pose[0] == x_stop and eng.velocity[0] == 0.0
 
@@ -124,16 +125,28 @@ def test_part_above_robot_height_is_no_collision():
 
 
 def test_pushing_on_counts_once_and_backing_off_then_again_counts_twice():
-    eng = SimEngine(room_world([]), SimParams(**FAST))
+    eng = SimEngine(room_world([]), SimParams(collision_backup_m=0.0, **FAST))
     eng.set_cmd_vel(0.26, 0.0)
     eng.step(25.0)
     assert eng.metrics.n_collisions == 1
     assert eng.pose[0] == pytest.approx(6.0 - 0.22, abs=0.26 * 0.02 + 1e-6)
     eng.set_cmd_vel(0.26, 0.0)        # pushes again while touching: same contact
     eng.step(2.0)
-    assert eng.metrics.n_collisions == 1
+    assert eng.metrics.n_collisions == 1 and eng.in_contact
     eng.set_cmd_vel(-0.2, 0.0)
     eng.step(1.0)
+    assert not eng.in_contact
+    eng.set_cmd_vel(0.26, 0.0)
+    eng.step(3.0)
+    assert eng.metrics.n_collisions == 2
+
+
+def test_automatic_back_off_makes_the_next_push_a_new_contact():
+    eng = SimEngine(room_world([]), SimParams(collision_backup_m=0.15, **FAST))
+    eng.set_cmd_vel(0.26, 0.0)
+    eng.step(25.0)
+    assert eng.metrics.n_collisions == 1 and not eng.backing_up
+    assert eng.pose[0] == pytest.approx(6.0 - 0.22 - 0.15, abs=0.01)
     eng.set_cmd_vel(0.26, 0.0)
     eng.step(3.0)
     assert eng.metrics.n_collisions == 2
@@ -147,7 +160,7 @@ def test_collision_aborts_the_active_goal():
     assert eng.nav_status.state is NavState.ABORTED
     assert "collision with bench_1" in eng.nav_status.reason
     assert eng.metrics.n_collisions == 1 and eng.metrics.goals_aborted == 1
-    assert eng.pose[0] == pytest.approx(3.0 - 0.25 - 0.22, abs=0.01)
+    assert eng.metrics.collisions[0].x_m == pytest.approx(3.0 - 0.25 - 0.22, abs=0.01)
 
 
 # --------------------------------------------------------------------- mapping

@@ -38,7 +38,7 @@ _TWO_PI = 2.0 * math.pi
 #: Angular slack (rad) when testing whether a cut direction lies inside a wedge.
 _ANGLE_EPS = 1e-6
 #: Points closer than this to a convex hull edge are on the hull (px).
-_HULL_TOL_PX = 1.0
+_HULL_TOL_PX = 0.5
 #: Sample spacing (px) of the raster visibility test of a cut.
 _SAMPLE_STEP_PX = 0.5
 #: A cut whose interior samples are on the piece border for more than this fraction

@@ -376,3 +376,15 @@ def find_frontiers(grid: GridMap, extra_obstacles: npt.NDArray[np.bool_] | None 
     """
     mask = detect_frontier_cells(grid, extra_obstacles, params)
     return group_frontiers(grid, mask, params, extra_obstacles, passable)
+
+
+def object_obstacles(layer: GridMap | None, grid: GridMap, threshold: int
+                     ) -> np.ndarray | None:
+    """Cells of ``grid`` occupied (>= ``threshold``) in an extra layer (the object costmap).
+
+    The layer is resampled onto the map's cells through world coordinates, so it may have
+    another size or origin. Returns None without a layer.
+    """
+    if layer is None:
+        return None
+    return layer.resample_to(grid) >= threshold

@@ -188,15 +188,42 @@ class GridMap:
         Used to align layers (e.g. the object costmap) with the map when their
         origins or sizes differ. Cells outside this grid get ``fill``.
         """
-        if self.same_geometry(other):
-            return self.data.copy()
-        rows, cols = np.indices(other.shape)
-        x, y = other.cells_to_world(rows.ravel(), cols.ravel())
-        r, c = self.world_to_cells(x, y)
-        ok = (r >= 0) & (r < self.height) & (c >= 0) & (c < self.width)
-        out = np.full(other.shape[0] * other.shape[1], fill, dtype=np.int8)
-        out[ok] = self.data[r[ok], c[ok]]
-        return out.reshape(other.shape)
+        return resample_array(self.data, self, other, fill)
+
+
+def resample_array(values: npt.NDArray, src: GridMap, dst: GridMap, fill: int | float = 0
+                   ) -> npt.NDArray:
+    """Values laid out on ``src``'s cells, sampled at ``dst``'s cell centres (nearest cell).
+
+    Parameters
+    ----------
+    values : ndarray, shape ``src.shape``
+        Any dtype (occupancy, region labels, ...).
+    src, dst : GridMap
+        Geometries (size, resolution, origin) of the input and of the output.
+    fill : scalar
+        Value for ``dst`` cells outside ``src``.
+
+    Returns
+    -------
+    ndarray, shape ``dst.shape``, dtype of ``values``
+
+    Raises
+    ------
+    ValueError
+        When ``values`` does not have ``src``'s shape.
+    """
+    if values.shape != src.shape:
+        raise ValueError(f"values shape {values.shape} differs from source grid {src.shape}")
+    if src.same_geometry(dst):
+        return values.copy()
+    rows, cols = np.indices(dst.shape)
+    x, y = dst.cells_to_world(rows.ravel(), cols.ravel())
+    r, c = src.world_to_cells(x, y)
+    ok = (r >= 0) & (r < src.height) & (c >= 0) & (c < src.width)
+    out = np.full(dst.shape[0] * dst.shape[1], fill, dtype=values.dtype)
+    out[ok] = values[r[ok], c[ok]]
+    return out.reshape(dst.shape)
 
 
 def grid_from_ascii(text: str, resolution_m: float = 0.05,

@@ -11,8 +11,9 @@ Pipeline (Kim, Kim & Lee, RA-L 2022, Sec. IV-C), per detection of a class with a
 6. keep the cluster that best matches the box (most points, weighted by closeness to
    the box centre; ties to the nearest median depth), plus clusters that lie inside its
    clamped box (parts split at thin links);
-7. 3D box: footprint orientation by PCA (or minimum-area rectangle), extents by min/max
-   along the footprint axes, heights from the floor (or the lowest point) to the top;
+7. 3D box: footprint orientation by the minimum-area rectangle (default) or PCA (the
+   paper), extents by min/max along the footprint axes, heights from the floor (or the
+   lowest point) to the top;
 8. clamp the extents by the class's size prior: grown to the minimum away from the camera
    (the hidden side), shrunk to the maximum around the centre.
 
@@ -84,13 +85,14 @@ class ObjectParams:
     pose_tolerance_s: float = field(default=0.2, metadata=_doc(
         "Largest stamp difference between the depth image and the robot pose used for it; "
         "frames without a pose this close are dropped", "s"))
-    pose_source: str = field(default="odom", metadata=_doc(
+    pose_topic_type: str = field(default="odom", metadata=_doc(
         "Where the robot pose in the map frame comes from: 'odom' (nav_msgs/Odometry on "
-        "'odom') or 'pose' (PoseWithCovarianceStamped on 'pose')"))
+        "'odom') or 'pose' (PoseWithCovarianceStamped on 'pose')", read_only=True))
     map_frame: str = field(default="map", metadata=_doc(
         "Frame of the published cloud and markers"))
     map_transient_local: bool = field(default=True, metadata=_doc(
-        "Subscribe to 'map' transient-local (latched); false for a volatile publisher"))
+        "Subscribe to 'map' transient-local (latched); false for a volatile publisher",
+        read_only=True))
     camera_x_m: float = field(default=0.064, metadata=_doc(
         "Camera position in base_link, x (default: sim_bridge's TurtleBot3-like mount)", "m"))
     camera_y_m: float = field(default=0.0, metadata=_doc(
@@ -112,7 +114,7 @@ class ObjectParams:
         metadata=_doc("Oracle detector only: the simulator's semantic class table as "
                       "'name:id' pairs (mirrors sim_bridge.sensors.CLASS_IDS)"))
     # --- detection -> 3D box
-    min_score: float = field(default=0.4, metadata=_doc(
+    min_score: float = field(default=0.3, metadata=_doc(
         "Detections below this confidence are ignored", "0..1"))
     max_depth_m: float = field(default=4.0, metadata=_doc(
         "Depth readings farther than this are ignored", "m"))
@@ -263,9 +265,9 @@ class ObjectParams:
         if self.orientation_method not in _ORIENTATION_METHODS:
             raise ValueError(f"orientation_method must be one of {_ORIENTATION_METHODS}, "
                              f"got {self.orientation_method!r}")
-        if self.pose_source not in _POSE_SOURCES:
+        if self.pose_topic_type not in _POSE_SOURCES:
             raise ValueError(
-                f"pose_source must be one of {_POSE_SOURCES}, got {self.pose_source!r}")
+                f"pose_topic_type must be one of {_POSE_SOURCES}, got {self.pose_topic_type!r}")
         if not 0 <= self.object_value <= 100:
             raise ValueError(f"object_value must be in 0..100, got {self.object_value}")
         if not -1 <= self.background_value <= 100:
@@ -743,16 +745,17 @@ def select_cluster(labels: npt.NDArray[np.integer], pixels_uv: npt.NDArray[np.fl
     return best
 
 
-def footprint_orientation(points_xy: npt.NDArray[np.floating], method: str = "pca"
+def footprint_orientation(points_xy: npt.NDArray[np.floating], method: str = "min_area_rect"
                           ) -> tuple[tuple[float, float], tuple[float, float], float]:
     """Oriented rectangle around footprint points.
 
     Parameters
     ----------
     points_xy : ndarray, shape (N, 2), N >= 1
-    method : {"pca", "min_area_rect"}
-        ``"pca"``: axes from the principal components of the points (the paper);
-        ``"min_area_rect"``: the minimum-area enclosing rectangle.
+    method : {"min_area_rect", "pca"}
+        ``"min_area_rect"``: the minimum-area enclosing rectangle (exact for rectangular
+        furniture); ``"pca"``: axes from the principal components of the points (the
+        paper; biased when the footprint is sampled unevenly or seen in part).
 
     Returns
     -------

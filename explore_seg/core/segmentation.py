@@ -214,7 +214,7 @@ def _clean(data: npt.NDArray[np.int8], params: SegmentationParams, res: float
         return free_raw, free_raw.copy()
     occ = data > params.occupied_min_occupancy
     occ_u8 = occ.astype(np.uint8)
-    speck_px = params.obstacle_speck_area_m2 / (res * res)
+    speck_px = math.floor(params.obstacle_speck_area_m2 / (res * res) + 1e-6)
     if speck_px >= 1 and occ.any():
         n, lab, stats, _ = cv2.connectedComponentsWithStats(occ_u8, connectivity=8)
         small = stats[:, cv2.CC_STAT_AREA] <= speck_px
@@ -801,7 +801,19 @@ class IncrementalSegmenter:
             return labels, "unchanged", 0, 0, ""
         lut = np.zeros(max(max(old_area, default=0), max(dirty, default=0)) + 2, dtype=bool)
         lut[list(dirty)] = True
-        work = lut[np.clip(labels, 0, len(lut) - 1)]
+        work = lut[labels]
+        if dirty:
+            # clean pieces sharing a wide border (no door) with a dirty piece are redone
+            # too: the cut between them was made at an old frontier and may not be real
+            door_cells = p.max_door_width_m / res
+            nb = _bbox(work, 1)
+            extra = {b if a in dirty else a
+                     for (a, b), c in _pair_counts(labels[nb]).items()
+                     if c > door_cells and (a in dirty) != (b in dirty)}
+            if extra:
+                dirty |= extra
+                lut[list(extra)] = True
+                work = lut[labels]
         if blobs is not None:
             work |= blobs
         n_work = int(work.sum())

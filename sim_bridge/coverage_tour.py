@@ -1,0 +1,331 @@
+"""Full-knowledge coverage tour: a reference path length for exploration benchmarks.
+
+With the whole ground truth known and a 360 degree range sensor, how far must a robot
+drive so that every explorable cell has been in view? :func:`coverage_tour` answers it
+in four steps:
+
+1. **candidates**: viewpoints on a regular lattice (``candidate_spacing_m``) over the
+   inflated free space (``inside`` cells at least ``clearance_m`` from every obstacle of
+   the footprint raster) that the start can reach;
+2. **visibility**: from each candidate the simulator's lidar (ray cast against the
+   world's primitives, ``sensor_range_m``, ``num_beams``) marks the cells its beams
+   cross; the targets are the ``inside`` cells on a ``target_stride_cells`` sub-lattice;
+3. **greedy set cover** (lazy evaluation) until every target that any candidate sees is
+   covered (targets no candidate sees are reported, not required);
+4. **tour**: nearest neighbour from the start over geodesic distances
+   (:func:`explore_seg.core.paths.distance_field` on the inflated free space, exact
+   8-connected lengths) then 2-opt with the start fixed and an open end.
+
+The result is a near-optimal informed tour, not a proven lower bound: greedy set cover
+and 2-opt are heuristics, and a robot also sees between viewpoints. Exploration with an
+unknown map should still need more: the benchmark reports each strategy's path length
+divided by this tour length.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.grid import OCCUPIED_THRESHOLD, GridMap
+from explore_seg.core.paths import distance_field, extract_path, inflate
+from sim_bridge import worlds
+from sim_bridge.sensors import Lidar, LidarParams
+from sim_bridge.world import World
+
+
+@dataclass(frozen=True)
+class TourParams:
+    """Parameters of :func:`coverage_tour`."""
+
+    sensor_range_m: float = field(default=5.0, metadata={
+        "doc": "range of the 360 degree sensor (the paper's lidar: 5 m)", "unit": "m"})
+    num_beams: int = field(default=360, metadata={"doc": "beams per viewpoint scan"})
+    candidate_spacing_m: float = field(default=0.5, metadata={
+        "doc": "lattice spacing of candidate viewpoints", "unit": "m"})
+    clearance_m: float = field(default=0.27, metadata={
+        "doc": "viewpoints and paths keep this distance to obstacles of the footprint "
+               "raster (robot radius + planner margin)", "unit": "m"})
+    target_stride_cells: int = field(default=2, metadata={
+        "doc": "targets: inside cells on every n-th row and column"})
+    ray_step_cells: float = field(default=0.5, metadata={
+        "doc": "sampling step along a beam", "unit": "cells"})
+    two_opt_max_sweeps: int = field(default=50, metadata={
+        "doc": "bound on the 2-opt improvement sweeps"})
+    sample_spacing_m: float = field(default=0.25, metadata={
+        "doc": "the sensor also scans every this far along the tour", "unit": "m"})
+    coverage_fraction: float = field(default=0.99, metadata={
+        "doc": "the tour ends once this share of the coverable targets was in view "
+               "(the benchmark's completion rule)"})
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.coverage_fraction <= 1.0:
+            raise ValueError(f"coverage_fraction must be in (0, 1], got {self.coverage_fraction}")
+        for name in ("sensor_range_m", "candidate_spacing_m", "ray_step_cells",
+                     "sample_spacing_m"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be finite and > 0, got {v}")
+        if not (math.isfinite(self.clearance_m) and self.clearance_m >= 0):
+            raise ValueError(f"clearance_m must be finite and >= 0, got {self.clearance_m}")
+        for name in ("num_beams", "target_stride_cells", "two_opt_max_sweeps"):
+            v = getattr(self, name)
+            if int(v) != v or v < 1:
+                raise ValueError(f"{name} must be an integer >= 1, got {v}")
+        if self.num_beams < 3:
+            raise ValueError(f"num_beams must be >= 3, got {self.num_beams}")
+
+
+@dataclass(frozen=True)
+class TourResult:
+    """Outcome of :func:`coverage_tour`.
+
+    Attributes
+    ----------
+    length_m : float
+        Geodesic length start -> viewpoints in tour order (open tour).
+    viewpoints_xy : ndarray of float64, shape (K, 2)
+        Chosen viewpoints in tour order.
+    path_xy : ndarray of float64, shape (N, 2)
+        The tour as world points (cell centres of the geodesic paths).
+    coverable_fraction : float
+        Share of the targets that some candidate sees (the rest cannot be seen from the
+        inflated free space).
+    n_candidates, n_targets : int
+    """
+
+    length_m: float
+    viewpoints_xy: npt.NDArray[np.float64]
+    path_xy: npt.NDArray[np.float64]
+    coverable_fraction: float
+    n_candidates: int
+    n_targets: int
+
+
+def _visible_cells(lidar: Lidar, xy: tuple[float, float], geom: GridMap,
+                   params: TourParams) -> npt.NDArray[np.int64]:
+    """Flat indices (into ``geom``) of the cells the beams from ``xy`` cross."""
+    ranges = np.asarray(lidar.scan((xy[0], xy[1], 0.0), None), dtype=np.float64)
+    lp = lidar.params
+    ang = lp.angle_min_rad + lp.angle_increment_rad * np.arange(ranges.shape[0])
+    # +inf: nothing within range (the beam sees all of it); -inf: too close to see.
+    reach = np.where(np.isfinite(ranges), ranges,
+                     np.where(ranges > 0, params.sensor_range_m, 0.0))
+    reach = np.minimum(reach, params.sensor_range_m)
+    step = params.ray_step_cells * geom.resolution_m
+    n = int(math.ceil(params.sensor_range_m / step)) + 1
+    s = np.arange(n, dtype=np.float64) * step                      # (n,)
+    ok = s[None, :] < reach[:, None]                               # (beams, n)
+    px = xy[0] + np.cos(ang)[:, None] * s[None, :]
+    py = xy[1] + np.sin(ang)[:, None] * s[None, :]
+    r, c = geom.world_to_cells(px[ok], py[ok])
+    inb = (r >= 0) & (r < geom.height) & (c >= 0) & (c < geom.width)
+    return np.unique(r[inb] * geom.width + c[inb])
+
+
+def _greedy_cover(sets: list[npt.NDArray[np.int64]], n_targets: int) -> list[int]:
+    """Lazy greedy set cover of every coverable target; returns chosen set indices."""
+    covered = np.zeros(n_targets, dtype=bool)
+    heap = [(-len(s), i) for i, s in enumerate(sets) if len(s)]
+    heapq.heapify(heap)
+    chosen: list[int] = []
+    coverable = np.zeros(n_targets, dtype=bool)
+    for s in sets:
+        coverable[s] = True
+    remaining = int(coverable.sum())
+    while remaining > 0 and heap:
+        neg, i = heapq.heappop(heap)
+        gain = int((~covered[sets[i]]).sum())
+        if gain == 0:
+            continue
+        if heap and gain < -heap[0][0]:
+            heapq.heappush(heap, (-gain, i))
+            continue
+        chosen.append(i)
+        covered[sets[i]] = True
+        remaining -= gain
+    return chosen
+
+
+def _tour_order(dist: npt.NDArray[np.float64], max_sweeps: int) -> list[int]:
+    """Open tour from node 0 through all nodes: nearest neighbour, then 2-opt."""
+    n = dist.shape[0]
+    order = [0]
+    left = set(range(1, n))
+    while left:
+        cur = order[-1]
+        nxt = min(left, key=lambda j: (dist[cur, j], j))
+        order.append(nxt)
+        left.remove(nxt)
+    for _ in range(max_sweeps):
+        improved = False
+        for i in range(1, n - 1):
+            a, b = order[i - 1], order[i]
+            for j in range(i + 1, n):
+                c = order[j]
+                d_after = order[j + 1] if j + 1 < n else None
+                old = dist[a, b] + (dist[c, d_after] if d_after is not None else 0.0)
+                new = dist[a, c] + (dist[b, d_after] if d_after is not None else 0.0)
+                if new < old - 1e-9:
+                    order[i:j + 1] = order[i:j + 1][::-1]
+                    b = order[i]
+                    improved = True
+        if not improved:
+            break
+    return order
+
+
+def coverage_tour(world: World, start_xy: tuple[float, float] | None = None,
+                  params: TourParams | None = None,
+                  ground_truth: worlds.GroundTruth | None = None) -> TourResult:
+    """Shortest-tour estimate that brings every explorable cell into sensor view.
+
+    Parameters
+    ----------
+    world : World
+    start_xy : (float, float), optional
+        Tour start; default the world's start pose.
+    params : TourParams, optional
+    ground_truth : worlds.GroundTruth, optional
+        Precomputed ``worlds.ground_truth(world)``.
+
+    Returns
+    -------
+    TourResult
+
+    Raises
+    ------
+    ValueError
+        When the start lies outside the world's rasters or no viewpoint is reachable.
+    """
+    p = params if params is not None else TourParams()
+    gt = ground_truth if ground_truth is not None else worlds.ground_truth(world)
+    geom = gt.lidar
+    res = geom.resolution_m
+    sx, sy = start_xy if start_xy is not None else world.start_pose[:2]
+    s_rc = geom.world_to_cell(float(sx), float(sy))
+    if not geom.in_bounds(*s_rc):
+        raise ValueError(f"start ({sx:.2f}, {sy:.2f}) outside the world raster "
+                         f"{geom.shape}")
+    blocked = (gt.footprint.data >= OCCUPIED_THRESHOLD) | ~gt.inside
+    passable = ~inflate(blocked, p.clearance_m, res)
+    reach = np.isfinite(distance_field(passable, s_rc, res))
+    reach &= passable
+    # 1. candidates on a lattice
+    k = max(1, int(round(p.candidate_spacing_m / res)))
+    lattice = np.zeros(geom.shape, dtype=bool)
+    lattice[k // 2::k, k // 2::k] = True
+    cand_rc = np.argwhere(reach & lattice)
+    if cand_rc.size == 0:
+        raise ValueError("no reachable viewpoint: the start is enclosed at this clearance")
+    cx, cy = geom.cells_to_world(cand_rc[:, 0], cand_rc[:, 1])
+    # 2. visibility of targets
+    st = p.target_stride_cells
+    tmask = np.zeros(geom.shape, dtype=bool)
+    tmask[::st, ::st] = True
+    tmask &= gt.inside
+    tid = np.full(geom.shape[0] * geom.shape[1], -1, dtype=np.int64)
+    tflat = np.flatnonzero(tmask.ravel())
+    tid[tflat] = np.arange(tflat.size)
+    lidar = Lidar(world, LidarParams(num_beams=p.num_beams, range_max_m=p.sensor_range_m,
+                                     noise_std_m=0.0, mount_xy_m=(0.0, 0.0)))
+    sets = []
+    for x, y in zip(cx.tolist(), cy.tolist()):
+        ids = tid[_visible_cells(lidar, (x, y), geom, p)]
+        sets.append(ids[ids >= 0])
+    coverable = np.zeros(tflat.size, dtype=bool)
+    for s in sets:
+        coverable[s] = True
+    # 3. set cover
+    chosen = _greedy_cover(sets, tflat.size)
+    pts_rc = [s_rc] + [tuple(int(v) for v in cand_rc[i]) for i in chosen]
+    # 4. geodesic distances and tour
+    n = len(pts_rc)
+    dist = np.zeros((n, n))
+    fields_ = []
+    for i, rc in enumerate(pts_rc):
+        f = distance_field(passable, rc, res)
+        fields_.append(f)
+        dist[i] = [f[q] for q in pts_rc]
+    dist = np.minimum(dist, dist.T)  # symmetric (start may sit in the inflated margin)
+    walker = _PathWalker(fields_, pts_rc, geom, p, lambda xy: _target_ids(xy),
+                         int(coverable.sum()))
+
+    def _target_ids(xy: tuple[float, float]) -> npt.NDArray[np.int64]:
+        ids = tid[_visible_cells(lidar, xy, geom, p)]
+        return ids[ids >= 0]
+
+    # 5. prune viewpoints that the path to the others already brings into view
+    keep = list(range(1, n))
+    order = _tour_order(dist[np.ix_([0] + keep, [0] + keep)], p.two_opt_max_sweeps)
+    best_len, best_order = walker.length([([0] + keep)[i] for i in order])
+    for v in sorted(keep, key=lambda i: len(sets[chosen[i - 1]])):
+        trial = [i for i in keep if i != v]
+        sub = [0] + trial
+        o = _tour_order(dist[np.ix_(sub, sub)], p.two_opt_max_sweeps)
+        length, ordered = walker.length([sub[i] for i in o])
+        if math.isfinite(length) and length <= best_len + 1e-9:
+            keep, best_len, best_order = trial, length, ordered
+    cells = walker.cells(best_order)
+    px, py = geom.cells_to_world(cells[:, 0], cells[:, 1])
+    vis = [pts_rc[i] for i in best_order[1:]]
+    vx, vy = geom.cells_to_world(np.asarray([v[0] for v in vis]), np.asarray([v[1] for v in vis]))
+    return TourResult(
+        length_m=float(best_len),
+        viewpoints_xy=np.column_stack([vx, vy]).reshape(-1, 2),
+        path_xy=np.column_stack([px, py]),
+        coverable_fraction=float(coverable.mean()) if coverable.size else 1.0,
+        n_candidates=int(cand_rc.shape[0]), n_targets=int(tflat.size))
+
+
+class _PathWalker:
+    """Coverage gathered while driving a tour: scans every ``sample_spacing_m`` along the
+    geodesic legs (cached per cell), tour length until ``coverage_fraction`` is seen."""
+
+    def __init__(self, fields_: list[npt.NDArray[np.float64]], pts_rc: list[tuple[int, int]],
+                 geom: GridMap, params: TourParams, visible, n_coverable: int) -> None:
+        self._fields = fields_
+        self._pts = pts_rc
+        self._geom = geom
+        self._p = params
+        self._visible = visible
+        self._need = int(math.ceil(params.coverage_fraction * n_coverable))
+        self._n_targets = None
+        self._legs: dict[tuple[int, int], npt.NDArray[np.int64]] = {}
+        self._seen: dict[tuple[int, int], npt.NDArray[np.int64]] = {}
+
+    def _leg(self, a: int, b: int) -> npt.NDArray[np.int64]:
+        key = (a, b)
+        if key not in self._legs:
+            self._legs[key] = extract_path(self._fields[a], self._pts[b])
+        return self._legs[key]
+
+    def cells(self, order: list[int]) -> npt.NDArray[np.int64]:
+        parts = [np.asarray([self._pts[order[0]]], dtype=np.int64)]
+        parts += [self._leg(order[i], order[i + 1])[1:] for i in range(len(order) - 1)]
+        return np.vstack(parts)
+
+    def _scan(self, rc: tuple[int, int]) -> npt.NDArray[np.int64]:
+        if rc not in self._seen:
+            self._seen[rc] = self._visible(self._geom.cell_to_world(rc[0], rc[1]))
+        return self._seen[rc]
+
+    def length(self, order: list[int]) -> tuple[float, list[int]]:
+        """(length until the coverage goal is met or inf, the order)."""
+        cells = self.cells(order)
+        res = self._geom.resolution_m
+        d = np.hypot(*np.diff(cells.astype(np.float64), axis=0).T) * res
+        cum = np.concatenate([[0.0], np.cumsum(d)])
+        spacing = self._p.sample_spacing_m
+        marks = np.searchsorted(cum, np.arange(0.0, cum[-1] + spacing, spacing))
+        idx = np.unique(np.concatenate([np.minimum(marks, len(cells) - 1), [len(cells) - 1]]))
+        seen: set[int] = set()
+        for i in idx:
+            seen.update(self._scan((int(cells[i, 0]), int(cells[i, 1]))).tolist())
+            if len(seen) >= self._need:
+                return float(cum[i]), order
+        return math.inf, order
