@@ -19,7 +19,7 @@ import numpy as np
 import numpy.typing as npt
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Pose, PoseStamped, PoseWithCovarianceStamped
-from nav_msgs.msg import MapMetaData, OccupancyGrid, Odometry
+from nav_msgs.msg import MapMetaData, OccupancyGrid, Odometry, Path
 from sensor_msgs.msg import CameraInfo, Image, LaserScan, PointCloud2, PointField
 from std_msgs.msg import Header
 
@@ -103,6 +103,37 @@ def pose_stamped(x: float, y: float, yaw: float, frame_id: str,
     msg = PoseStamped()
     msg.header = make_header(frame_id, stamp)
     msg.pose = pose_from_2d(x, y, yaw)
+    return msg
+
+
+def odometry_msg(pose: tuple[float, float, float], velocity: tuple[float, float],
+                 frame_id: str, child_frame_id: str, stamp: Time | int | None = None) -> Odometry:
+    """nav_msgs/Odometry: planar pose in ``frame_id``, body twist (v, w) in ``child_frame_id``."""
+    msg = Odometry()
+    msg.header = make_header(frame_id, stamp)
+    msg.child_frame_id = child_frame_id
+    msg.pose.pose = pose_from_2d(*pose)
+    msg.twist.twist.linear.x = float(velocity[0])
+    msg.twist.twist.angular.z = float(velocity[1])
+    return msg
+
+
+def path_msg(xy: npt.ArrayLike, frame_id: str, stamp: Time | int | None = None) -> Path:
+    """nav_msgs/Path through world points (N, 2); each pose heads to the next point."""
+    pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    msg = Path()
+    msg.header = make_header(frame_id, stamp)
+    n = len(pts)
+    if n == 0:
+        return msg
+    d = np.diff(pts, axis=0)
+    yaws = np.arctan2(d[:, 1], d[:, 0]) if n > 1 else np.zeros(0)
+    yaws = np.concatenate([yaws, yaws[-1:]]) if n > 1 else np.zeros(1)
+    for (x, y), yaw in zip(pts, yaws):
+        ps = PoseStamped()
+        ps.header = msg.header
+        ps.pose = pose_from_2d(float(x), float(y), float(yaw))
+        msg.poses.append(ps)
     return msg
 
 

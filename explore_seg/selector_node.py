@@ -36,9 +36,7 @@ from explore_seg import convert
 from explore_seg.core.frontiers import (Frontier, find_frontiers, object_obstacles,
                                          traversable_mask)
 from explore_seg.core.grid import GridMap, resample_array
-from explore_seg.core.paths import BlockGraph
-from explore_seg.core.selection import (Action, Goal, GoalManager, SelectionParams,
-                                        frontier_distances)
+from explore_seg.core.selection import Action, Goal, GoalManager, PathGraphs, SelectionParams
 from explore_seg.node_util import run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS, map_qos
@@ -80,7 +78,7 @@ class TargetSelectorNode(Node):
         self._pose: tuple[float, float, float] | None = None
         self._pose_time_ns = 0
         self._dirty = True
-        self._graph: BlockGraph | None = None
+        self._graph: PathGraphs | None = None
         self.frontiers: list[Frontier] = []
         self._state = State.STOPPED if not p.autostart else State.WAITING_FOR_MAP
         self._done_published: bool | None = None
@@ -271,7 +269,7 @@ class TargetSelectorNode(Node):
         passable = traversable_mask(grid, extra, fp)
         self.frontiers = find_frontiers(grid, extra, fp, passable=passable)
         t1 = time.perf_counter()
-        self._graph = BlockGraph(passable, grid.resolution_m, p.path_block_cells)
+        self._graph = PathGraphs(grid, extra, p, passable)
         self._dirty = False
         return t1 - t0
 
@@ -306,11 +304,11 @@ class TargetSelectorNode(Node):
             self._warn("robot_outside", f"robot at ({x:.2f}, {y:.2f}) lies outside the map")
         elif graph is not None:
             radius = int(math.floor(p.start_search_radius_m / grid.resolution_m + 1e-9))
-            if graph.nearest_passable(robot_rc, radius) is None:
+            if graph.graph.nearest_passable(robot_rc, radius) is None:
                 self._warn("robot_blocked", f"robot cell {robot_rc} is not passable and has "
                                             "no passable cell nearby: no new goals")
             else:
-                dist = frontier_distances(graph, robot_rc, self.frontiers, p)
+                dist = graph.distances(robot_rc, self.frontiers)
         result = self._manager.step(self._now_s(), (x, y), grid, self.frontiers, dist,
                                     self._labels, robot_rc)
         t1 = time.perf_counter()

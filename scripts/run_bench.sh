@@ -1,3 +1,20 @@
 #!/usr/bin/env bash
-echo "[bench] not yet available: the benchmark harness lands with the demo/benchmark issue" >&2
-exit 2
+# Exploration benchmark (bench/run_bench.py): RUNS seeded lock-step runs per world x
+# strategy, results + figures in OUT, summary in BENCHMARKS.md. Usage:
+#   scripts/run_bench.sh [OUT] [RUNS] [extra run_bench.py options...]
+# e.g. scripts/run_bench.sh out/bench 20 --worlds house,house_cluttered --jobs 2
+# BENCH_ARGS (environment) is appended too, so `make bench BENCH_ARGS="--worlds maze"` works.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+OUT=${1:-out/bench}
+RUNS=${2:-20}
+shift 2 2>/dev/null || shift $#
+PY=.venv/bin/python
+unset _ROS_WHEELS_BOOTSTRAP_COMPLETE || true
+export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
+export ROS_DOMAIN_ID=${ROS_DOMAIN_ID:-$(( 20 + $$ % 70 ))}
+export PYTHONDONTWRITEBYTECODE=1
+# One thread per worker process: the pool already uses the cores.
+export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1
+# shellcheck disable=SC2086
+exec "$PY" bench/run_bench.py --out "$OUT" --runs "$RUNS" "$@" ${BENCH_ARGS:-}

@@ -29,7 +29,7 @@ from typing import Any, Callable
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.grid import GridMap
+from explore_seg.core.grid import OCCUPIED_THRESHOLD, GridMap
 from sim_bridge import worlds
 from sim_bridge.mapping import MappingParams, ScanMapper
 from sim_bridge.metrics import CollisionEvent, SimMetrics
@@ -333,7 +333,7 @@ class Collider:
         c0, c1 = max(0, c - rad), min(g.width, c + rad + 1)
         if r0 >= r1 or c0 >= c1:
             return math.inf
-        rr, cc = np.nonzero(g.data[r0:r1, c0:c1] >= 65)
+        rr, cc = np.nonzero(g.data[r0:r1, c0:c1] >= OCCUPIED_THRESHOLD)
         if rr.size == 0:
             return math.inf
         # Point in the grid frame (cells), then distance to each unit square.
@@ -366,7 +366,7 @@ class SimEngine:
     scan_geometry : ScanGeometry, optional
         Angles/limits of the lidar's ranges; default from ``params``.
     event_queue_len : int
-        Bound of :attr:`scan_events` (camera events: 1/16 of it, at least 1).
+        Bound of :attr:`scan_events` (camera events: 1/8 of it, at least 1).
     trail_spacing_m, trail_max : float, int
         Spacing and bound of the recorded trail (halved when full).
 
@@ -408,7 +408,8 @@ class SimEngine:
         self._accum_s = 0.0
         self._mapper = ScanMapper((x, y), p.mapping_params())
         self._nav = Navigator(p.nav_params())
-        self._nav.set_map(lambda: self._mapper.grid(self.time_ns), 0)
+        self._map_stamp_ns = 0
+        self._nav.set_map(lambda: self._mapper.grid(self._map_stamp_ns), 0)
         self.metrics = SimMetrics(ground_truth)
         self._in_contact = False
         self._next_scan_s = 0.0
@@ -417,7 +418,7 @@ class SimEngine:
         self._latest_scan: ScanFrame | None = None
         self._latest_camera: CameraSample | None = None
         self.scan_events: deque[ScanFrame] = deque(maxlen=event_queue_len)
-        self.camera_events: deque[CameraSample] = deque(maxlen=max(1, event_queue_len // 16))
+        self.camera_events: deque[CameraSample] = deque(maxlen=max(1, event_queue_len // 8))
         self._layers: dict[str, GridMap] = {}
         self._nav_prev_state = NavState.IDLE
         self._on_collision: list[Callable[[CollisionEvent], None]] = []
@@ -451,7 +452,7 @@ class SimEngine:
     @property
     def map(self) -> GridMap:
         """The current occupancy map (stamped with the sim time of its last change)."""
-        return self._mapper.grid(self.time_ns)
+        return self._mapper.grid(self._map_stamp_ns)
 
     @property
     def map_version(self) -> int:
@@ -634,7 +635,7 @@ class SimEngine:
             self.camera_events.append(self._latest_camera)
         if self.ground_truth is not None and t >= self._next_coverage_s - 1e-9:
             self._next_coverage_s += p.coverage_period_s
-            self.metrics.update_coverage(self._mapper.grid(self.time_ns), t)
+            self.metrics.update_coverage(self.map, t)
         # Command: the post-collision back-up, else the navigator while a goal is active,
         # else the direct command.
         backing = self._backup_left_m > 0.0
@@ -735,7 +736,8 @@ class SimEngine:
                         map_pose[2] + nyaw * p.pose_noise_yaw_rad)
         self._mapper.integrate_scan(map_pose, ranges, g.angle_min_rad, g.angle_increment_rad,
                                     g.range_max_m, g.range_min_m)
-        self._nav.set_map(lambda: self._mapper.grid(self.time_ns), self._mapper.version)
+        self._map_stamp_ns = self.time_ns
+        self._nav.set_map(lambda: self._mapper.grid(self._map_stamp_ns), self._mapper.version)
         self._latest_scan = ScanFrame(self._time_s, pose, ranges)
         self.scan_events.append(self._latest_scan)
 

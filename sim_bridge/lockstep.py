@@ -30,18 +30,27 @@ a seed; the seed perturbs the start pose (position within ``start_jitter_m``, he
 within ``start_yaw_jitter_rad``), the lidar noise and the oracle's misses and jitter,
 so seeded runs differ from one another.
 
-Differences from the ROS pipeline (documented, intentional): everything is synchronous
-(every decision sees the frontiers, regions and object layer of the current map, where
-the nodes see their latest messages); the camera is rendered only when the object
-costmap would process a frame (``object_period_s``) and, by default, at half the
-camera resolution (the intrinsics scaled with it) to keep runs cheap.
+Parameters: the nodes' parameters come from ``config/explorer.yaml`` when it exists
+(:func:`load_explorer_params`), else from the dataclass defaults, so a lock-step run and
+the ROS explorer use the same values; decisions run at ``SelectionParams.rate_hz`` and
+the object costmap at ``ObjectParams.rate_hz`` unless :class:`LockstepParams` says
+otherwise.
+
+Differences from the ROS pipeline (intentional): everything is synchronous (every
+decision sees the frontiers, regions and object layer of the current map, where the
+nodes see their latest messages, possibly a cycle old); the navigation stand-in gets a
+new object layer only when a box appeared, vanished or moved/grew by more than
+``object_update_tolerance_m``; the camera is rendered only when the object costmap
+processes a frame and, by default, at half the simulator's resolution (intrinsics
+scaled) to keep runs cheap.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field, fields, replace
+from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
@@ -49,14 +58,13 @@ import numpy.typing as npt
 
 from explore_seg.core.camera import CameraIntrinsics
 from explore_seg.core.detector import Detector, DetectorParams
-from explore_seg.core.frontiers import Frontier, find_frontiers, traversable_mask
+from explore_seg.core.frontiers import Frontier, FrontierParams, find_frontiers, \
+    traversable_mask
 from explore_seg.core.grid import GridMap
 from explore_seg.core.objects import DepthFrame, ObjectMap, ObjectParams, load_priors, \
     process_frame
-from explore_seg.core.paths import BlockGraph
 from explore_seg.core.segmentation import IncrementalSegmenter, SegmentationParams
-from explore_seg.core.selection import Action, GoalManager, SelectionParams, \
-    frontier_distances
+from explore_seg.core.selection import Action, GoalManager, PathGraphs, SelectionParams
 from sim_bridge import worlds
 from sim_bridge.engine import Collider, SimEngine, SimParams
 from sim_bridge.sensors import CLASS_IDS
@@ -65,7 +73,7 @@ from sim_bridge.world import World
 #: Layer name of the object costmap in the navigation stand-in.
 OBJECT_LAYER = "object_costmap"
 #: Timing keys of :attr:`RunResult.timings_ms` (one list entry per update).
-TIMING_KEYS = ("frontier", "selection", "segmentation", "objects", "decision")
+TIMING_KEYS = ("frontier", "selection", "segmentation", "detection", "objects", "decision")
 
 
 @dataclass(frozen=True)
@@ -111,11 +119,12 @@ class LockstepParams:
 
     max_sim_time_s: float = field(default=1800.0, metadata={
         "doc": "stop after this much sim time", "unit": "s"})
-    decision_period_s: float = field(default=1.0, metadata={
-        "doc": "frontier detection + segmentation + goal decision period (selector rate)",
-        "unit": "s"})
-    object_period_s: float = field(default=0.5, metadata={
-        "doc": "object costmap update period (camera frame processed)", "unit": "s"})
+    decision_period_s: float = field(default=0.0, metadata={
+        "doc": "frontier detection + segmentation + goal decision period; 0 = "
+               "1 / SelectionParams.rate_hz (the target_selector's rate)", "unit": "s"})
+    object_period_s: float = field(default=0.0, metadata={
+        "doc": "object costmap update period (one camera frame processed); 0 = "
+               "1 / ObjectParams.rate_hz (the object_costmap node's rate)", "unit": "s"})
     coverage_target_pct: float = field(default=99.0, metadata={
         "doc": "run completed at this coverage of the explorable area", "unit": "%"})
     milestones_pct: tuple[float, ...] = field(default=(50.0, 90.0, 95.0, 99.0), metadata={
@@ -139,12 +148,12 @@ class LockstepParams:
                "by more than this (or appeared/vanished)", "unit": "m"})
 
     def __post_init__(self) -> None:
-        for name in ("max_sim_time_s", "decision_period_s", "object_period_s",
-                     "sample_period_s", "camera_scale"):
+        for name in ("max_sim_time_s", "sample_period_s", "camera_scale"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
-        for name in ("start_jitter_m", "start_yaw_jitter_rad", "start_min_clearance_m",
+        for name in ("decision_period_s", "object_period_s",
+                     "start_jitter_m", "start_yaw_jitter_rad", "start_min_clearance_m",
                      "oracle_jitter_px", "object_update_tolerance_m"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
@@ -289,6 +298,71 @@ def _json_clean(v: Any) -> Any:
 # --------------------------------------------------------------------------- set-up
 
 
+@dataclass(frozen=True)
+class ExplorerParams:
+    """The explorer nodes' parameters (what ``config/explorer.yaml`` sets)."""
+
+    frontier: FrontierParams = field(default_factory=FrontierParams)
+    selection: SelectionParams = field(default_factory=SelectionParams)
+    segmentation: SegmentationParams = field(default_factory=SegmentationParams)
+    objects: ObjectParams = field(default_factory=ObjectParams)
+
+
+#: Node name in the parameter file -> ExplorerParams field.
+_NODE_SECTIONS = {"frontier_detector": "frontier", "target_selector": "selection",
+                  "segmentation": "segmentation", "object_costmap": "objects"}
+
+
+def default_explorer_params_file() -> Path | None:
+    """``config/explorer.yaml`` of the source tree, when present."""
+    cand = Path(__file__).resolve().parents[1] / "config" / "explorer.yaml"
+    return cand if cand.is_file() else None
+
+
+def load_explorer_params(path: str | Path | None = None) -> ExplorerParams:
+    """Explorer parameters from a ROS 2 parameter YAML (``/**`` merged first, then each
+    node's section); fields the file does not set keep the dataclass defaults and
+    parameters of other nodes or bindings (``detector.*``, ``use_sim_time``) are ignored.
+
+    Parameters
+    ----------
+    path : str or Path, optional
+        Default :func:`default_explorer_params_file`; without a file the defaults.
+
+    Raises
+    ------
+    ValueError
+        When the file is malformed or a value is rejected by its dataclass.
+    """
+    import yaml
+
+    p = Path(path) if path else default_explorer_params_file()
+    out = ExplorerParams()
+    if p is None:
+        return out
+    data = yaml.safe_load(p.read_text()) or {}
+    if not isinstance(data, dict):
+        raise ValueError(f"{p}: expected a mapping of node names, got {type(data).__name__}")
+    for node, attr in _NODE_SECTIONS.items():
+        values: dict[str, Any] = {}
+        for key in ("/**", node, "/" + node):
+            sec = data.get(key)
+            if sec is None:
+                continue
+            if not isinstance(sec, dict) or not isinstance(sec.get("ros__parameters"), dict):
+                raise ValueError(f"{p}: section {key!r} lacks a 'ros__parameters' mapping")
+            values.update(sec["ros__parameters"])
+        base = getattr(out, attr)
+        known = {f.name for f in fields(base)}
+        changes = {k: tuple(v) if isinstance(v, list) else v for k, v in values.items()
+                   if k in known}
+        try:
+            out = replace(out, **{attr: replace(base, **changes)})
+        except (TypeError, ValueError) as err:
+            raise ValueError(f"{p}: {node}: {err}") from err
+    return out
+
+
 def perturbed_start(world: World, seed: int, params: LockstepParams,
                     radius_m: float = 0.22, height_m: float = 1.1
                     ) -> tuple[float, float, float]:
@@ -371,8 +445,12 @@ class _ObjectPipeline:
         self._last_stamp = -1.0
         self._published: list[tuple[float, ...]] = []
 
-    def update(self) -> bool:
-        """Process the newest camera frame if unseen; True when one was processed."""
+    def update(self, timings: dict[str, list[float]]) -> bool:
+        """Process the newest camera frame if unseen; True when one was processed.
+
+        Appends the oracle detection time to ``timings["detection"]`` and the rest
+        (3D boxes, fusion; the layer is timed by the caller) to ``timings["objects"]``.
+        """
         cam = self.engine.latest_camera
         if cam is None or cam.stamp_s <= self._last_stamp:
             return False
@@ -381,10 +459,14 @@ class _ObjectPipeline:
         tf = np.eye(4)
         tf[:3, :3] = fr.rotation
         tf[:3, 3] = fr.translation
-        depth = DepthFrame(fr.depth_m, self.intrinsics, tf)
+        t0 = time.perf_counter()
         dets = self.detector.detect(fr.rgb, semantic=fr.semantic, instance=fr.instance)
+        t1 = time.perf_counter()
+        depth = DepthFrame(fr.depth_m, self.intrinsics, tf)
         res = process_frame(depth, dets, self.priors, self.params, scan_points_map(self.engine))
         self.map.update(res.objects + res.unknown, depth, int(round(cam.stamp_s * 1e9)))
+        timings["detection"].append((t1 - t0) * 1e3)
+        timings["objects"].append((time.perf_counter() - t1) * 1e3)
         return True
 
     def changed(self) -> bool:
@@ -414,9 +496,7 @@ def run_exploration(world: World, strategy: str, seed: int, *,
                     decision_period_s: float | None = None,
                     params: LockstepParams | None = None,
                     sim_params: SimParams | None = None,
-                    selection_params: SelectionParams | None = None,
-                    segmentation_params: SegmentationParams | None = None,
-                    object_params: ObjectParams | None = None,
+                    explorer_params: ExplorerParams | None = None,
                     ground_truth: Any = None,
                     observer: Callable[[LockstepState], None] | None = None) -> RunResult:
     """Explore ``world`` with ``strategy`` in lock step and measure the run.
@@ -434,10 +514,10 @@ def run_exploration(world: World, strategy: str, seed: int, *,
     params : LockstepParams, optional
     sim_params : SimParams, optional
         Base simulator parameters (seed, camera and world fields are set here).
-    selection_params, segmentation_params, object_params : optional
-        Explorer parameters (defaults: the dataclass defaults, i.e. the nodes'); the
-        strategy fields (``strategy``, ``use_regions``, ``use_object_costmap``) are
-        set from :data:`STRATEGY_SPECS`.
+    explorer_params : ExplorerParams, optional
+        The nodes' parameters; default :func:`load_explorer_params` (``config/explorer.yaml``
+        when present, else the dataclass defaults). The strategy fields (``strategy``,
+        ``use_regions``, ``use_object_costmap``) are set from :data:`STRATEGY_SPECS`.
     ground_truth : worlds.GroundTruth, optional
         Precomputed ``worlds.ground_truth(world)`` (its ``inside`` must hold the start).
     observer : callable, optional
@@ -460,10 +540,14 @@ def run_exploration(world: World, strategy: str, seed: int, *,
         p = replace(p, max_sim_time_s=float(max_sim_time_s))
     if decision_period_s is not None:
         p = replace(p, decision_period_s=float(decision_period_s))
-    sel_p = replace(selection_params if selection_params is not None else SelectionParams(),
-                    strategy=spec.selection, use_regions=spec.use_regions,
+    ep = explorer_params if explorer_params is not None else load_explorer_params()
+    sel_p = replace(ep.selection, strategy=spec.selection, use_regions=spec.use_regions,
                     use_object_costmap=spec.use_objects)
-    fr_p = sel_p.frontier_params()
+    fr_p = replace(ep.frontier, use_object_costmap=spec.use_objects)
+    sel_fr_p = sel_p.frontier_params()
+    obj_p = ep.objects
+    p = replace(p, decision_period_s=p.decision_period_s or 1.0 / sel_p.rate_hz,
+                object_period_s=p.object_period_s or 1.0 / obj_p.rate_hz)
     sp = _sim_params(seed, spec, p, sim_params)
     start = perturbed_start(world, seed, p, sp.robot_radius_m, sp.robot_height_m)
     run_world = replace(world, start_pose=start)
@@ -471,9 +555,8 @@ def run_exploration(world: World, strategy: str, seed: int, *,
         ground_truth = worlds.ground_truth(run_world, resolution_m=sp.map_resolution_m)
     engine = SimEngine(run_world, sp, ground_truth=ground_truth)
     manager = GoalManager(sel_p)
-    segmenter = (IncrementalSegmenter(segmentation_params or SegmentationParams())
-                 if spec.use_regions else None)
-    objects = (_ObjectPipeline(engine, object_params or ObjectParams(), seed, p)
+    segmenter = IncrementalSegmenter(ep.segmentation) if spec.use_regions else None
+    objects = (_ObjectPipeline(engine, obj_p, seed, p)
                if spec.use_objects else None)
 
     res = RunResult(world=world.name, strategy=strategy, seed=int(seed), start_pose=start,
@@ -487,7 +570,7 @@ def run_exploration(world: World, strategy: str, seed: int, *,
     next_decision = 0.0
     next_sample = 0.0
     graph_key: tuple[int, int] | None = None
-    graph: BlockGraph | None = None
+    graph: PathGraphs | None = None
     labels: npt.NDArray[np.int32] | None = None
     seg_version = -1
     layer_version = 0
@@ -520,21 +603,24 @@ def run_exploration(world: World, strategy: str, seed: int, *,
         if now >= p.max_sim_time_s - 1e-9:
             res.stop_reason = "timeout"
             break
-        if objects is not None:
+        if objects is not None and objects.update(res.timings_ms) and objects.changed():
             t0 = time.perf_counter()
-            if objects.update() and objects.changed():
-                layer = objects.map.rasterize(engine.map)
-                engine.add_costmap_layer(OBJECT_LAYER, layer)
-                objects.mark_published()
-                layer_version += 1
-            res.timings_ms["objects"].append((time.perf_counter() - t0) * 1e3)
+            layer = objects.map.rasterize(engine.map)
+            engine.add_costmap_layer(OBJECT_LAYER, layer)
+            objects.mark_published()
+            layer_version += 1
+            res.timings_ms["objects"][-1] += (time.perf_counter() - t0) * 1e3
         if now >= next_decision - 1e-9:
             next_decision += p.decision_period_s
             t_dec = time.perf_counter()
             grid = engine.map
-            extra = None
+            extra = sel_extra = None
             if layer is not None:
-                extra = layer.resample_to(grid, fill=0) >= fr_p.object_occupied_threshold
+                lay = layer.resample_to(grid, fill=0)
+                extra = lay >= fr_p.object_occupied_threshold if fr_p.use_object_costmap else None
+                sel_extra = extra if sel_fr_p == fr_p else (
+                    lay >= sel_fr_p.object_occupied_threshold
+                    if sel_fr_p.use_object_costmap else None)
             # --- segmentation node
             if segmenter is not None and engine.map_version != seg_version:
                 t0 = time.perf_counter()
@@ -546,16 +632,17 @@ def run_exploration(world: World, strategy: str, seed: int, *,
             passable = traversable_mask(grid, extra, fr_p)
             frontiers = find_frontiers(grid, extra, fr_p, passable)
             res.timings_ms["frontier"].append((time.perf_counter() - t0) * 1e3)
-            # --- selector node
+            # --- selector node (its own passable mask unless the parameters agree)
             t0 = time.perf_counter()
             key = (engine.map_version, layer_version)
             if graph is None or key != graph_key:
-                graph = BlockGraph(passable, grid.resolution_m, sel_p.path_block_cells)
+                sel_pass = passable if (sel_fr_p == fr_p and sel_extra is extra) else \
+                    traversable_mask(grid, sel_extra, sel_fr_p)
+                graph = PathGraphs(grid, sel_extra, sel_p, sel_pass)
                 graph_key = key
             x, y, _ = engine.pose
             robot_rc = grid.world_to_cell(x, y)
-            dist = (frontier_distances(graph, robot_rc, frontiers, sel_p)
-                    if grid.in_bounds(*robot_rc) else None)
+            dist = graph.distances(robot_rc, frontiers) if grid.in_bounds(*robot_rc) else None
             use_labels = labels if (labels is not None and labels.shape == grid.shape) else None
             old_goal = manager.goal
             black_before = manager.blacklist

@@ -29,16 +29,18 @@ class MappingParams:
 
     resolution_m: float = field(default=0.05, metadata={
         "doc": "map cell size", "unit": "m"})
-    log_odds_hit: float = field(default=0.85, metadata={
-        "doc": "log-odds added to a cell a beam ends in (ln(0.7/0.3))"})
+    log_odds_hit: float = field(default=2.2, metadata={
+        "doc": "log-odds added to a cell a beam ends in (ln(0.9/0.1); ~5x a miss, so a wall "
+               "seen once survives grazing beams, like slam_toolbox's 0.1 hit ratio)"})
     log_odds_miss: float = field(default=-0.4, metadata={
-        "doc": "log-odds added to a cell a beam passes through (< 0)"})
+        "doc": "log-odds added to a cell a beam passes through (ln(0.4/0.6); < 0)"})
     log_odds_min: float = field(default=-2.0, metadata={
         "doc": "lower clamp of a cell's log-odds"})
     log_odds_max: float = field(default=3.5, metadata={
         "doc": "upper clamp of a cell's log-odds"})
     occupied_threshold_log_odds: float = field(default=0.0, metadata={
-        "doc": "observed cells above this log-odds are published occupied (100), the rest free (0)"})
+        "doc": "observed cells above this log-odds are published occupied (100), the rest "
+               "free (0)"})
     ray_step_cells: float = field(default=0.5, metadata={
         "doc": "sampling step along a beam, in cells (<= 1 so no cell is skipped along the axis)"})
     initial_size_m: float = field(default=4.0, metadata={

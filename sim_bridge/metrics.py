@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.grid import GridMap
+from explore_seg.core.grid import FREE_THRESHOLD, GridMap
 
 
 @dataclass(frozen=True)
@@ -106,7 +106,8 @@ class CoverageReference:
         out[self.inside] = vals
         return out
 
-    def coverage(self, grid: GridMap, free_threshold: int = 25) -> tuple[float, float]:
+    def coverage(self, grid: GridMap, free_threshold: int = FREE_THRESHOLD
+                 ) -> tuple[float, float]:
         """(known-free %, known %) of the inside cells in ``grid``."""
         vals = self.values_at_inside(grid)[self.inside]
         free = int(((vals >= 0) & (vals < free_threshold)).sum())

@@ -12,7 +12,6 @@ the OccupancyGrid layers named in ``costmap_layers``. Service: ``sim/save_metric
 
 from __future__ import annotations
 
-import math
 import re
 from pathlib import Path
 
@@ -46,35 +45,6 @@ _NS_PER_S = 1_000_000_000
 
 def _ns(t_s: float) -> int:
     return int(round(t_s * _NS_PER_S))
-
-
-def _odometry_msg(pose: tuple[float, float, float], vel: tuple[float, float],
-                  stamp_ns: int) -> Odometry:
-    """nav_msgs/Odometry: pose in ``map``, body twist in ``base_footprint``.
-
-    (Belongs in explore_seg.convert; kept private here until it moves.)
-    """
-    msg = Odometry()
-    msg.header = convert.make_header(MAP_FRAME, stamp_ns)
-    msg.child_frame_id = BASE_FRAME
-    msg.pose.pose = convert.pose_from_2d(*pose)
-    msg.twist.twist.linear.x = float(vel[0])
-    msg.twist.twist.angular.z = float(vel[1])
-    return msg
-
-
-def _path_msg(xy, stamp_ns: int) -> PathMsg:
-    """nav_msgs/Path of world points (headings along the path)."""
-    msg = PathMsg()
-    msg.header = convert.make_header(MAP_FRAME, stamp_ns)
-    n = len(xy)
-    for i in range(n):
-        j = min(i + 1, n - 1)
-        k = j - 1 if j == i else i
-        yaw = math.atan2(xy[j][1] - xy[k][1], xy[j][0] - xy[k][0]) if n > 1 else 0.0
-        msg.poses.append(convert.pose_stamped(float(xy[i][0]), float(xy[i][1]), yaw,
-                                              MAP_FRAME, stamp_ns))
-    return msg
 
 
 class SimBridgeNode(Node):
@@ -228,13 +198,13 @@ class SimBridgeNode(Node):
             self._publish_scan(scan)
         for frame in eng.drain_camera():
             self._publish_camera(frame)
-        self._odom_pub.publish(_odometry_msg(eng.pose, eng.velocity, stamp))
+        self._odom_pub.publish(convert.odometry_msg(eng.pose, eng.velocity, MAP_FRAME, BASE_FRAME, stamp))
         if t >= self._next_map_s:
             self._next_map_s = t + 1.0 / p.map_rate_hz
             self._map_pub.publish(convert.grid_to_msg(eng.map))
         if eng.plan_version != self._published_plan_version:
             self._published_plan_version = eng.plan_version
-            self._plan_pub.publish(_path_msg(eng.plan, stamp))
+            self._plan_pub.publish(convert.path_msg(eng.plan, MAP_FRAME, stamp))
         state = eng.nav_status.state
         if state is not self._nav_state:
             self._nav_state = state

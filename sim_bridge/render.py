@@ -59,8 +59,8 @@ class Overlays:
     robot_pose : (x, y, yaw), optional
     collisions : sequence of (x, y)
         Contact positions, drawn as red crosses.
-    frontiers : ndarray of bool, shape (H, W) of the map, optional
-        Frontier cells.
+    frontiers : ndarray, optional
+        Frontier cells: a bool mask of the map's shape (H, W), or world points (N, 2).
     regions : ndarray of int, shape (H, W) of the map, optional
         Region labels (0 = none), tinted with one colour per label.
     boxes : sequence of ndarray (K, 2)
@@ -73,7 +73,7 @@ class Overlays:
     plan: npt.NDArray[np.float64] | None = None
     robot_pose: tuple[float, float, float] | None = None
     collisions: Sequence[tuple[float, float]] = field(default_factory=list)
-    frontiers: npt.NDArray[np.bool_] | None = None
+    frontiers: npt.NDArray[np.bool_] | npt.NDArray[np.float64] | None = None
     regions: npt.NDArray[np.integer] | None = None
     boxes: Sequence[npt.NDArray[np.float64]] = field(default_factory=list)
     goals: Sequence[tuple[float, float]] = field(default_factory=list)
@@ -159,11 +159,19 @@ def render_map(grid: GridMap, overlays: Overlays | None = None,
         edge = occ & ~_erode(occ)
         rgb[edge] = st.truth
     rgb[grid.occupied_mask()] = st.occupied
+    frontier_pts = None
     if ov.frontiers is not None:
-        fr = np.asarray(ov.frontiers, dtype=bool)
-        if fr.shape != grid.shape:
-            raise ValueError(f"frontiers shape {fr.shape} differs from the map {grid.shape}")
-        rgb[fr] = st.frontier
+        fr = np.asarray(ov.frontiers)
+        if fr.dtype == bool:
+            if fr.shape != grid.shape:
+                raise ValueError(f"frontier mask shape {fr.shape} differs from the map "
+                                 f"{grid.shape}")
+            rgb[fr] = st.frontier
+        elif fr.ndim == 2 and fr.shape[1] == 2:
+            frontier_pts = fr.astype(np.float64)
+        else:
+            raise ValueError(f"frontiers must be a bool mask {grid.shape} or (N, 2) points, "
+                             f"got {fr.dtype} {fr.shape}")
     img = Image.fromarray(np.ascontiguousarray(rgb[::-1]), "RGB")
     if scale > 1:
         img = img.resize((grid.width * scale, grid.height * scale), Image.NEAREST)
@@ -179,6 +187,10 @@ def render_map(grid: GridMap, overlays: Overlays | None = None,
         draw.line(cv.px(ov.robot_path), fill=st.path, width=lw)
     if ov.plan is not None and len(ov.plan) >= 2:
         draw.line(cv.px(ov.plan), fill=st.plan, width=lw)
+    if frontier_pts is not None:
+        r = max(1, scale // 2)
+        for u, v in cv.px(frontier_pts):
+            draw.rectangle([u - r, v - r, u + r, v + r], fill=st.frontier)
     for gx, gy in ov.goals:
         (u, v), = cv.px([gx, gy])
         draw.ellipse([u - mk, v - mk, u + mk, v + mk], outline=st.goal, width=lw)

@@ -279,3 +279,15 @@ def test_quaternion_yaw_round_trip():
         q = quaternion_from_yaw(float(yaw))
         from explore_seg.core.grid import yaw_from_quaternion
         assert yaw_from_quaternion(*q) == pytest.approx(yaw)
+
+
+def test_odometry_and_path_messages():
+    odom = convert.odometry_msg((1.0, 2.0, 0.5), (0.2, -0.1), "map", "base_footprint", 3_000_000_001)
+    assert convert.pose2d_from_odometry(odom) == pytest.approx((1.0, 2.0, 0.5))
+    assert (odom.header.frame_id, odom.child_frame_id) == ("map", "base_footprint")
+    assert odom.twist.twist.linear.x == pytest.approx(0.2)
+    assert convert.stamp_to_ns(odom.header.stamp) == 3_000_000_001
+    path = convert.path_msg([[0, 0], [1, 0], [1, 1]], "map", 5)
+    yaws = [convert.pose2d_from_pose(p.pose)[2] for p in path.poses]
+    assert yaws == pytest.approx([0.0, np.pi / 2, np.pi / 2])
+    assert convert.path_msg(np.zeros((0, 2)), "map").poses == []

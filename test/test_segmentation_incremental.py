@@ -159,3 +159,32 @@ def test_escape_hatch_and_full_incremental_agree_on_room_count(frac):
     assert len(region_ids(lab)) == 5
     if frac == 0.0:
         assert seg.last_update_info.mode == "full"
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_random_reveals_keep_invariants(seed):
+    """Seeded random rooms revealed by growing discs: coverage, minimum area and ids
+    that never come back once retired, after every update."""
+    rng = np.random.default_rng(seed)
+    c = Canvas(14.0, 10.0)
+    for _ in range(5):
+        x0, y0 = rng.uniform(0.5, 9.0), rng.uniform(0.5, 5.5)
+        c.room(x0, y0, x0 + rng.uniform(1.5, 4.5), y0 + rng.uniform(1.5, 4.0))
+    full = c.grid()
+    p = SegmentationParams(tau_m=float(rng.uniform(1.5, 2.5)))
+    seg = IncrementalSegmenter(p)
+    rr, cc = np.indices(full.shape)
+    known = np.zeros(full.shape, bool)
+    alive: set[int] = set()
+    retired: set[int] = set()
+    free_rc = np.argwhere(full.data == 0)
+    for _ in range(8):
+        r, q = free_rc[rng.integers(len(free_rc))]
+        known |= (rr - r) ** 2 + (cc - q) ** 2 <= round(3.0 / RES) ** 2
+        g = full.with_data(np.where(known, full.data, -1).astype(np.int8))
+        lab = seg.update(g)
+        assert_coverage(g, lab, p)
+        ids = set(region_ids(lab))
+        assert not ids & retired, f"ids {ids & retired} came back"
+        retired |= alive - ids
+        alive = ids

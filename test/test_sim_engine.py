@@ -230,9 +230,16 @@ def test_scripted_tour_map_converges_to_ground_truth():
     grid = eng.map
     truth = eng.ground_truth.as_map("lidar").resample_to(grid, fill=-1)
     seen = (grid.data >= 0) & (truth >= 0)
-    agree = (grid.data[seen] >= 65) == (truth[seen] >= 65)
     assert seen.sum() > 0.9 * eng.ground_truth.inside.sum()
-    assert agree.mean() >= 0.95
+    # A hit on a surface lying on a cell border may land in either cell: a mapped
+    # obstacle agrees when the truth has one within one cell; a mapped free cell
+    # agrees when the truth cell is free.
+    occ, gt_occ = grid.data >= 65, truth >= 65
+    near_gt = cv2.dilate(gt_occ.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+    agree = np.where(occ, near_gt, ~gt_occ)
+    assert agree[seen].mean() >= 0.95
+    assert near_gt[occ].mean() >= 0.98                  # obstacles where they are
+    assert (~gt_occ[seen & ~occ]).mean() >= 0.98        # free space never on obstacles
     # Inner wall faces (truth wall cells next to the inside) are mapped within one cell.
     inside = eng.ground_truth.inside
     gt_occ = eng.ground_truth.lidar.data >= 65
@@ -459,6 +466,16 @@ def test_render_map_colours_and_overlays(tmp_path):
     assert abs(xs.mean() - 25) < 2 and abs(ys.mean() - 15) < 2
     with pytest.raises(ValueError, match="regions shape"):
         render_map(grid, Overlays(regions=np.zeros((2, 2), np.int32)))
+    with pytest.raises(ValueError, match="frontier mask shape"):
+        render_map(grid, Overlays(frontiers=np.zeros((2, 2), bool)))
+    with pytest.raises(ValueError, match="frontiers must be"):
+        render_map(grid, Overlays(frontiers=np.zeros((4, 3))))
+    pts = render_map(grid, Overlays(frontiers=np.array([[0.15, 0.25]])), scale=10)
+    mask = np.zeros(grid.shape, bool)
+    mask[2, 1] = True                                    # the same cell as a mask
+    cells = render_map(grid, Overlays(frontiers=mask), scale=10)
+    magenta = (255, 0, 200)
+    assert tuple(pts[5, 15]) == magenta and tuple(cells[5, 15]) == magenta
     path = render_map_png(tmp_path / "m.png", grid, scale=4)
     assert Image.open(path).size == (20, 12)
 

@@ -156,3 +156,60 @@ def test_save_metrics_service_writes_json_and_png(ros, sim, tmp_path):
     assert res.success, res.message
     assert (tmp_path / "small_house_metrics.json").is_file()
     assert (tmp_path / "small_house_map.png").is_file()
+
+
+def test_lockstep_mode_advances_fixed_sim_steps(ros, tmp_path):
+    from sim_bridge.node import SimBridgeNode
+
+    node = ros.add(SimBridgeNode(context=ros.context, parameter_overrides=[
+        Parameter("world", value="small_house"), Parameter("lockstep", value=True),
+        Parameter("lockstep_dt_s", value=0.1), Parameter("tick_period_s", value=0.005),
+        Parameter("output_dir", value=str(tmp_path))]))
+    inbox = Inbox(ros)
+    ros.spin_until(lambda: inbox.has("/clock") and inbox.clock_s() >= 2.0,
+                   what="2 s of lock-step sim time")
+    t = inbox.clock_s()
+    assert t * 10 == pytest.approx(round(t * 10), abs=1e-6)   # whole 0.1 s steps
+    assert node.engine.time_s >= t
+
+
+def test_parameters_change_at_run_time_and_read_only_ones_are_refused(ros, sim):
+    ok = sim.set_parameters([Parameter("real_time_factor", value=5.0),
+                             Parameter("nav_goal_tolerance_xy_m", value=0.4)])
+    assert all(r.successful for r in ok)
+    assert sim.engine.params.real_time_factor == 5.0
+    assert sim.engine.navigator.params.goal_tolerance_xy_m == 0.4
+    bad = sim.set_parameters([Parameter("real_time_factor", value=-1.0)])
+    assert not bad[0].successful and "real_time_factor" in bad[0].reason
+    frozen = sim.set_parameters([Parameter("world", value="maze")])
+    assert not frozen[0].successful
+    assert sim.engine.world.name == "small_house"
+
+
+def test_camera_topics_carry_rgb_depth_semantic_and_info(ros, tmp_path):
+    from sensor_msgs.msg import CameraInfo, Image
+
+    from sim_bridge.node import SimBridgeNode
+
+    ros.add(SimBridgeNode(context=ros.context, parameter_overrides=[
+        Parameter("world", value="small_cluttered"), Parameter("enable_camera", value=True),
+        Parameter("camera_width_px", value=160), Parameter("camera_height_px", value=120),
+        Parameter("camera_fx_px", value=131.0), Parameter("camera_fy_px", value=131.0),
+        Parameter("camera_cx_px", value=79.5), Parameter("camera_cy_px", value=59.5),
+        Parameter("output_dir", value=str(tmp_path))]))
+    probe = ros.node("sim_camera_probe")
+    got: dict[str, object] = {}
+    for topic, typ in (("camera/color/image_raw", Image), ("camera/depth/image_raw", Image),
+                       ("camera/semantic/image_raw", Image),
+                       ("camera/color/camera_info", CameraInfo)):
+        probe.create_subscription(typ, topic, lambda m, t=topic: got.__setitem__(t, m),
+                                  SENSOR_QOS)
+    ros.spin_until(lambda: len(got) == 4, what="the four camera topics")
+    rgb, depth, sem = (got[f"camera/{k}/image_raw"] for k in ("color", "depth", "semantic"))
+    assert (rgb.encoding, depth.encoding, sem.encoding) == ("rgb8", "32FC1", "mono8")
+    assert (rgb.width, rgb.height) == (160, 120)
+    assert rgb.header.stamp == depth.header.stamp == sem.header.stamp
+    d = convert.depth_from_msg(depth)
+    assert np.isfinite(d).any() and np.nanmin(d) > 0
+    k = convert.intrinsics_from_msg(got["camera/color/camera_info"])
+    assert (k.fx, k.cx, k.width, k.height) == (131.0, 79.5, 160, 120)

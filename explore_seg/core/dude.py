@@ -171,19 +171,22 @@ def _hull_indices(pts: npt.NDArray[np.float64], tol: float = _HULL_TOL_PX
     return np.flatnonzero(on)
 
 
-def _segments_cross(a0, a1, b0, b1) -> bool:
-    """True when two segments properly cross (shared end points do not count)."""
-    for p in (a0, a1):
-        for q in (b0, b1):
-            if abs(p[0] - q[0]) < 1e-9 and abs(p[1] - q[1]) < 1e-9:
-                return False
+def _crosses_any(a0: npt.NDArray[np.float64], a1: npt.NDArray[np.float64],
+                 b0: npt.NDArray[np.float64], b1: npt.NDArray[np.float64]) -> bool:
+    """True when segment a0-a1 properly crosses one of the segments b0-b1 (K, 2).
 
-    def orient(p, q, r) -> float:
-        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+    Segments sharing an end point do not count as crossing.
+    """
+    shared = (np.all(np.abs(b0 - a0) < 1e-9, axis=1) | np.all(np.abs(b0 - a1) < 1e-9, axis=1)
+              | np.all(np.abs(b1 - a0) < 1e-9, axis=1) | np.all(np.abs(b1 - a1) < 1e-9, axis=1))
+
+    def orient(p, q, r):
+        return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) \
+            - (q[..., 1] - p[..., 1]) * (r[..., 0] - p[..., 0])
 
     d1, d2 = orient(b0, b1, a0), orient(b0, b1, a1)
     d3, d4 = orient(a0, a1, b0), orient(a0, a1, b1)
-    return (d1 * d2 < 0) and (d3 * d4 < 0)
+    return bool(np.any((d1 * d2 < 0) & (d3 * d4 < 0) & ~shared))
 
 
 # -------------------------------------------------------------------------------- rings
@@ -483,10 +486,40 @@ class _CutSet:
     far: set[int] = field(default_factory=set)     # notches at the far ends
 
 
+class _Boundary:
+    """All ring vertices and edges of a piece in flat arrays (built once per round)."""
+
+    def __init__(self, rings: list[_Ring]) -> None:
+        self.pts = np.concatenate([r.pts for r in rings])
+        self.ring = np.concatenate([np.full(len(r.pts), k) for k, r in enumerate(rings)])
+        self.idx = np.concatenate([np.arange(len(r.pts)) for r in rings])
+        self.arc = np.concatenate([r.arc for r in rings])
+        self.size = np.concatenate([np.full(len(r.pts), len(r.pts)) for r in rings])
+        nxt = np.concatenate([np.roll(r.pts, -1, axis=0) for r in rings])
+        self.ab = nxt - self.pts
+        self.den = np.einsum("ij,ij->i", self.ab, self.ab)
+        self.len = np.sqrt(self.den)
+        self.perimeter = np.array([r.perimeter for r in rings])
+
+
 def _far_ends(v: _Notch, vi: int, notches: list[_Notch], rings: list[_Ring],
-              st: DudeSettings) -> tuple[list[_End], list[_End]]:
-    """Candidate far ends of cuts from notch ``v``: other notches and plain points."""
+              bd: _Boundary, st: DudeSettings) -> tuple[list[_End], list[_End]]:
+    """Candidate far ends of cuts from notch ``v``: other notches and plain points.
+
+    Plain points are the ring vertices and the feet of the perpendiculars from ``v`` on
+    the ring edges that face it; the ``max_tip_candidates`` nearest are returned. Ends
+    whose cut would be a sliver cut (§9.2) are skipped.
+    """
     tau = st.tau_px
+    per = float(rings[v.ring].perimeter)
+    va = float(rings[v.ring].arc[v.idx])
+    limit = st.sliver_factor * tau
+
+    def not_sliver(ring: npt.NDArray[np.intp], arc: npt.NDArray[np.float64]
+                   ) -> npt.NDArray[np.bool_]:
+        dd = np.abs(arc - va) % per if per > 0 else np.zeros_like(arc)
+        return (ring != v.ring) | (np.minimum(dd, per - dd) > limit)
+
     notch_ends = []
     for j, u in enumerate(notches):
         if j == vi or (u.ring == v.ring and u.idx == v.idx):
@@ -494,69 +527,31 @@ def _far_ends(v: _Notch, vi: int, notches: list[_Notch], rings: list[_Ring],
         notch_ends.append(_End(u.pt, u.ring, float(rings[u.ring].arc[u.idx]), j,
                                float(np.hypot(*(u.pt - v.pt)))))
     notch_ends.sort(key=lambda e: e.length)
-    notch_ends = notch_ends[:st.max_notch_candidates]
-    tips: list[_End] = []
-    pts_all, ring_all, arc_all = [], [], []
-    for ri, ring in enumerate(rings):
-        pts = ring.pts
-        m = len(pts)
-        # ring vertices (not v itself nor its ring neighbours)
-        mask = np.ones(m, dtype=bool)
-        if ri == v.ring:
-            for off in (-1, 0, 1):
-                mask[(v.idx + off) % m] = False
-        pts_all.append(pts[mask])
-        ring_all.append(np.full(int(mask.sum()), ri))
-        arc_all.append(ring.arc[mask])
-        # perpendicular feet on edges facing v (v on the interior = left side)
-        a = pts
-        b = np.roll(pts, -1, axis=0)
-        ab = b - a
-        den = np.einsum("ij,ij->i", ab, ab)
-        ok = den > 1e-12
-        t = np.where(ok, ((v.pt - a) * ab).sum(axis=1) / np.where(ok, den, 1.0), -1.0)
-        cross = ab[:, 0] * (v.pt[1] - a[:, 1]) - ab[:, 1] * (v.pt[0] - a[:, 0])
-        sel = ok & (t > 0.0) & (t < 1.0) & (cross > 0)
-        if ri == v.ring:
-            sel[(v.idx - 1) % m] = False
-            sel[v.idx] = False
-        if np.any(sel):
-            foot = a[sel] + t[sel, None] * ab[sel]
-            pts_all.append(foot)
-            ring_all.append(np.full(len(foot), ri))
-            arc_all.append(ring.arc[sel] + t[sel] * np.sqrt(den[sel]))
-    if pts_all:
-        P = np.concatenate(pts_all)
-        R = np.concatenate(ring_all)
-        A = np.concatenate(arc_all)
-        L = np.hypot(P[:, 0] - v.pt[0], P[:, 1] - v.pt[1])
-        order = np.argsort(L, kind="stable")
-        # skip sliver far ends on the same ring before truncating
-        per = rings[v.ring].perimeter
-        va = float(rings[v.ring].arc[v.idx])
-        count = 0
-        for k in order:
-            if L[k] < 1.0:
-                continue
-            if R[k] == v.ring:
-                dd = abs(A[k] - va) % per if per > 0 else 0.0
-                if min(dd, per - dd) <= st.sliver_factor * tau:
-                    continue
-            tips.append(_End(P[k], int(R[k]), float(A[k]), -1, float(L[k])))
-            count += 1
-            if count >= st.max_tip_candidates:
-                break
-    # sliver filter on notch ends as well
-    per = rings[v.ring].perimeter
-    va = float(rings[v.ring].arc[v.idx])
-    kept = []
-    for e in notch_ends:
-        if e.ring == v.ring and per > 0:
-            dd = abs(e.arc - va) % per
-            if min(dd, per - dd) <= st.sliver_factor * tau:
-                continue
-        kept.append(e)
-    return kept, tips
+    notch_ends = [e for e in notch_ends[:st.max_notch_candidates]
+                  if not_sliver(np.array([e.ring]), np.array([e.arc]))[0]]
+    # ring vertices, not v itself nor its ring neighbours
+    same = bd.ring == v.ring
+    near_v = same & (((bd.idx - v.idx) % bd.size <= 1) | ((v.idx - bd.idx) % bd.size <= 1))
+    # perpendicular feet on edges facing v (v on the interior = left side)
+    rel = v.pt - bd.pts
+    ok = bd.den > 1e-12
+    t = np.where(ok, np.einsum("ij,ij->i", rel, bd.ab) / np.where(ok, bd.den, 1.0), -1.0)
+    cross = bd.ab[:, 0] * rel[:, 1] - bd.ab[:, 1] * rel[:, 0]
+    own_edge = same & ((bd.idx == v.idx) | ((bd.idx + 1) % bd.size == v.idx))
+    sel = ok & (t > 0.0) & (t < 1.0) & (cross > 0) & ~own_edge
+    P = np.concatenate([bd.pts[~near_v], bd.pts[sel] + t[sel, None] * bd.ab[sel]])
+    R = np.concatenate([bd.ring[~near_v], bd.ring[sel]])
+    A = np.concatenate([bd.arc[~near_v], bd.arc[sel] + t[sel] * bd.len[sel]])
+    L = np.hypot(P[:, 0] - v.pt[0], P[:, 1] - v.pt[1])
+    keep = (L >= 1.0) & not_sliver(R, A)
+    P, R, A, L = P[keep], R[keep], A[keep], L[keep]
+    k = st.max_tip_candidates
+    if len(L) > k:
+        part = np.argpartition(L, k)[:k]
+        P, R, A, L = P[part], R[part], A[part], L[part]
+    order = np.argsort(L, kind="stable")
+    tips = [_End(P[i], int(R[i]), float(A[i]), -1, float(L[i])) for i in order]
+    return notch_ends, tips
 
 
 def _cut_sets(notches: list[_Notch], rings: list[_Ring], vis: npt.NDArray[np.bool_],
@@ -564,8 +559,9 @@ def _cut_sets(notches: list[_Notch], rings: list[_Ring], vis: npt.NDArray[np.boo
     """Cut sets of every notch with their weights (§8.2)."""
     tau = st.tau_px
     sets: list[_CutSet] = []
+    bd = _Boundary(rings)
     for vi, v in enumerate(notches):
-        notch_ends, tips = _far_ends(v, vi, notches, rings, st)
+        notch_ends, tips = _far_ends(v, vi, notches, rings, bd, st)
         ends = notch_ends + tips
         if not ends:
             continue
@@ -636,7 +632,7 @@ def _cut_sets(notches: list[_Notch], rings: list[_Ring], vis: npt.NDArray[np.boo
     return sets
 
 
-def _choose(sets: list[_CutSet], n_notches: int) -> list[tuple[np.ndarray, np.ndarray]]:
+def _choose(sets: list[_CutSet]) -> list[tuple[np.ndarray, np.ndarray]]:
     """Greedy choice of cut sets (§8.3, the recommended simplification of the knapsack).
 
     Highest weight first, a set is accepted when it resolves a still unresolved notch,
@@ -648,6 +644,8 @@ def _choose(sets: list[_CutSet], n_notches: int) -> list[tuple[np.ndarray, np.nd
     accepted: list[int] = []
     resolved: set[int] = set()
 
+    acc_cuts: list[tuple[np.ndarray, np.ndarray]] = []
+
     def conflicts(i: int) -> bool:
         # same owner; a cut ending at the notch of an accepted set (that cut is one of
         # that notch's own sets too); crossing cuts
@@ -656,23 +654,27 @@ def _choose(sets: list[_CutSet], n_notches: int) -> list[tuple[np.ndarray, np.nd
             sj = sets[j]
             if si.owner == sj.owner or sj.owner in si.far or si.owner in sj.far:
                 return True
-            for a0, a1 in si.cuts:
-                for b0, b1 in sj.cuts:
-                    if _segments_cross(a0, a1, b0, b1):
-                        return True
-        return False
+        if not acc_cuts:
+            return False
+        b0 = np.array([c[0] for c in acc_cuts])
+        b1 = np.array([c[1] for c in acc_cuts])
+        return any(_crosses_any(a0, a1, b0, b1) for a0, a1 in si.cuts)
+
+    def accept(i: int) -> None:
+        accepted.append(i)
+        acc_cuts.extend(sets[i].cuts)
 
     for i in order:
         s = sets[i]
         if not (s.resolves - resolved) or conflicts(i):
             continue
-        accepted.append(i)
+        accept(i)
         resolved |= s.resolves
     for i in order:
         s = sets[i]
         if s.owner in resolved or conflicts(i):
             continue
-        accepted.append(i)
+        accept(i)
         resolved |= s.resolves | {s.owner}
     for i in sorted(accepted, key=lambda k: sets[k].weight):
         others = set()
@@ -747,7 +749,7 @@ def find_cuts(mask: npt.NDArray[np.uint8], st: DudeSettings
     sets = _cut_sets(notches, rings, vis, border, st)
     if not sets:
         return []
-    return _choose(sets, len(notches))
+    return _choose(sets)
 
 
 def _draw_cut(mask: npt.NDArray[np.uint8], a: npt.NDArray[np.float64],

@@ -157,9 +157,11 @@ def obstacle_mask(grid: GridMap, extra_obstacles: npt.NDArray[np.bool_] | None =
 
 
 def traversable_mask(grid: GridMap, extra_obstacles: npt.NDArray[np.bool_] | None = None,
-                     params: FrontierParams = FrontierParams()) -> npt.NDArray[np.bool_]:
+                     params: FrontierParams = FrontierParams(), allow_unknown: bool = False
+                     ) -> npt.NDArray[np.bool_]:
     """Passable cells: free, not an extra obstacle, farther than the robot radius from
-    every obstacle (map or extra layer).
+    every obstacle (map or extra layer). With ``allow_unknown`` unknown cells count as
+    free too (an optimistic mask, like Nav2's ``allow_unknown`` planner setting).
 
     Parameters
     ----------
@@ -188,7 +190,10 @@ def traversable_mask(grid: GridMap, extra_obstacles: npt.NDArray[np.bool_] | Non
     [[0, 1, 1, 1, 1], [0, 0, 1, 1, 1]]
     """
     blocked = obstacle_mask(grid, extra_obstacles, params)
-    free = grid.free_mask(params.free_threshold) & ~blocked
+    free = grid.free_mask(params.free_threshold)
+    if allow_unknown:
+        free |= grid.unknown_mask()
+    free &= ~blocked
     return free & ~inflate(blocked, params.robot_radius_m, grid.resolution_m)
 
 

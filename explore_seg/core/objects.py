@@ -207,6 +207,12 @@ class ObjectParams:
         "Highest depth point of an unclassified object", "m"))
     unknown_min_points: int = field(default=20, metadata=_doc(
         "Fewest depth points over a leg group to make an object"))
+    unknown_top_band_m: float = field(default=0.1, metadata=_doc(
+        "Height band of a horizontal top: the densest band of this height must hold "
+        "unknown_top_fraction of an unclassified object's depth points", "m"))
+    unknown_top_fraction: float = field(default=0.5, metadata=_doc(
+        "Share of the depth points in the densest unknown_top_band_m band; walls and door "
+        "jambs (vertical surfaces over leg-like wall ends) spread over all heights and fail"))
     unknown_pixel_stride: int = field(default=4, metadata=_doc(
         "Use every n-th depth pixel (rows and columns) for unclassified objects", "px"))
 
@@ -234,7 +240,7 @@ class ObjectParams:
             if not math.isfinite(v):
                 raise ValueError(f"{name} must be finite, got {v}")
         fractions = ("min_score", "merge_iou", "miss_free_fraction",
-                     "merge_parts_fraction")
+                     "merge_parts_fraction", "unknown_top_fraction")
         for name in fractions:
             v = getattr(self, name)
             if not 0.0 <= v <= 1.0:
@@ -247,6 +253,8 @@ class ObjectParams:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
+        if not self.unknown_top_band_m > 0:
+            raise ValueError(f"unknown_top_band_m must be > 0, got {self.unknown_top_band_m}")
         if not 0.0 < self.min_grazing_angle_rad <= 0.5 * math.pi:
             raise ValueError(f"min_grazing_angle_rad must be in (0, pi/2], "
                              f"got {self.min_grazing_angle_rad}")
@@ -1090,6 +1098,24 @@ def points_in_rect(points_xy: npt.NDArray[np.floating], center_xy: Sequence[floa
     return (np.abs(u) <= 0.5 * size_xy[0] + margin_m) & (np.abs(v) <= 0.5 * size_xy[1] + margin_m)
 
 
+def top_fraction(heights_m: npt.NDArray[np.floating], band_m: float) -> float:
+    """Largest share of ``heights_m`` inside any window of height ``band_m``.
+
+    A horizontal top seen by a depth camera gives one dense band of heights; a vertical
+    surface spreads its points over all heights. Returns 0 for no points.
+
+    Examples
+    --------
+    >>> float(top_fraction(np.array([0.70, 0.72, 0.74, 0.3, 0.9]), 0.1))
+    0.6
+    """
+    z = np.sort(np.asarray(heights_m, dtype=np.float64).reshape(-1))
+    if z.size == 0:
+        return 0.0
+    upper = np.searchsorted(z, z + band_m, side="right")
+    return float((upper - np.arange(z.size)).max() / z.size)
+
+
 def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
                     params: ObjectParams, known: Iterable[Object3D] = (),
                     prior: SizePrior | None = None) -> list[Object3D]:
@@ -1151,6 +1177,8 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
             sel = sel[~np.isfinite(on_leg)]
         if len(sel) < params.unknown_min_points:
             continue
+        if top_fraction(sel[:, 2], params.unknown_top_band_m) < params.unknown_top_fraction:
+            continue  # a vertical surface (wall, door jamb, cabinet front): no table top
         inl = statistical_outlier_mask(sel, params.sor_k, params.sor_std)
         sel = sel[inl]
         legs3d = np.column_stack([g, np.full(len(g), float(sel[:, 2].min()))])

@@ -26,8 +26,14 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.dude import DudeSettings, decompose_mask
+from explore_seg.core.dude import DudeSettings, decompose_mask, find_cuts
 from explore_seg.core.grid import GridMap
+
+#: Bounds on the DuDe checks of one incremental update: seams between new and clean
+#: pieces, and clean pieces whose shape changed.
+_MAX_SEAM_TESTS = 6
+_MAX_SHAPE_TESTS = 4
+
 
 def _doc(text: str, unit: str | None = None, **extra) -> dict:
     md = {"doc": text}
@@ -47,10 +53,11 @@ class SegmentationParams:
         From ``__post_init__`` when a value is out of range.
     """
 
-    tau_m: float = field(default=2.5, metadata=_doc(
+    tau_m: float = field(default=1.6, metadata=_doc(
         "DuDe max concavity tau: boundary vertices deeper than this in the dual space "
-        "are cut (small: corridors over-segmented; large: rooms merged through doors)",
-        "m"))
+        "are cut (small: corridors over-segmented; large: rooms merged through doors). "
+        "1.6 m is the best of a sweep on generated houses (bench/eval_segmentation.py); "
+        "the draft's optimum is 2.5 m, the seed code uses 3.0 m", "m"))
     free_max_occupancy: int = field(default=10, metadata=_doc(
         "a cell is free when 0 <= occupancy < this", "%"))
     occupied_min_occupancy: int = field(default=90, metadata=_doc(
@@ -180,10 +187,6 @@ def _settings(params: SegmentationParams, res: float) -> DudeSettings:
 
 def _square(r: int) -> npt.NDArray[np.uint8]:
     return np.ones((2 * r + 1, 2 * r + 1), dtype=np.uint8)
-
-
-def _disk(r: int) -> npt.NDArray[np.uint8]:
-    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
 
 
 def clean_free_space(grid: GridMap, params: SegmentationParams
@@ -500,8 +503,13 @@ def _match_ids(new: npt.NDArray[np.int32], old: npt.NDArray[np.int32],
 
 
 def _shift_into(old: npt.NDArray, shape: tuple[int, int], drow: int, dcol: int,
-                fill: int = 0) -> npt.NDArray:
-    """Old array placed into a new array of ``shape`` with old (r, c) -> (r+drow, c+dcol)."""
+                fill: int = 0, reuse: bool = False) -> npt.NDArray:
+    """Old array placed into a new array of ``shape`` with old (r, c) -> (r+drow, c+dcol).
+
+    With ``reuse`` and no shift nor resize, ``old`` itself is returned (no copy).
+    """
+    if reuse and drow == 0 and dcol == 0 and old.shape == tuple(shape):
+        return old
     out = np.full(shape, fill, dtype=old.dtype)
     h, w = old.shape
     r0, c0 = max(0, drow), max(0, dcol)
@@ -524,7 +532,7 @@ class IncrementalSegmenter:
     Examples
     --------
     >>> from explore_seg.core.grid import grid_from_ascii
-    >>> g, _ = grid_from_ascii("#####\n#...#\n#####", resolution_m=0.5)
+    >>> g, _ = grid_from_ascii("#####\\n#...#\\n#####", resolution_m=0.5)
     >>> seg = IncrementalSegmenter(SegmentationParams(
     ...     min_region_area_m2=0.1, obstacle_inflation_m=0.0, free_close_m=0.0))
     >>> seg.update(g).tolist()
@@ -591,6 +599,10 @@ class IncrementalSegmenter:
             self.last_update_info = UpdateInfo("empty", time.perf_counter() - t0, 0, 0, 0)
             return np.zeros(grid.shape, dtype=np.int32)
         shift = self._aligned_shift(grid)
+        prev_known_f = None
+        if shift is not None and self._free_raw is not None and self._free_clean is not None:
+            # cells that were known free and in the cleaned free space before
+            prev_known_f = _shift_into(self._free_raw & self._free_clean, grid.shape, *shift)
         free_raw, free_clean = self._clean_update(grid, shift)
         domain = free_raw | free_clean
         prev = None
@@ -607,9 +619,9 @@ class IncrementalSegmenter:
             labels = self._full(free_raw, free_clean, domain, res, prev)
             mode, n_areas, n_cells = "full", 0, int(domain.sum())
         else:
-            assert prev is not None
+            assert prev is not None and prev_known_f is not None
             labels, mode, n_areas, n_cells, reason = self._incremental(
-                free_raw, free_clean, domain, res, prev)
+                free_raw, free_clean, domain, res, prev, prev_known_f)
         self._force_full = False
         self._labels = labels
         self._geom = grid
@@ -645,20 +657,21 @@ class IncrementalSegmenter:
         if (shift is None or self._data is None or self._free_raw is None
                 or self._free_clean is None):
             return _clean(grid.data, p, res)
-        old = _shift_into(self._data, grid.shape, *shift, fill=-1)
+        old = _shift_into(self._data, grid.shape, *shift, fill=-1, reuse=True)
         changed = old != grid.data
         infl = _clean_influence_cells(p, res)
         box = _bbox(changed, infl)
         # cells the old masks did not cover (grown area) are recomputed too
-        free_raw = _shift_into(self._free_raw, grid.shape, *shift)
-        free_clean = _shift_into(self._free_clean, grid.shape, *shift)
-        cover = np.zeros(grid.shape, dtype=bool)
-        cover = _shift_into(np.ones(self._data.shape, dtype=bool), grid.shape, *shift)
-        if not cover.all():
+        # the old masks are replaced by the result, so they may be updated in place
+        free_raw = _shift_into(self._free_raw, grid.shape, *shift, reuse=True)
+        free_clean = _shift_into(self._free_clean, grid.shape, *shift, reuse=True)
+        if shift != (0, 0) or self._data.shape != grid.shape:
+            cover = _shift_into(np.ones(self._data.shape, dtype=bool), grid.shape, *shift)
             edge = _bbox(~cover, infl)
-            box = edge if box is None else (
-                slice(min(box[0].start, edge[0].start), max(box[0].stop, edge[0].stop)),
-                slice(min(box[1].start, edge[1].start), max(box[1].stop, edge[1].stop)))
+            if edge is not None:
+                box = edge if box is None else (
+                    slice(min(box[0].start, edge[0].start), max(box[0].stop, edge[0].stop)),
+                    slice(min(box[1].start, edge[1].start), max(box[1].stop, edge[1].stop)))
         if box is None:
             return free_raw, free_clean
         h, w = grid.shape
@@ -702,11 +715,12 @@ class IncrementalSegmenter:
     def _finish(self, labels: npt.NDArray[np.int32], free_raw: npt.NDArray[np.bool_],
                 domain: npt.NDArray[np.bool_], res: float, temp_ids: list[int],
                 old: npt.NDArray[np.int32] | None, old_area: dict[int, int],
-                merge_all: bool) -> None:
+                merge_all: bool) -> set[int]:
         """Gap filling, new free components, merging, id matching (in place).
 
         The arrays may be crops (views) of the full images; ``temp_ids`` are the ids of
-        the new pieces, which get old ids by overlap with ``old`` or fresh ids.
+        the new pieces, which get old ids by overlap with ``old`` or fresh ids. Returns
+        the final ids of the new pieces.
         """
         p = self.params
         _fill_gaps(labels, domain, self._fill_iters(res))
@@ -727,6 +741,7 @@ class IncrementalSegmenter:
             if t not in mapping:
                 mapping[t] = self._fresh()
         _apply_mapping(labels, mapping)
+        return set(mapping.values())
 
     def _leftovers(self, labels: npt.NDArray[np.int32], free_raw: npt.NDArray[np.bool_],
                    domain: npt.NDArray[np.bool_], res: float) -> None:
@@ -755,31 +770,16 @@ class IncrementalSegmenter:
         self._finish(labels, free_raw, domain, res, temp_ids, prev, old_area, True)
         return labels
 
-    def _incremental(self, free_raw, free_clean, domain, res, prev):
+    def _incremental(self, free_raw, free_clean, domain, res, prev, prev_known_f):
         p = self.params
         cell_area = res * res
         labels = prev.copy()
-        lost = (labels > 0) & ~domain
         old_area = _counts(labels)
         dirty: set[int] = set()
-        if lost.any():
-            lost_cnt = _counts(labels[lost])
-            labels[lost] = 0
-            for i, c in lost_cnt.items():
-                if c > p.inc_lost_frac * old_area[i]:
-                    dirty.add(i)
-            check = [i for i in lost_cnt if i not in dirty]
-            if check:
-                # a new obstacle may have split a piece: test its connectivity
-                from scipy import ndimage
-                objs = ndimage.find_objects(labels, max_label=max(check))
-                for i in check:
-                    sl = objs[i - 1]
-                    if sl is None:
-                        continue
-                    sub = (labels[sl] == i).astype(np.uint8)
-                    if cv2.connectedComponents(sub, connectivity=8)[0] > 2:
-                        dirty.add(i)
+        # known free cells that left the cleaned free space: new obstacles, map fixes
+        blocked = (labels > 0) & prev_known_f & ~free_clean
+        lost = (labels > 0) & ~domain
+        labels[lost] = 0
         new_free = free_clean & (labels == 0)
         blobs = None
         box_new = _bbox(new_free, 0)
@@ -796,24 +796,38 @@ class IncrementalSegmenter:
                 near = cv2.dilate(blobs[bb].astype(np.uint8),
                                   np.ones((2 * t + 1, 2 * t + 1), np.uint8)) > 0
                 dirty.update(_counts(labels[bb][near]))
+        if blocked.any():
+            bl_cnt = _counts(prev[blocked])
+            for i, c in bl_cnt.items():
+                if c > p.inc_lost_frac * old_area[i]:
+                    dirty.add(i)
+            check = sorted((i for i in bl_cnt if i not in dirty), key=lambda i: -bl_cnt[i])
+            if check:
+                from scipy import ndimage
+                objs = ndimage.find_objects(labels, max_label=max(check))
+                st = _settings(p, res)
+                tau_cells = p.tau_m / res
+                tests = 0
+                for i in check:
+                    sl = objs[i - 1]
+                    if sl is None:
+                        continue
+                    piece = labels[sl] == i
+                    # split by a new obstacle, or a new structure DuDe would now cut
+                    if cv2.connectedComponents(piece.astype(np.uint8), connectivity=8)[0] > 2:
+                        dirty.add(i)
+                    elif bl_cnt[i] >= tau_cells and tests < _MAX_SHAPE_TESTS:
+                        tests += 1
+                        sub = np.pad((piece & free_clean[sl]).astype(np.uint8), 1)
+                        n_sub = cv2.connectedComponents(sub, connectivity=4)[0]
+                        if n_sub > 2 or (n_sub == 2 and find_cuts(sub, st)):
+                            dirty.add(i)
         if not dirty and blobs is None:
             self._leftovers(labels, free_raw, domain, res)
             return labels, "unchanged", 0, 0, ""
         lut = np.zeros(max(max(old_area, default=0), max(dirty, default=0)) + 2, dtype=bool)
         lut[list(dirty)] = True
         work = lut[labels]
-        if dirty:
-            # clean pieces sharing a wide border (no door) with a dirty piece are redone
-            # too: the cut between them was made at an old frontier and may not be real
-            door_cells = p.max_door_width_m / res
-            nb = _bbox(work, 1)
-            extra = {b if a in dirty else a
-                     for (a, b), c in _pair_counts(labels[nb]).items()
-                     if c > door_cells and (a in dirty) != (b in dirty)}
-            if extra:
-                dirty |= extra
-                lut[list(extra)] = True
-                work = lut[labels]
         if blobs is not None:
             work |= blobs
         n_work = int(work.sum())
@@ -837,10 +851,51 @@ class IncrementalSegmenter:
         for a in range(1, n_areas):
             ids, temp_next = self._decompose(fc, res, lab_c, alab == a, temp_next)
             temp_ids += ids
-        self._finish(lab_c, free_raw[box], domain[box], res, temp_ids, old_c, old_area,
-                     False)
+        redone = self._finish(lab_c, free_raw[box], domain[box], res, temp_ids, old_c,
+                              old_area, False)
+        self._heal_seams(labels, free_clean, box, redone, res)
         self._leftovers(labels, free_raw, domain, res)
         return labels, "incremental", n_areas - 1, n_work, ""
+
+    def _heal_seams(self, labels: npt.NDArray[np.int32], free_clean: npt.NDArray[np.bool_],
+                    box: tuple[slice, slice], redone: set[int], res: float) -> None:
+        """Merge a new piece into a clean neighbour when their union is convex enough.
+
+        Pieces outside the work areas are kept as they are (§11.7), so a cut made at an
+        old frontier (across a corridor that was only half seen, say) would stay forever.
+        For every pair (new piece, clean neighbour) sharing a border of at least half a
+        door width, the deepest concavity of the union's outer ring (convexity defects,
+        the top-level concavity of §6) is measured inside a window around the work area;
+        below tau DuDe would not cut the union, and the new piece takes the neighbour's
+        id. Longest borders first; at most one merge per piece and update.
+        """
+        p = self.params
+        pairs = _pair_counts(labels[box])
+        min_border = 0.5 * p.max_door_width_m / res
+        cand = sorted(((c, a, b) for (a, b), c in pairs.items()
+                       if c >= min_border and ((a in redone) != (b in redone))), reverse=True)
+        if not cand:
+            return
+        tau_px = p.tau_m / res
+        m = int(math.ceil(2 * tau_px))
+        h, w = labels.shape
+        win = (slice(max(0, box[0].start - m), min(h, box[0].stop + m)),
+               slice(max(0, box[1].start - m), min(w, box[1].stop + m)))
+        lab_w = labels[win]
+        fc_w = free_clean[win]
+        used: set[int] = set()
+        for _c, a, b in cand[:_MAX_SEAM_TESTS]:
+            new, old = (a, b) if a in redone else (b, a)
+            if new in used or old in used:
+                continue
+            both = (lab_w == new) | (lab_w == old)
+            bb = _bbox(both, 1)
+            union = np.pad((both[bb] & fc_w[bb]).astype(np.uint8), 1)
+            if cv2.connectedComponents(union, connectivity=4)[0] != 2:
+                continue
+            if _max_concavity(union) < tau_px:
+                lab_w[both & (lab_w == new)] = old
+                used |= {new, old}
 
 
 def _resample_labels(old: npt.NDArray[np.int32], g0: GridMap, g1: GridMap
@@ -874,7 +929,7 @@ def segment(grid: GridMap, params: SegmentationParams | None = None
     >>> from explore_seg.core.grid import grid_from_ascii
     >>> g, _ = grid_from_ascii("####\\n#..#\\n####", resolution_m=0.5)
     >>> segment(g, SegmentationParams(min_region_area_m2=0.1, obstacle_inflation_m=0.0,
-    ...                               free_close_m=0.0)).max()
+    ...                               free_close_m=0.0)).max().item()
     1
     """
     seg = IncrementalSegmenter(params)

@@ -39,12 +39,12 @@ import enum
 import math
 from collections import deque
 from dataclasses import dataclass, field, fields
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.frontiers import Frontier, FrontierParams
+from explore_seg.core.frontiers import Frontier, FrontierParams, traversable_mask
 from explore_seg.core.grid import GridMap
 from explore_seg.core.paths import MAX_BLOCK_CELLS, BlockGraph, nearest_true
 
@@ -101,6 +101,9 @@ class SelectionParams:
         "unit": "m"})
     blacklist_max: int = field(default=50, metadata={
         "doc": "blacklist length (oldest entries dropped)"})
+    unknown_path_factor: float = field(default=1.5, metadata={
+        "doc": "when no cPoint is reachable through known free space, distances through "
+               "unknown cells are used, multiplied by this factor (>= 1)"})
     done_confirmations: int = field(default=3, metadata={
         "doc": "consecutive decisions without a reachable frontier before DONE"})
     return_to_start: bool = field(default=False, metadata={
@@ -163,6 +166,8 @@ class SelectionParams:
                              f"got {self.path_block_cells}")
         if self.blacklist_max < 1:
             raise ValueError(f"blacklist_max must be >= 1, got {self.blacklist_max}")
+        if not self.unknown_path_factor >= 1.0:
+            raise ValueError(f"unknown_path_factor must be >= 1, got {self.unknown_path_factor}")
         if self.done_confirmations < 1:
             raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
         self.frontier_params()  # validates the detection fields
@@ -356,17 +361,36 @@ def select_goal(frontiers: Sequence[Frontier], dist_m: npt.ArrayLike,
 
 def frontier_distances(graph: BlockGraph, robot_rc: tuple[int, int],
                        frontiers: Sequence[Frontier],
-                       params: SelectionParams = SelectionParams()) -> npt.NDArray[np.float64]:
+                       params: SelectionParams = SelectionParams(),
+                       fallback: Callable[[], BlockGraph] | None = None
+                       ) -> npt.NDArray[np.float64]:
     """Path length (m) robot -> each cPoint, all from one sweep; inf when unreachable.
 
     A robot on a non-passable cell (inflated margin, map noise) starts from the nearest
     passable cell within ``start_search_radius_m`` (the straight hop is added); without
     one every distance is inf. cPoints that are not passable get inf.
 
+    ``fallback`` builds a graph over an optimistic mask (free or unknown, see
+    ``traversable_mask(..., allow_unknown=True)``). It is used only when no cPoint is
+    reachable through known free space: a frontier seen through a doorway whose known
+    free strip is narrower than the robot is then still a goal (the planner may cross
+    unknown cells, as Nav2 does with ``allow_unknown``) instead of ending exploration
+    early. Those distances are multiplied by ``unknown_path_factor``.
+
     Returns
     -------
     ndarray of float64, shape (N,)
     """
+    d = _frontier_distances(graph, robot_rc, frontiers, params)
+    if fallback is not None and len(d) and not np.isfinite(d).any():
+        d = _frontier_distances(fallback(), robot_rc, frontiers, params) \
+            * params.unknown_path_factor
+    return d
+
+
+def _frontier_distances(graph: BlockGraph, robot_rc: tuple[int, int],
+                        frontiers: Sequence[Frontier], params: SelectionParams
+                        ) -> npt.NDArray[np.float64]:
     n = len(frontiers)
     if n == 0:
         return np.zeros(0, dtype=np.float64)
@@ -380,6 +404,47 @@ def frontier_distances(graph: BlockGraph, robot_rc: tuple[int, int],
     d = graph.distances(start, pts) + hop
     d[[not f.point_passable for f in frontiers]] = np.inf
     return d
+
+
+class PathGraphs:
+    """Path graphs of one map (and object layer) version, for :func:`frontier_distances`.
+
+    The graph over known free space is built at once; the optimistic graph (free or
+    unknown) only when a decision needs it, and then kept for this map version.
+
+    Parameters
+    ----------
+    grid : GridMap
+    extra_obstacles : ndarray of bool, shape (H, W), optional
+        Object-layer obstacles aligned with ``grid``.
+    params : SelectionParams
+    passable : ndarray of bool, optional
+        The known-free passable mask when the caller already has it.
+    """
+
+    def __init__(self, grid: GridMap, extra_obstacles: npt.NDArray[np.bool_] | None,
+                 params: SelectionParams, passable: npt.NDArray[np.bool_] | None = None
+                 ) -> None:
+        self._grid, self._extra, self._params = grid, extra_obstacles, params
+        if passable is None:
+            passable = traversable_mask(grid, extra_obstacles, params.frontier_params())
+        self.graph = BlockGraph(passable, grid.resolution_m, params.path_block_cells)
+        self._fallback: BlockGraph | None = None
+
+    def fallback(self) -> BlockGraph:
+        """The graph over free-or-unknown cells (built on first use)."""
+        if self._fallback is None:
+            mask = traversable_mask(self._grid, self._extra, self._params.frontier_params(),
+                                    allow_unknown=True)
+            self._fallback = BlockGraph(mask, self._grid.resolution_m,
+                                        self._params.path_block_cells)
+        return self._fallback
+
+    def distances(self, robot_rc: tuple[int, int], frontiers: Sequence[Frontier]
+                  ) -> npt.NDArray[np.float64]:
+        """:func:`frontier_distances` with the fallback through unknown space."""
+        return frontier_distances(self.graph, robot_rc, frontiers, self._params,
+                                  self.fallback)
 
 
 # ------------------------------------------------------------------------ goal manager
@@ -459,6 +524,7 @@ class GoalManager:
         self.goal: Goal | None = None
         self.done = False
         self._best_dist = math.inf
+        self._best_path_dist = math.inf
         self._last_progress_s = 0.0
         self._arrived_s: float | None = None
         self._arrived_stamp_ns = 0
@@ -529,6 +595,7 @@ class GoalManager:
         """Progress is measured from the robot-goal distance when the goal was set."""
         self._best_dist = math.hypot(robot_xy_m[0] - goal.xy_m[0],
                                      robot_xy_m[1] - goal.xy_m[1])
+        self._best_path_dist = math.inf
         self._last_progress_s = now_s
         self._arrived_s = None
 
@@ -574,6 +641,16 @@ class GoalManager:
             if d_goal <= self._best_dist - p.progress_min_m:
                 self._best_dist = d_goal
                 self._last_progress_s = now_s
+            # Progress along the path counts too: the way to a goal often leads away
+            # from it first (around a wall, through a corridor).
+            cur_goal = (self._matching(grid, frontiers)
+                        if dist_m is not None and not self.goal.is_return else None)
+            if cur_goal is not None and np.isfinite(dist_m[cur_goal]):
+                d_path = float(dist_m[cur_goal])
+                if d_path <= self._best_path_dist - p.progress_min_m:
+                    if math.isfinite(self._best_path_dist):
+                        self._last_progress_s = now_s
+                    self._best_path_dist = d_path
             if d_goal <= p.goal_reached_tolerance_m:
                 if self.goal.is_return:
                     self.goal = None
@@ -639,6 +716,7 @@ class GoalManager:
             if math.hypot(bx - self.goal.xy_m[0], by - self.goal.xy_m[1]) < p.goal_change_min_m:
                 return StepResult(Action.KEEP, self.goal, reason or "new goal next to the old",
                                   sel)
+            if cur is not None and not excluded[cur] and np.isfinite(sel.costs[cur]):
                 reason = reason or "a better frontier appeared"
             else:
                 reason = reason or "goal frontier gone or unreachable"

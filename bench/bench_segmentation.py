@@ -1,0 +1,154 @@
+#!/usr/bin/env python3
+"""Benchmark of the DuDe room segmentation: batch time, incremental time, quality.
+
+Prints (never asserts):
+
+1. full decomposition time of a 40 x 40 m map at 0.05 m (a generated house and a maze
+   from ``sim_bridge.worlds``), p50/p95 over ``--reps`` runs; target <= 300 ms;
+2. incremental update time p50/p95 over a synthetic exploration of the 40 m house: the
+   map is revealed by a disc of ``--radius`` m whose centre walks a raster of
+   ``--step`` m (nearest-neighbour order from the start), as in the protocol of
+   Fermin-Leon et al.'s draft; every map is cropped to the known cells plus a margin,
+   so the origin moves by whole cells as with slam_toolbox; target p95 <= 25 ms. The
+   final incremental labels are scored against the batch result and the rooms;
+3. recall / precision (IPA definition) on ``--houses`` generated 20 m houses, plain and
+   cluttered; targets recall >= 90 %, precision >= 95 %.
+
+Usage::
+
+    python bench/bench_segmentation.py [--reps 5] [--houses 6] [--tau 1.6]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+for p in (ROOT, ROOT / "bench"):
+    if str(p) not in sys.path:
+        sys.path.insert(0, str(p))
+
+from eval_segmentation import run_houses  # noqa: E402
+
+from explore_seg.core.grid import GridMap  # noqa: E402
+from explore_seg.core.seg_eval import evaluate  # noqa: E402
+from explore_seg.core.segmentation import (IncrementalSegmenter,  # noqa: E402
+                                           SegmentationParams, segment)
+
+#: Unknown cells kept around the known ones when cropping a revealed map.
+CROP_MARGIN_CELLS = 10
+
+
+def pct(values: list[float], q: float) -> float:
+    return float(np.percentile(np.asarray(values), q))
+
+
+def exploration_maps(grid: GridMap, start_rc: tuple[int, int], radius_m: float,
+                     step_m: float):
+    """Maps of a progressive reveal: discs along a nearest-neighbour raster walk."""
+    h, w = grid.shape
+    res = grid.resolution_m
+    free = grid.data == 0
+    step = max(1, round(step_m / res))
+    rad = round(radius_m / res)
+    centres = [(r, c) for r in range(step // 2, h, step) for c in range(step // 2, w, step)
+               if free[max(0, r - 5):r + 6, max(0, c - 5):c + 6].any()]
+    order, cur = [], start_rc
+    while centres:
+        d = [(a - cur[0]) ** 2 + (b - cur[1]) ** 2 for a, b in centres]
+        cur = centres.pop(int(np.argmin(d)))
+        order.append(cur)
+    rr, cc = np.mgrid[0:h, 0:w]
+    known = np.zeros((h, w), bool)
+    for r, c in order:
+        known |= (rr - r) ** 2 + (cc - c) ** 2 <= rad * rad
+        rows = np.flatnonzero(known.any(axis=1))
+        cols = np.flatnonzero(known.any(axis=0))
+        r0, r1 = max(0, rows[0] - CROP_MARGIN_CELLS), min(h, rows[-1] + 1 + CROP_MARGIN_CELLS)
+        c0, c1 = max(0, cols[0] - CROP_MARGIN_CELLS), min(w, cols[-1] + 1 + CROP_MARGIN_CELLS)
+        data = np.where(known, grid.data, -1).astype(np.int8)[r0:r1, c0:c1]
+        yield GridMap(data, res, (grid.origin_xy_m[0] + c0 * res,
+                                  grid.origin_xy_m[1] + r0 * res)), (r0, c0)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--reps", type=int, default=5, help="batch repetitions")
+    ap.add_argument("--houses", type=int, default=6, help="houses per quality set")
+    ap.add_argument("--tau", type=float, default=SegmentationParams().tau_m)
+    ap.add_argument("--seed", type=int, default=3, help="seed of the 40 m house and maze")
+    ap.add_argument("--radius", type=float, default=5.0, help="reveal disc radius (m)")
+    ap.add_argument("--step", type=float, default=2.5, help="reveal raster step (m)")
+    args = ap.parse_args(argv)
+
+    from sim_bridge.worlds import generate_house, generate_maze, ground_truth
+
+    params = SegmentationParams(tau_m=args.tau)
+    print(f"DuDe segmentation benchmark, tau = {args.tau} m (times are wall clock on this "
+          f"machine, including other processes' load)")
+
+    # 1. batch ------------------------------------------------------------------------
+    house = generate_house(args.seed, size_m=(40.0, 40.0))
+    gt_house = ground_truth(house)
+    house_map = gt_house.as_map("lidar")
+    maze = generate_maze(args.seed, size_m=(40.0, 40.0))
+    maze_map = ground_truth(maze).as_map("lidar")
+    segment(house_map, params)                     # warm-up (imports, OpenCV init)
+    for name, grid in (("house 40x40 m", house_map), ("maze 40x40 m", maze_map)):
+        times = []
+        for _ in range(args.reps):
+            t0 = time.perf_counter()
+            labels = segment(grid, params)
+            times.append((time.perf_counter() - t0) * 1e3)
+        print(f"[batch] {name} ({grid.width}x{grid.height} cells at {grid.resolution_m} m): "
+              f"p50 {pct(times, 50):.0f} ms  p95 {pct(times, 95):.0f} ms  "
+              f"({int(labels.max())} regions; target <= 300 ms)")
+
+    # 2. incremental -----------------------------------------------------------------
+    seg = IncrementalSegmenter(params)
+    times, modes, areas = [], Counter(), []
+    full_labels = None
+    for grid, (r0, c0) in exploration_maps(house_map, gt_house.start_cell, args.radius,
+                                          args.step):
+        t0 = time.perf_counter()
+        lab = seg.update(grid)
+        times.append((time.perf_counter() - t0) * 1e3)
+        info = seg.last_update_info
+        modes[info.mode] += 1
+        areas.append(info.work_areas)
+        full_labels = np.zeros(house_map.shape, np.int32)
+        full_labels[r0:r0 + grid.height, c0:c0 + grid.width] = lab
+    inc_times = times
+    print(f"[incremental] house 40x40 m, {len(times)} maps (disc {args.radius} m, step "
+          f"{args.step} m): p50 {pct(inc_times, 50):.1f} ms  p95 {pct(inc_times, 95):.1f} ms"
+          f"  max {max(inc_times):.0f} ms  (target p95 <= 25 ms); modes {dict(modes)}; "
+          f"mean work areas {np.mean(areas):.2f}")
+    batch = segment(house_map, params)
+    e_b = evaluate(full_labels, batch)
+    e_g = evaluate(full_labels, house.room_labels)
+    e_bg = evaluate(batch, house.room_labels)
+    print(f"[incremental] final labels vs batch: recall {e_b['recall'] * 100:.1f} precision "
+          f"{e_b['precision'] * 100:.1f}; vs rooms: recall {e_g['recall'] * 100:.1f} "
+          f"precision {e_g['precision'] * 100:.1f} (batch vs rooms: recall "
+          f"{e_bg['recall'] * 100:.1f} precision {e_bg['precision'] * 100:.1f})")
+
+    # 3. quality -----------------------------------------------------------------------
+    seeds = list(range(args.houses))
+    for cluttered in (False, True):
+        r = run_houses(seeds, [args.tau], cluttered, 20.0, params, verbose=False)[args.tau]
+        kind = "cluttered" if cluttered else "plain"
+        print(f"[quality] {len(seeds)} {kind} 20 m houses: recall {r['recall'] * 100:.1f} +- "
+              f"{r['recall_std'] * 100:.1f} %  precision {r['precision'] * 100:.1f} +- "
+              f"{r['precision_std'] * 100:.1f} %  (targets >= 90 / >= 95); mean batch "
+              f"{r['time_ms']:.0f} ms")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,149 @@
+#!/usr/bin/env python3
+"""Recall / precision (Bormann et al. 2016, IPA definition) of the DuDe segmentation.
+
+Two modes:
+
+* generated houses (default): for every seed, ``sim_bridge.worlds.generate_house`` gives
+  the rooms (``World.room_labels``) and ``ground_truth(world).as_map("lidar")`` the map
+  (0 inside free, 100 occupied, -1 elsewhere); the map is segmented in batch and scored
+  against the rooms, for every ``--tau`` (a sweep when several are given)::
+
+      python bench/eval_segmentation.py --seeds 0-9 --tau 1.5,2.0,2.5,3.0 [--cluttered]
+
+* a label image pair (16-bit or 8-bit PNGs of the same size; 0 = none)::
+
+      python bench/eval_segmentation.py --pred labels.png --gt rooms.png [--gt-connected]
+
+``--gt-connected`` takes the 8-connected components of the non-zero ground-truth pixels
+as rooms (IPA's ground-truth drawings). Prints per-map and mean values, never asserts.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from explore_seg.core.seg_eval import evaluate  # noqa: E402
+from explore_seg.core.segmentation import SegmentationParams, segment  # noqa: E402
+
+
+def parse_seeds(text: str) -> list[int]:
+    """``"0-4,7"`` -> [0, 1, 2, 3, 4, 7]."""
+    out: list[int] = []
+    for part in text.split(","):
+        if "-" in part:
+            a, b = part.split("-")
+            out += list(range(int(a), int(b) + 1))
+        elif part:
+            out.append(int(part))
+    return out
+
+
+def house_cases(seeds: list[int], cluttered: bool, size_m: float):
+    """(name, map GridMap, room labels) of generated houses."""
+    from sim_bridge.worlds import generate_house, ground_truth
+
+    for seed in seeds:
+        w = generate_house(seed, size_m=(size_m, size_m), cluttered=cluttered)
+        grid = ground_truth(w).as_map("lidar")
+        if grid.shape != w.room_labels.shape:
+            raise ValueError(f"room labels {w.room_labels.shape} do not match the map "
+                             f"{grid.shape}")
+        yield w.name, grid, w.room_labels
+
+
+def run_houses(seeds: list[int], taus: list[float], cluttered: bool, size_m: float,
+               base: SegmentationParams, verbose: bool = True) -> dict[float, dict]:
+    """Mean recall/precision per tau over the houses; prints one line per house."""
+    cases = list(house_cases(seeds, cluttered, size_m))
+    results: dict[float, dict] = {}
+    for tau in taus:
+        params = SegmentationParams(**{**base.__dict__, "tau_m": tau})
+        rec, prec, times = [], [], []
+        for name, grid, rooms in cases:
+            t0 = time.perf_counter()
+            labels = segment(grid, params)
+            times.append(time.perf_counter() - t0)
+            e = evaluate(labels, rooms)
+            rec.append(e["recall"])
+            prec.append(e["precision"])
+            if verbose:
+                print(f"  tau={tau:.2f} {name:24s} {grid.width}x{grid.height}  "
+                      f"recall {e['recall'] * 100:5.1f}  precision {e['precision'] * 100:5.1f}"
+                      f"  rooms {e['n_rooms']:3d}  segments {e['n_segments']:3d}  "
+                      f"{times[-1] * 1e3:6.0f} ms")
+        results[tau] = {"recall": float(np.mean(rec)), "recall_std": float(np.std(rec)),
+                        "precision": float(np.mean(prec)),
+                        "precision_std": float(np.std(prec)),
+                        "time_ms": float(np.mean(times) * 1e3)}
+    return results
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seeds", default="0-7", help="house seeds, e.g. 0-9 or 1,4,7")
+    ap.add_argument("--tau", default=str(SegmentationParams().tau_m),
+                    help="tau in metres, comma-separated for a sweep")
+    ap.add_argument("--cluttered", action="store_true", help="furnished houses")
+    ap.add_argument("--size", type=float, default=20.0, help="house side (m)")
+    ap.add_argument("--corridor-merge", action="store_true", help="enable corridor merge")
+    ap.add_argument("--pred", help="predicted label PNG (pair mode)")
+    ap.add_argument("--gt", help="ground-truth label PNG (pair mode)")
+    ap.add_argument("--gt-connected", action="store_true",
+                    help="rooms = 8-connected components of the non-zero gt pixels")
+    ap.add_argument("--min-px", type=int, default=100, help="IPA minimum size (px)")
+    ap.add_argument("--quiet", action="store_true", help="only the summary lines")
+    args = ap.parse_args(argv)
+
+    if args.pred or args.gt:
+        import cv2
+
+        if not (args.pred and args.gt):
+            ap.error("--pred and --gt go together")
+        imgs = []
+        for path in (args.pred, args.gt):
+            img = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+            if img is None:
+                sys.stderr.write(f"eval_segmentation: cannot read {path}\n")
+                return 1
+            if img.ndim == 3:     # colour label image: one id per colour
+                flat = img.reshape(-1, img.shape[2]).astype(np.int64)
+                key = flat[:, 0] * 65536 + flat[:, 1] * 256 + flat[:, 2]
+                _u, inv = np.unique(key, return_inverse=True)
+                img = np.where(key == 0, 0, inv + 1).reshape(img.shape[:2])
+            imgs.append(img.astype(np.int64))
+        try:
+            e = evaluate(imgs[0], imgs[1], args.min_px, gt_connected=args.gt_connected)
+        except ValueError as err:
+            sys.stderr.write(f"eval_segmentation: {err}\n")
+            return 1
+        print(f"recall {e['recall'] * 100:.1f} %  precision {e['precision'] * 100:.1f} %  "
+              f"(weighted {e['recall_weighted'] * 100:.1f} / "
+              f"{e['precision_weighted'] * 100:.1f})  rooms {e['n_rooms']}  "
+              f"segments {e['n_segments']}")
+        return 0
+
+    taus = [float(t) for t in args.tau.split(",") if t]
+    base = SegmentationParams(corridor_merge=args.corridor_merge)
+    kind = "cluttered" if args.cluttered else "plain"
+    print(f"generated houses ({kind}, {args.size:.0f} m, seeds {args.seeds}); "
+          f"IPA recall/precision, min size {args.min_px} px")
+    res = run_houses(parse_seeds(args.seeds), taus, args.cluttered, args.size, base,
+                     verbose=not args.quiet)
+    for tau, r in res.items():
+        print(f"tau {tau:.2f} m: recall {r['recall'] * 100:5.1f} +- "
+              f"{r['recall_std'] * 100:4.1f} %  precision {r['precision'] * 100:5.1f} +- "
+              f"{r['precision_std'] * 100:4.1f} %  mean time {r['time_ms']:.0f} ms")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

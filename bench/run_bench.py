@@ -1,0 +1,423 @@
+"""Exploration benchmark: seeded lock-step runs x worlds x strategies -> CSV, plots, BENCHMARKS.md.
+
+Every run is :func:`sim_bridge.lockstep.run_exploration` (the explorer's core code on the
+simulator, no ROS, no real-time waiting), so results are reproducible from the seed:
+run ``k`` of every (world, strategy) uses seed ``--seed0 + k``. Runs are spread over
+``--jobs`` processes. Per world the full-knowledge coverage tour
+(:mod:`sim_bridge.coverage_tour`) is computed once from the unperturbed start.
+
+Outputs in ``--out``: ``runs.csv`` (one row per run), ``runs.jsonl`` (everything,
+coverage samples and per-update timings included), ``tours.csv``, ``yolo.json`` (the
+real detector timed on rendered frames), ``maps/`` (final map of the first run of every
+world x strategy), the figures of :mod:`bench.report`, and ``BENCHMARKS.md`` at ``--md``
+(default: the repository root).
+
+World names: the generated worlds (``house``, ``maze``, ``house_cluttered``,
+``small_house``, ``small_cluttered``), ``shared/NAME`` for ``<shared>/worlds/NAME.world.yaml``
+and ``eb/NAME`` for the Explore-Bench map ``<shared>/worlds/explore_bench/NAME.yaml``
+(``<shared>`` = ``$EXPLORE_SEG_SHARED`` or ``../shared`` beside the repository), or a
+path to a world file.
+
+Usage::
+
+    .venv/bin/python bench/run_bench.py --runs 20 --jobs 2 --out out/bench
+    .venv/bin/python bench/run_bench.py --runs 3 --worlds house --strategies paper,nearest
+    .venv/bin/python bench/run_bench.py --report-only --out out/bench
+    .venv/bin/python bench/run_bench.py --ros 2 --runs 2 --worlds small_house
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import functools
+import json
+import math
+import multiprocessing as mp
+import os
+import shlex
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+
+from sim_bridge import worlds as sim_worlds  # noqa: E402
+from sim_bridge.coverage_tour import TourParams, coverage_tour  # noqa: E402
+from sim_bridge.engine import load_world  # noqa: E402
+from sim_bridge.lockstep import STRATEGIES, LockstepParams, LockstepState, \
+    run_exploration  # noqa: E402
+
+GENERATED_WORLDS = ("house", "maze", "house_cluttered")
+SHARED_WORLDS = ("house", "house_cluttered", "house_cluttered_plus", "maze")
+#: Sim time limit per m^2 of explorable area, and its bounds (s).
+TIME_PER_AREA_S = 5.0
+MIN_SIM_TIME_S = 600.0
+MAX_SIM_TIME_S = 7200.0
+
+
+def shared_dir() -> Path | None:
+    """``$EXPLORE_SEG_SHARED`` or ``../shared`` beside the repository, when present."""
+    env = os.environ.get("EXPLORE_SEG_SHARED")
+    cand = Path(env) if env else ROOT.parent / "shared"
+    return cand if cand.is_dir() else None
+
+
+def default_worlds() -> list[str]:
+    """Generated worlds, plus the shared worlds and Explore-Bench maps when present."""
+    names = list(GENERATED_WORLDS)
+    sh = shared_dir()
+    if sh is not None:
+        names += [f"shared/{n}" for n in SHARED_WORLDS
+                  if (sh / "worlds" / f"{n}.world.yaml").is_file()]
+        eb = sh / "worlds" / "explore_bench"
+        names += [f"eb/{p.stem}" for p in sorted(eb.glob("*.yaml")) if p.stem != "starts"]
+    return names
+
+
+def world_path(spec: str) -> str:
+    """Resolve a world spec to what :func:`sim_bridge.engine.load_world` takes.
+
+    Raises
+    ------
+    ValueError
+        When a ``shared/`` or ``eb/`` world is asked for and the shared folder is absent.
+    """
+    for prefix, sub, suffix in (("shared/", "", ".world.yaml"), ("eb/", "explore_bench", ".yaml")):
+        if spec.startswith(prefix):
+            sh = shared_dir()
+            if sh is None:
+                raise ValueError(f"world {spec!r} needs the shared folder (../shared or "
+                                 "$EXPLORE_SEG_SHARED), which is absent")
+            return str(sh / "worlds" / sub / f"{spec[len(prefix):]}{suffix}")
+    return spec
+
+
+@functools.lru_cache(maxsize=4)
+def load(spec: str):
+    """(World, GroundTruth) of a spec, cached per process (a few worlds per worker)."""
+    world = load_world(world_path(spec))
+    world.name = spec
+    return world, sim_worlds.ground_truth(world)
+
+
+def sim_time_limit(area_m2: float, override: float | None) -> float:
+    """``override`` or ``TIME_PER_AREA_S`` per m^2 within [MIN_SIM_TIME_S, MAX_SIM_TIME_S]."""
+    if override:
+        return float(override)
+    return float(min(MAX_SIM_TIME_S, max(MIN_SIM_TIME_S, TIME_PER_AREA_S * area_m2)))
+
+
+# ----------------------------------------------------------------------- workers
+
+
+def _run_task(task: tuple[str, str, int, float, str | None]) -> dict[str, Any]:
+    spec, strategy, seed, max_t, picture = task
+    world, gt = load(spec)
+    last: list[LockstepState] = []
+    observer = (lambda st: last.__setitem__(slice(None), [st])) if picture else None
+    res = run_exploration(world, strategy, seed, max_sim_time_s=max_t, ground_truth=gt,
+                          observer=observer)
+    if picture and last:
+        _save_picture(last[0], picture)
+    return res.to_dict()
+
+
+def _save_picture(st: LockstepState, path: str) -> None:
+    import dataclasses
+
+    from sim_bridge.render import engine_overlays, render_map_png
+
+    eng = st.engine
+    fr = np.zeros(st.grid.shape, dtype=bool)
+    for f in st.frontiers:
+        fr[f.cells[:, 0], f.cells[:, 1]] = True
+    ov = engine_overlays(eng, path_xy=eng.trail)
+    ov = dataclasses.replace(
+        ov, regions=st.labels, frontiers=fr, goals=list(st.goals),
+        boxes=[o.footprint() for o in st.object_map.objects()] if st.object_map else [])
+    render_map_png(path, st.grid, ov)
+
+
+def _tour_task(spec: str) -> dict[str, Any]:
+    world, gt = load(spec)
+    t0 = time.perf_counter()
+    tour = coverage_tour(world, params=TourParams(), ground_truth=gt)
+    return {"world": spec, "tour_m": round(tour.length_m, 2),
+            "viewpoints": int(len(tour.viewpoints_xy)),
+            "coverable_fraction": round(tour.coverable_fraction, 4),
+            "explorable_area_m2": round(gt.free_area_m2, 2),
+            "wall_s": round(time.perf_counter() - t0, 1)}
+
+
+def time_yolo(frames: int, world_spec: str = "house_cluttered") -> dict[str, Any]:
+    """Time the real detector (auto backend) on frames rendered along the world.
+
+    Returns a dict with the backend, per-frame milliseconds (p50, p95, mean) and the
+    frame size, or ``{"error": ...}`` when the model files are missing.
+    """
+    from explore_seg.core.detector import Detector, DetectorParams
+    from sim_bridge.sensors import CameraParams, DepthCamera
+
+    try:
+        det = Detector(DetectorParams())
+    except (FileNotFoundError, ImportError, ValueError) as err:
+        return {"error": f"{type(err).__name__}: {err}"}
+    world, gt = load(world_spec)
+    cam = DepthCamera(world, CameraParams())
+    rng = np.random.default_rng(0)
+    free = np.argwhere(gt.inside)
+    times, n_dets = [], []
+    for k in range(frames + 1):
+        r, c = free[rng.integers(len(free))]
+        x, y = gt.lidar.cell_to_world(int(r), int(c))
+        frame = cam.render((x, y, float(rng.uniform(-math.pi, math.pi))))
+        t0 = time.perf_counter()
+        dets = det.detect(frame.rgb)
+        if k:  # the first call warms up (graph build, allocations)
+            times.append((time.perf_counter() - t0) * 1e3)
+            n_dets.append(len(dets))
+    a = np.asarray(times)
+    return {"backend": det.backend_name, "input_size": det.params.input_size,
+            "threads": det.params.num_threads, "frames": frames,
+            "frame_size": [cam.params.width, cam.params.height],
+            "ms_p50": round(float(np.percentile(a, 50)), 1),
+            "ms_p95": round(float(np.percentile(a, 95)), 1),
+            "ms_mean": round(float(a.mean()), 1),
+            "detections_mean": round(float(np.mean(n_dets)), 2)}
+
+
+# ---------------------------------------------------------------------- progress
+
+
+class Progress:
+    """Plain-text progress bar on stderr (one line per update when not a terminal)."""
+
+    def __init__(self, total: int, label: str, width: int = 30) -> None:
+        self.total, self.label, self.width = total, label, width
+        self.done = 0
+        self.t0 = time.monotonic()
+        self.tty = sys.stderr.isatty()
+
+    def update(self, note: str = "") -> None:
+        self.done += 1
+        el = time.monotonic() - self.t0
+        eta = el / self.done * (self.total - self.done)
+        fill = int(self.width * self.done / max(self.total, 1))
+        line = (f"[{self.label}] [{'#' * fill}{'.' * (self.width - fill)}] "
+                f"{self.done}/{self.total} {_hms(el)} elapsed, eta {_hms(eta)} {note}")
+        if self.tty:
+            sys.stderr.write("\r" + line[:160].ljust(160))
+            if self.done == self.total:
+                sys.stderr.write("\n")
+        else:
+            sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+
+
+def _hms(s: float) -> str:
+    s = int(round(s))
+    return f"{s // 3600}h{s % 3600 // 60:02d}m{s % 60:02d}s" if s >= 3600 else \
+        f"{s // 60}m{s % 60:02d}s"
+
+
+# -------------------------------------------------------------------------- main
+
+
+def _parse(argv: list[str] | None) -> argparse.Namespace:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--runs", type=int, default=20, help="seeded runs per world x strategy")
+    ap.add_argument("--worlds", default="", help="comma-separated world specs "
+                    "(default: generated + shared worlds)")
+    ap.add_argument("--strategies", default=",".join(STRATEGIES),
+                    help=f"comma-separated, from {','.join(STRATEGIES)}")
+    ap.add_argument("--jobs", type=int, default=2, help="worker processes")
+    ap.add_argument("--out", default="out/bench", help="output folder")
+    ap.add_argument("--md", default=str(ROOT / "BENCHMARKS.md"),
+                    help="where to write BENCHMARKS.md ('' = not at all)")
+    ap.add_argument("--seed0", type=int, default=0, help="seed of the first run")
+    ap.add_argument("--max-sim-time", type=float, default=0.0,
+                    help=f"sim time limit per run in s (0 = {TIME_PER_AREA_S} s per m^2 "
+                         f"within [{MIN_SIM_TIME_S:.0f}, {MAX_SIM_TIME_S:.0f}])")
+    ap.add_argument("--no-tour", action="store_true", help="skip the coverage tours")
+    ap.add_argument("--yolo-frames", type=int, default=10,
+                    help="frames to time the real detector on (0 = skip)")
+    ap.add_argument("--ros", type=int, default=0,
+                    help="also run this many seeds of the first world through ROS "
+                         "(sim_bridge + explorer processes) and compare")
+    ap.add_argument("--ros-strategy", default="paper", help="strategy of the ROS runs")
+    ap.add_argument("--ros-rtf", type=float, default=8.0,
+                    help="real-time factor of the ROS runs")
+    ap.add_argument("--report-only", action="store_true",
+                    help="only redo plots and BENCHMARKS.md from --out")
+    a = ap.parse_args(argv)
+    if a.runs < 1 or a.jobs < 1:
+        ap.error("--runs and --jobs must be >= 1")
+    bad = [s for s in a.strategies.split(",") if s not in STRATEGIES]
+    if bad:
+        ap.error(f"unknown strategies {bad}; choose from {list(STRATEGIES)}")
+    return a
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the benchmark (see the module docstring); returns the exit status."""
+    a = _parse(argv)
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    command = "bench/run_bench.py " + " ".join(shlex.quote(x) for x in (argv if argv is not None
+                                                                        else sys.argv[1:]))
+    from bench import report
+
+    if a.report_only:
+        report.write_all(out, Path(a.md) if a.md else None, command=None)
+        return 0
+    specs = [w for w in (a.worlds.split(",") if a.worlds else default_worlds()) if w]
+    strategies = [s for s in a.strategies.split(",") if s]
+    try:
+        for s in specs:
+            world_path(s)
+    except ValueError as err:
+        print(f"[bench] {err}", file=sys.stderr)
+        return 2
+    meta = {"command": command, "runs": a.runs, "seed0": a.seed0, "worlds": specs,
+            "strategies": strategies, "jobs": a.jobs, "cpus": os.cpu_count(),
+            "lockstep_params": {k: v for k, v in vars(LockstepParams()).items()},
+            "started": time.strftime("%Y-%m-%d %H:%M:%S")}
+    t_start = time.monotonic()
+    ctx = mp.get_context("fork")
+    with ctx.Pool(a.jobs, maxtasksperchild=20) as pool:
+        # Explorable areas (time limits) first: cheap rasters.
+        areas = {s: float(load(s)[1].free_area_m2) for s in specs}
+        tours: list[dict[str, Any]] = []
+        if not a.no_tour:
+            prog = Progress(len(specs), "tours")
+            for row in pool.imap_unordered(_tour_task, specs):
+                tours.append(row)
+                prog.update(f"{row['world']}: {row['tour_m']} m")
+            _write_csv(out / "tours.csv", sorted(tours, key=lambda r: specs.index(r["world"])))
+        (out / "maps").mkdir(exist_ok=True)
+        tasks = []
+        for s in specs:
+            limit = sim_time_limit(areas[s], a.max_sim_time)
+            for strat in strategies:
+                for k in range(a.runs):
+                    pic = (str(out / "maps" / f"{_slug(s)}_{strat}.png") if k == 0 else None)
+                    tasks.append((s, strat, a.seed0 + k, limit, pic))
+        # Long worlds first so the pool does not end on one slow run.
+        tasks.sort(key=lambda t: -areas[t[0]])
+        prog = Progress(len(tasks), "runs")
+        results = []
+        with open(out / "runs.jsonl", "w") as jl:
+            for d in pool.imap_unordered(_run_task, tasks):
+                results.append(d)
+                jl.write(json.dumps(d) + "\n")
+                jl.flush()
+                prog.update(f"{d['world']}/{d['strategy']}/{d['seed']}: "
+                            f"{d['coverage_pct'] or 0:.1f} % {d['stop_reason']} "
+                            f"({d['wall_time_s']:.0f} s)")
+    tour_by_world = {t["world"]: t["tour_m"] for t in tours}
+    rows = []
+    order = {(s, st): i for i, (s, st) in enumerate((s, st) for s in specs for st in strategies)}
+    from sim_bridge.lockstep import RunResult
+
+    for d in sorted(results, key=lambda d: (order[(d["world"], d["strategy"])], d["seed"])):
+        row = _row_from_dict(d, RunResult)
+        tour = tour_by_world.get(d["world"])
+        row["tour_m"] = tour if tour is not None else ""
+        row["path_over_tour"] = (round(d["path_length_m"] / tour, 3)
+                                 if tour and d["completed"] else "")
+        rows.append(row)
+    _write_csv(out / "runs.csv", rows)
+    if a.yolo_frames > 0:
+        yolo = time_yolo(a.yolo_frames)
+        (out / "yolo.json").write_text(json.dumps(yolo, indent=1))
+        print(f"[bench] real detector: {yolo}", file=sys.stderr)
+    if a.ros > 0:
+        ros = compare_with_ros(specs[0], a.ros_strategy, [a.seed0 + k for k in range(a.ros)],
+                          out / "ros", a.ros_rtf, sim_time_limit(areas[specs[0]],
+                                                                  a.max_sim_time))
+        (out / "ros.json").write_text(json.dumps(ros, indent=1))
+    meta["wall_s"] = round(time.monotonic() - t_start, 1)
+    (out / "meta.json").write_text(json.dumps(meta, indent=1))
+    report.write_all(out, Path(a.md) if a.md else None, command=command)
+    print(f"[bench] {len(results)} runs in {_hms(meta['wall_s'])}; results in {out}"
+          + (f", summary in {a.md}" if a.md else ""), file=sys.stderr)
+    return 0
+
+
+def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf: float,
+                     max_sim_time_s: float) -> dict[str, Any]:
+    """The same world/strategy/seeds in lock step and through ROS (``scripts/demo.py``:
+    ``sim_bridge`` + ``explorer`` processes), both stopping at 99 % coverage.
+
+    The lock-step runs use the unperturbed start (the simulator node has no start
+    perturbation); sensor noise and message timing still differ, so the two agree in
+    distribution, not run for run.
+    """
+    import subprocess
+
+    rows = []
+    world_obj, gt = load(world)
+    for seed in seeds:
+        r = run_exploration(world_obj, strategy, seed, max_sim_time_s=max_sim_time_s,
+                            ground_truth=gt,
+                            params=LockstepParams(start_jitter_m=0.0, start_yaw_jitter_rad=0.0))
+        rows.append({"seed": seed, "mode": "lock-step", "stop": r.stop_reason,
+                     "coverage_pct": r.coverage_pct, "sim_time_s": r.sim_time_s,
+                     "path_length_m": r.path_length_m, "collisions": r.collisions,
+                     "goals": r.goals_sent})
+        d = out / f"seed{seed}"
+        cmd = [sys.executable, str(ROOT / "scripts" / "demo.py"), str(d), "--world",
+               world_path(world), "--strategy", strategy, "--seed", str(seed), "--rtf", str(rtf),
+               "--max-sim-time", str(max_sim_time_s), "--stop-coverage", "99"]
+        proc = subprocess.run(cmd, cwd=str(ROOT), capture_output=True, text=True)
+        mj = d / "metrics.json"
+        m = json.loads(mj.read_text()) if mj.is_file() else {}
+        rows.append({"seed": seed, "mode": "ROS",
+                     "stop": m.get("stop_reason") or f"rc={proc.returncode}",
+                     "coverage_pct": m.get("coverage_pct"), "sim_time_s": m.get("sim_time_s"),
+                     "path_length_m": m.get("path_length_m"),
+                     "collisions": m.get("collisions"), "goals": m.get("goals_sent")})
+        print(f"[bench] ROS seed {seed}: {rows[-1]}", file=sys.stderr)
+    note = (f"World `{world}`, strategy `{strategy}`, unperturbed start; the ROS runs use "
+            f"`sim_bridge` + `explorer` processes at real-time factor {rtf} "
+            "(`scripts/demo.py`). Both stop at 99 % coverage.")
+    return {"note": note, "rows": rows}
+
+
+def _row_from_dict(d: dict[str, Any], cls) -> dict[str, Any]:
+    fields = {k: v for k, v in d.items() if k in cls.__dataclass_fields__}
+    for k in ("time_to_s", "path_to_m"):
+        fields[k] = {kk: (math.nan if vv is None else vv) for kk, vv in fields[k].items()}
+    for k in ("coverage_pct", "explorable_area_m2"):
+        if fields.get(k) is None:
+            fields[k] = math.nan
+    return cls(**fields).summary_row()
+
+
+def _slug(spec: str) -> str:
+    return spec.replace("/", "_").replace(".", "_")
+
+
+def _write_csv(path: Path, rows: list[dict[str, Any]]) -> None:
+    if not rows:
+        path.write_text("")
+        return
+    keys = list(rows[0])
+    for r in rows[1:]:
+        keys += [k for k in r if k not in keys]
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=keys)
+        w.writeheader()
+        w.writerows(rows)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,222 @@
+"""Lock-step exploration runner and the full-knowledge coverage tour."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from explore_seg.core.frontiers import FrontierParams
+from sim_bridge.coverage_tour import TourParams, _greedy_cover, _tour_order, coverage_tour
+from sim_bridge.engine import Collider
+from sim_bridge.lockstep import (STRATEGIES, LockstepParams, RunResult, _blacklist_growth,
+                                 load_explorer_params, perturbed_start, run_exploration)
+from sim_bridge.worlds import default_world, ground_truth
+
+SEED = 1
+MAX_SIM_TIME_S = 600.0
+
+
+@pytest.fixture(scope="module")
+def small_house():
+    w = default_world("small_house")
+    return w, ground_truth(w)
+
+
+@pytest.fixture(scope="module")
+def runs(small_house):
+    """One run of every strategy on the small house (shared by the tests below)."""
+    w, gt = small_house
+    return {s: run_exploration(w, s, SEED, max_sim_time_s=MAX_SIM_TIME_S, ground_truth=gt)
+            for s in STRATEGIES}
+
+
+@pytest.mark.parametrize("strategy", ["paper", "nearest"])
+def test_explores_small_house_to_completion(runs, strategy):
+    r = runs[strategy]
+    assert r.stop_reason == "coverage", (r.stop_reason, r.coverage_pct)
+    assert r.completed and r.coverage_pct >= 99.0
+    t = [r.time_to_s[k] for k in ("50", "90", "95", "99")]
+    p = [r.path_to_m[k] for k in ("50", "90", "95", "99")]
+    assert all(math.isfinite(v) for v in t + p)
+    assert t == sorted(t) and p == sorted(p)
+    assert t[-1] <= r.sim_time_s and p[-1] <= r.path_length_m + 1e-9
+    assert r.goals_sent >= 1 and r.goals_sent == len(r.goals)
+    assert len(r.timings_ms["frontier"]) == len(r.timings_ms["selection"]) >= 1
+
+
+def test_paper_runs_every_module(runs):
+    r = runs["paper"]
+    for key in ("frontier", "selection", "segmentation", "detection", "objects"):
+        assert len(r.timings_ms[key]) >= 1, key
+    assert not runs["nearest"].timings_ms["segmentation"]
+    assert not runs["nearest"].timings_ms["objects"]
+
+
+def test_coverage_samples_are_monotone_in_time(runs):
+    for r in runs.values():
+        t = [s[0] for s in r.coverage_samples]
+        assert t == sorted(t) and t[-1] == pytest.approx(r.sim_time_s)
+        path = [s[2] for s in r.coverage_samples]
+        assert path == sorted(path)
+
+
+def test_same_seed_same_result(small_house):
+    w, gt = small_house
+    a = run_exploration(w, "paper", 3, max_sim_time_s=40.0, ground_truth=gt).to_dict()
+    b = run_exploration(w, "paper", 3, max_sim_time_s=40.0, ground_truth=gt).to_dict()
+    for d in (a, b):
+        d.pop("wall_time_s")
+        d.pop("timings_ms")
+    assert a == b
+
+
+def test_seeds_perturb_the_start():
+    w = default_world("small_house")
+    p = LockstepParams()
+    starts = [perturbed_start(w, s, p) for s in range(8)]
+    assert len(set(starts)) == 8
+    coll = Collider(w, 0.22, 1.1)
+    for x, y, yaw in starts:
+        assert abs(x - w.start_pose[0]) <= p.start_jitter_m + 1e-12
+        assert abs(y - w.start_pose[1]) <= p.start_jitter_m + 1e-12
+        assert -math.pi <= yaw < math.pi
+        assert coll.clearance(x, y)[0] >= p.start_min_clearance_m
+    assert perturbed_start(w, 5, p) == starts[5]
+
+
+def test_coverage_tour_is_below_every_strategy(runs, small_house):
+    w, gt = small_house
+    problems = []
+    for strategy, r in runs.items():
+        if not r.completed:
+            problems.append(f"{strategy} did not complete ({r.coverage_pct:.1f} %)")
+            continue
+        tour = coverage_tour(w, start_xy=r.start_pose[:2], ground_truth=gt)
+        if not 0.0 < tour.length_m <= r.path_to_m["99"]:
+            problems.append(f"{strategy}: tour {tour.length_m:.1f} m > path to 99 % "
+                            f"{r.path_to_m['99']:.1f} m")
+    assert not problems, problems
+
+
+def test_coverage_tour_sees_everything_coverable(small_house):
+    w, gt = small_house
+    tour = coverage_tour(w, ground_truth=gt)
+    assert tour.coverable_fraction > 0.99
+    assert len(tour.viewpoints_xy) >= 2
+    steps = np.hypot(*np.diff(tour.path_xy, axis=0).T)
+    assert steps.max() <= 0.05 * math.sqrt(2) + 1e-9       # 8-connected cell path
+    assert steps.sum() >= tour.length_m - 1e-6             # tour ends on its last viewpoint
+
+
+@pytest.mark.parametrize("points, expected", [
+    ([0.0, 3.0, 1.0, 2.0], [0, 2, 3, 1]),
+    ([0.0, -1.0, 5.0, 2.0], [0, 1, 3, 2]),
+    ([4.0, 0.0, 9.0], [0, 1, 2]),
+])
+def test_tour_order_on_a_line(points, expected):
+    x = np.asarray(points)
+    order = _tour_order(np.abs(x[:, None] - x[None, :]), max_sweeps=10)
+    assert order == expected
+
+
+def test_two_opt_never_lengthens_nearest_neighbour():
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        pts = rng.uniform(0, 10, (9, 2))
+        d = np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
+        nn = _tour_order(d, max_sweeps=0)
+        opt = _tour_order(d, max_sweeps=20)
+        length = lambda o: sum(d[o[i], o[i + 1]] for i in range(len(o) - 1))  # noqa: E731
+        assert sorted(opt) == list(range(9)) and opt[0] == 0
+        assert length(opt) <= length(nn) + 1e-9
+
+
+def test_greedy_cover_covers_every_coverable_target():
+    sets = [np.array([0, 1, 2]), np.array([2, 3]), np.array([3, 4, 5, 6]), np.array([1]),
+            np.array([], dtype=np.int64)]
+    chosen = _greedy_cover(sets, 8)            # target 7 is seen by no set
+    assert chosen == [2, 0]
+    covered = set(np.concatenate([sets[i] for i in chosen]).tolist())
+    assert covered == {0, 1, 2, 3, 4, 5, 6}
+
+
+@pytest.mark.parametrize("before, after, added", [
+    ((), (), 0), ((), ((1.0, 2.0),), 1), (((1.0, 2.0),), ((1.0, 2.0), (3.0, 4.0)), 1),
+    (((1.0, 2.0), (3.0, 4.0)), ((3.0, 4.0), (5.0, 6.0)), 1),   # bounded: oldest dropped
+])
+def test_blacklist_growth(before, after, added):
+    assert _blacklist_growth(before, after) == added
+
+
+def test_summary_row_is_flat():
+    r = RunResult("w", "paper", 0, time_to_s={"99": math.nan}, path_to_m={"99": 12.5},
+                  timings_ms={"frontier": [1.0, 3.0]})
+    row = r.summary_row()
+    assert row["path_to_99_m"] == 12.5 and math.isnan(row["time_to_99_s"])
+    assert row["frontier_ms_p50"] == 2.0 and math.isnan(row["selection_ms_p50"])
+    assert all(not isinstance(v, (list, dict)) for v in row.values())
+    assert r.to_dict()["time_to_s"] == {"99": None}
+
+
+def test_unknown_strategy_is_rejected():
+    with pytest.raises(ValueError, match="strategy must be one of"):
+        run_exploration(default_world("small_house"), "greedy", 0)
+
+
+@pytest.mark.parametrize("field, value, match", [
+    ("max_sim_time_s", 0.0, "max_sim_time_s must be finite and > 0"),
+    ("decision_period_s", -1.0, "decision_period_s must be finite and >= 0"),
+    ("coverage_target_pct", 101.0, "coverage_target_pct must be in"),
+    ("oracle_miss_prob", 1.5, "oracle_miss_prob must be in"),
+    ("milestones_pct", (50.0, 0.0), "milestones_pct must be in"),
+    ("camera_scale", 2.0, "camera_scale must be <= 1"),
+])
+def test_lockstep_params_validation(field, value, match):
+    with pytest.raises(ValueError, match=match):
+        LockstepParams(**{field: value})
+
+
+@pytest.mark.parametrize("field, value, match", [
+    ("sensor_range_m", 0.0, "sensor_range_m must be finite and > 0"),
+    ("clearance_m", -0.1, "clearance_m must be finite and >= 0"),
+    ("num_beams", 2, "num_beams must be >= 3"),
+    ("target_stride_cells", 0, "target_stride_cells must be an integer >= 1"),
+    ("coverage_fraction", 0.0, "coverage_fraction must be in"),
+])
+def test_tour_params_validation(field, value, match):
+    with pytest.raises(ValueError, match=match):
+        TourParams(**{field: value})
+
+
+def test_coverage_tour_rejects_a_start_outside():
+    w = default_world("small_house")
+    with pytest.raises(ValueError, match="outside the world raster"):
+        coverage_tour(w, start_xy=(100.0, 0.0))
+
+
+def test_load_explorer_params_reads_each_node_section(tmp_path):
+    f = tmp_path / "explorer.yaml"
+    f.write_text(
+        "/**:\n  ros__parameters:\n    use_sim_time: true\n    robot_radius_m: 0.3\n"
+        "target_selector:\n  ros__parameters:\n    gamma: 2.5\n    strategy: nearest\n"
+        "segmentation:\n  ros__parameters:\n    tau_m: 3.0\n"
+        "object_costmap:\n  ros__parameters:\n    rate_hz: 4.0\n    detector.backend: oracle\n")
+    ep = load_explorer_params(f)
+    assert ep.selection.gamma == 2.5 and ep.selection.strategy == "nearest"
+    assert ep.selection.robot_radius_m == 0.3 and ep.frontier.robot_radius_m == 0.3
+    assert ep.segmentation.tau_m == 3.0 and ep.objects.rate_hz == 4.0
+    assert ep.frontier.min_group_size_cells == FrontierParams().min_group_size_cells
+
+
+@pytest.mark.parametrize("text, match", [
+    ("- a\n- b\n", "expected a mapping of node names"),
+    ("target_selector:\n  gamma: 1.0\n", "lacks a 'ros__parameters' mapping"),
+    ("target_selector:\n  ros__parameters:\n    gamma: -1.0\n", "gamma must be finite"),
+])
+def test_load_explorer_params_errors(tmp_path, text, match):
+    f = tmp_path / "bad.yaml"
+    f.write_text(text)
+    with pytest.raises(ValueError, match=match):
+        load_explorer_params(f)
