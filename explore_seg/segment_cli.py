@@ -2,7 +2,7 @@
 
 Usage::
 
-    segment_map MAP.yaml|MAP.pgm|MAP.png --out labels.png [--color color.png] [--tau 2.5]
+    segment_map MAP.yaml|MAP.pgm|MAP.png --out labels.png [--color color.png] [--tau 1.6]
 
 * a map_server YAML (``image``, ``resolution``, ``origin``, ``negate``,
   ``occupied_thresh``, ``free_thresh``, ``mode`` trinary/scale/raw) is read as
