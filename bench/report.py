@@ -257,8 +257,9 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
          "do not edit by hand.", "",
          "Command:", "", "```sh", f".venv/bin/python {cmd}", "```", ""]
     if meta:
-        L += [f"Started {meta.get('started', '?')}, {meta.get('runs')} seeded runs per world x "
-              f"strategy (seeds {meta.get('seed0', 0)}..{meta.get('seed0', 0) + meta.get('runs', 1) - 1}), "
+        s0, n = meta.get("seed0", 0), meta.get("runs", 1)
+        L += [f"Started {meta.get('started', '?')}, {n} seeded runs per world x "
+              f"strategy (seeds {s0}..{s0 + n - 1}), "
               f"{meta.get('jobs')} worker processes on {meta.get('cpus')} CPUs, "
               f"{meta.get('wall_s', '?')} s wall in total.", ""]
     L += ["## Setup", "",

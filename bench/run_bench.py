@@ -38,7 +38,6 @@ import os
 import shlex
 import sys
 import time
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -51,7 +50,7 @@ import numpy as np  # noqa: E402
 from sim_bridge import worlds as sim_worlds  # noqa: E402
 from sim_bridge.coverage_tour import TourParams, coverage_tour  # noqa: E402
 from sim_bridge.engine import load_world  # noqa: E402
-from sim_bridge.lockstep import STRATEGIES, LockstepParams, LockstepState, \
+from sim_bridge.lockstep import STRATEGIES, LockstepParams, LockstepState, RunResult, \
     run_exploration  # noqa: E402
 
 GENERATED_WORLDS = ("house", "maze", "house_cluttered")
@@ -120,12 +119,15 @@ def sim_time_limit(area_m2: float, override: float | None) -> float:
 def _run_task(task: tuple[str, str, int, float, str | None]) -> dict[str, Any]:
     spec, strategy, seed, max_t, picture = task
     world, gt = load(spec)
-    last: list[LockstepState] = []
-    observer = (lambda st: last.__setitem__(slice(None), [st])) if picture else None
+    last: dict[str, LockstepState] = {}
+
+    def keep_last(st: LockstepState) -> None:
+        last["state"] = st
+
     res = run_exploration(world, strategy, seed, max_sim_time_s=max_t, ground_truth=gt,
-                          observer=observer)
-    if picture and last:
-        _save_picture(last[0], picture)
+                          observer=keep_last if picture else None)
+    if picture and "state" in last:
+        _save_picture(last["state"], picture)
     return res.to_dict()
 
 
@@ -325,10 +327,8 @@ def main(argv: list[str] | None = None) -> int:
     tour_by_world = {t["world"]: t["tour_m"] for t in tours}
     rows = []
     order = {(s, st): i for i, (s, st) in enumerate((s, st) for s in specs for st in strategies)}
-    from sim_bridge.lockstep import RunResult
-
     for d in sorted(results, key=lambda d: (order[(d["world"], d["strategy"])], d["seed"])):
-        row = _row_from_dict(d, RunResult)
+        row = _row_from_dict(d)
         tour = tour_by_world.get(d["world"])
         row["tour_m"] = tour if tour is not None else ""
         row["path_over_tour"] = (round(d["path_length_m"] / tour, 3)
@@ -392,7 +392,9 @@ def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf
     return {"note": note, "rows": rows}
 
 
-def _row_from_dict(d: dict[str, Any], cls) -> dict[str, Any]:
+def _row_from_dict(d: dict[str, Any]) -> dict[str, Any]:
+    """The CSV row of a run stored as :meth:`RunResult.to_dict` (None -> NaN)."""
+    cls = RunResult
     fields = {k: v for k, v in d.items() if k in cls.__dataclass_fields__}
     for k in ("time_to_s", "path_to_m"):
         fields[k] = {kk: (math.nan if vv is None else vv) for kk, vv in fields[k].items()}

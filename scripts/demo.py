@@ -47,6 +47,8 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from sim_bridge.lockstep import STRATEGY_SPECS  # noqa: E402
+#: Longer side of the animation frames (px).
+GIF_SIDE_PX = 480
 #: Exit codes of :func:`main`.
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 
@@ -412,7 +414,8 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
     ex = SingleThreadedExecutor(context=ctx)
     mon = Monitor(ctx)
     ex.add_node(mon.node)
-    gif = GifWriter(out / "exploration.gif", max_frames=cfg.gif_max_frames, frame_ms=120)
+    gif = GifWriter(out / "exploration.gif", max_frames=cfg.gif_max_frames, frame_ms=120,
+                    max_side_px=GIF_SIDE_PX)
     children: list[_Child] = []
     t0 = time.monotonic()
     stop_reason, error = "", ""
@@ -483,7 +486,8 @@ def _watch(cfg: DemoConfig, ex, mon: Monitor, children: list[_Child], gif, t0: f
             best_cov, best_cov_t = cov, t_sim
         if mon.grid is not None and t_sim >= next_frame_sim:
             next_frame_sim = t_sim + cfg.frame_period_sim_s
-            gif.add(render_map(mon.grid, mon.overlays()))
+            side = max(mon.grid.width, mon.grid.height, 1)
+            gif.add(render_map(mon.grid, mon.overlays(), scale=max(1, round(GIF_SIDE_PX / side))))
         if now >= next_print:
             next_print = now + cfg.progress_period_s
             log(_progress_line(mon, wall))
