@@ -182,8 +182,13 @@ def results_table(runs: list[dict[str, Any]], tours: dict[str, float]) -> list[s
         tour = tours.get(world)
         ratio = _mean_std([_f(r["path_to_m"].get("99")) / tour for r in rs], 2) if tour else "-"
         coll = [r["collisions"] for r in rs]
+        early = sum(1 for r in rs if r["stop_reason"] == "done")
+        timeout = sum(1 for r in rs if r["stop_reason"] == "timeout")
+        stops = ", ".join(x for x in (f"{early} done early" if early else "",
+                                      f"{timeout} timed out" if timeout else "") if x)
         lines.append(
-            f"| {world} | {strat} | {n} | {done}/{n} | {times} | {p99} | {ratio} | "
+            f"| {world} | {strat} | {n} | {done}/{n}{f' ({stops})' if stops else ''} | "
+            f"{times} | {p99} | {ratio} | "
             f"{np.mean(coll):.1f} (max {max(coll)}) | "
             f"{_mean_std([r['goals_sent'] for r in rs], 0)} | "
             f"{_mean_std([r['goal_switches'] for r in rs], 0)} | "
@@ -240,12 +245,16 @@ def _read_csv(path: Path) -> list[dict[str, str]]:
 def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
     """Figures in ``out`` and, when ``md`` is given, the markdown summary there."""
     runs = load_runs(out)
+    meta_path = out / "meta.json"
+    meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
+    w_order = {w: i for i, w in enumerate(meta.get("worlds", []))}
+    s_order = {st: i for i, st in enumerate(meta.get("strategies", []))}
+    runs.sort(key=lambda r: (w_order.get(r["world"], len(w_order)), r["world"],
+                             s_order.get(r["strategy"], len(s_order)), r["strategy"], r["seed"]))
     cov = plot_coverage(runs, out)
     box = plot_time_to(runs, out)
     if md is None:
         return None
-    meta_path = out / "meta.json"
-    meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
     cmd = command or meta.get("command", "bench/run_bench.py")
     tours_rows = _read_csv(out / "tours.csv")
     tours = {r["world"]: float(r["tour_m"]) for r in tours_rows}
@@ -285,7 +294,10 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
           "99 % in view. A heuristic, not a proven bound. path / tour = path length to 99 % "
           "divided by it.", ""]
     L += ["## Results", "", "Times and paths: mean ± std over the runs that reached the "
-          "milestone (their number in brackets when not all did).", ""]
+          "milestone (their number in brackets when not all did). \"done early\": the "
+          "explorer reported exploration done (no reachable frontier left) below 99 %. "
+          "Goals: goals sent to navigation; switches: goals replaced by a cheaper frontier "
+          "while the old goal's frontier was still there and reachable.", ""]
     L += results_table(runs, tours) + [""]
     if cov or box:
         L += ["## Figures", ""]

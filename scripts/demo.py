@@ -420,11 +420,14 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
     t0 = time.monotonic()
     stop_reason, error = "", ""
     try:
-        children.append(_Child("sim_bridge", sim_command(cfg), out / "logs" / "sim_bridge.log",
-                               env))
+        # The explorer first: the simulator's clock starts only once it is listening, so
+        # no sim time passes while the explorer imports and builds its nodes.
         if cfg.explorer:
             children.append(_Child("explorer", explorer_command(cfg),
                                    out / "logs" / "explorer.log", env))
+            _wait_for_explorer(cfg, ex, mon, children[0], t0)
+        children.insert(0, _Child("sim_bridge", sim_command(cfg),
+                                  out / "logs" / "sim_bridge.log", env))
         log(f"[demo] world {cfg.world}, strategy {cfg.strategy}, seed {cfg.seed}, "
             f"real-time factor {cfg.real_time_factor}, sim limit {cfg.max_sim_time_s:.0f} s, "
             f"ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID', '0')}; logs in {out / 'logs'}")
@@ -438,7 +441,8 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
     try:
         wall = time.monotonic() - t0
         log(_progress_line(mon, wall))
-        sim_json = _save_sim_metrics(ex, mon.node, children[0]) if children else {}
+        sims = [ch for ch in children if ch.name == "sim_bridge"]
+        sim_json = _save_sim_metrics(ex, mon.node, sims[0]) if sims else {}
     finally:
         for ch in reversed(children):
             ch.stop()
@@ -450,6 +454,24 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
     if error:
         raise DemoError(error)
     return metrics
+
+
+def _wait_for_explorer(cfg: DemoConfig, ex, mon: Monitor, child: _Child, t0: float) -> None:
+    """Spin until the explorer publishes ``goal_pose`` (its selector is up).
+
+    Raises
+    ------
+    DemoError
+        When the explorer exits or is not up within ``startup_timeout_s``.
+    """
+    while mon.node.count_publishers("goal_pose") == 0:
+        ex.spin_once(timeout_sec=0.1)
+        if not child.alive():
+            raise DemoError(f"{child.name} exited with code {child.proc.returncode}; last "
+                            f"lines of {child.log_path}:\n{child.tail()}")
+        if time.monotonic() - t0 > cfg.startup_timeout_s:
+            raise DemoError(f"the explorer did not come up within {cfg.startup_timeout_s:.0f} s "
+                            f"(no goal_pose publisher); see {child.log_path}")
 
 
 def _watch(cfg: DemoConfig, ex, mon: Monitor, children: list[_Child], gif, t0: float,

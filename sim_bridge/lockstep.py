@@ -194,8 +194,9 @@ class RunResult:
     collisions : int
     collision_places : list of (x, y, what)
     goals_sent, goal_switches : int
-        Goals sent to navigation; goals replaced while the previous one was still
-        pursued (better frontier, or its frontier vanished).
+        Goals sent to navigation; goals replaced by a cheaper frontier while the
+        previous goal's frontier was still there and reachable (a vanished frontier, a
+        reached or blacklisted goal is not a switch).
     goals_blacklisted, nav_aborts : int
     start_pose : (x, y, yaw)
     n_objects : int
@@ -651,10 +652,12 @@ def run_exploration(world: World, strategy: str, seed: int, *,
             newly_black = _blacklist_growth(black_before, manager.blacklist)
             res.goals_blacklisted += newly_black
             if step.action is Action.NEW_GOAL and step.goal is not None:
-                # A switch: the previous goal was neither reached nor given up.
-                if (old_goal is not None and not newly_black and math.hypot(
-                        x - old_goal.xy_m[0], y - old_goal.xy_m[1])
-                        > sel_p.goal_reached_tolerance_m):
+                # A switch: the previous goal was neither reached nor given up, and its
+                # frontier is still there and reachable (a cheaper one won).
+                if (old_goal is not None and not old_goal.is_return and not newly_black
+                        and step.selection is not None
+                        and _frontier_alive(grid, frontiers, step.selection.costs,
+                                            old_goal.xy_m, sel_p.frontier_match_radius_m)):
                     res.goal_switches += 1
                 gx, gy = step.goal.xy_m
                 try:
@@ -689,6 +692,18 @@ def run_exploration(world: World, strategy: str, seed: int, *,
 
 def _key(m: float) -> str:
     return f"{m:g}"
+
+
+def _frontier_alive(grid: GridMap, frontiers: list[Frontier], costs: npt.NDArray[np.float64],
+                    xy: tuple[float, float], radius_m: float) -> bool:
+    """True when a frontier with finite cost has a cell within ``radius_m`` of ``xy``."""
+    for f, cost in zip(frontiers, costs):
+        if not np.isfinite(cost):
+            continue
+        fx, fy = grid.cells_to_world(f.cells[:, 0], f.cells[:, 1])
+        if float(np.min(np.hypot(fx - xy[0], fy - xy[1]))) <= radius_m:
+            return True
+    return False
 
 
 def _blacklist_growth(before: tuple, after: tuple) -> int:

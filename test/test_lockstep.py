@@ -220,3 +220,22 @@ def test_load_explorer_params_errors(tmp_path, text, match):
     f.write_text(text)
     with pytest.raises(ValueError, match=match):
         load_explorer_params(f)
+
+
+def test_frontier_alive_needs_a_reachable_frontier_near_the_goal():
+    from explore_seg.core.frontiers import find_frontiers
+    from explore_seg.core.grid import grid_from_ascii
+    from sim_bridge.lockstep import _frontier_alive
+
+    g, _ = grid_from_ascii("""
+??????????
+..........
+..........
+..........
+""", resolution_m=0.1)
+    fr = find_frontiers(g, params=FrontierParams(min_group_size_cells=3, robot_radius_m=0.0))
+    assert len(fr) == 1
+    x, y = g.cell_to_world(3, 5)                       # on the frontier row
+    assert _frontier_alive(g, fr, np.array([1.0]), (x, y), 0.05)
+    assert not _frontier_alive(g, fr, np.array([np.inf]), (x, y), 0.05)    # unreachable
+    assert not _frontier_alive(g, fr, np.array([1.0]), (x, y - 0.3), 0.2)  # too far

@@ -530,11 +530,33 @@ def test_redetections_merge_and_keep_the_larger_size():
         jitter = rng.normal(0, 0.05, 2)
         omap.update([_obj(2.0 + jitter[0], 1.0 + jitter[1]), _obj(5.0, 1.0, "dining table",
                                                                   (1.5, 0.9, 0.75))])
-    omap.update([_obj(2.0, 1.0, size=(0.8, 0.6, 0.9), yaw=math.pi / 2)])   # 90 deg = same box
+    # 90 deg = same box; growth is limited per observation, so it takes a few views
+    bigger = _obj(2.0, 1.0, size=(0.8, 0.6, 0.9), yaw=math.pi / 2)
+    omap.update([bigger])
+    chair = next(o for o in omap.objects() if o.cls == "chair")
+    assert max(chair.size_xyz[:2]) == pytest.approx(0.6 * ObjectParams().merge_growth_max)
+    for _ in range(3):
+        omap.update([bigger])
     assert len(omap) == 2
     chair = next(o for o in omap.objects() if o.cls == "chair")
     np.testing.assert_allclose(chair.center_xyz[:2], (2.0, 1.0), atol=0.05)
     assert sorted(chair.size_xyz[:2]) == pytest.approx([0.6, 0.8])
+
+
+def test_cluster_far_beyond_the_prior_is_dropped_not_clamped():
+    from explore_seg.core.objects import plausible_extent
+
+    prior = PRIORS["chair"]
+    p = ObjectParams()
+    rng = np.random.default_rng(0)
+    chair_pts = np.column_stack([rng.uniform(0, 0.5, 200), rng.uniform(0, 0.5, 200),
+                                 rng.uniform(0.05, 0.9, 200)])
+    wall_pts = np.column_stack([rng.uniform(0, 3.0, 300), np.full(300, 0.6),
+                                rng.uniform(0.05, 0.9, 300)])
+    assert plausible_extent(chair_pts, prior, p)
+    assert not plausible_extent(np.vstack([chair_pts, wall_pts]), prior, p)
+    assert plausible_extent(np.vstack([chair_pts, wall_pts]), prior,
+                            ObjectParams(prior_reject_factor=0.0))
 
 
 def test_classified_detection_replaces_unknown_object():

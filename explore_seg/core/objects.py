@@ -160,6 +160,11 @@ class ObjectParams:
         "Re-detections of a class whose centres are closer than this merge", "m"))
     merge_iou: float = field(default=0.2, metadata=_doc(
         "Re-detections whose footprints overlap more than this (IoU) merge", "0..1"))
+    prior_reject_factor: float = field(default=1.2, metadata=_doc(
+        "Drop a detection whose cluster footprint or height exceeds this factor times its "
+        "class prior's maximum (0 = never drop, only clamp)"))
+    merge_growth_max: float = field(default=1.25, metadata=_doc(
+        "Largest growth factor of a fused box's size per merged observation (>= 1)"))
     max_objects: int = field(default=200, metadata=_doc(
         "Most objects kept; the least confirmed are dropped first"))
     clear_after_misses: int = field(default=3, metadata=_doc(
@@ -253,6 +258,10 @@ class ObjectParams:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
+        if not (self.prior_reject_factor == 0 or self.prior_reject_factor >= 1.0):
+            raise ValueError(f"prior_reject_factor must be 0 or >= 1, got {self.prior_reject_factor}")
+        if not self.merge_growth_max >= 1.0:
+            raise ValueError(f"merge_growth_max must be >= 1, got {self.merge_growth_max}")
         if not self.unknown_top_band_m > 0:
             raise ValueError(f"unknown_top_band_m must be > 0, got {self.unknown_top_band_m}")
         if not 0.0 < self.min_grazing_angle_rad <= 0.5 * math.pi:
@@ -989,6 +998,8 @@ def segment_detection(frame: DepthFrame, box_xyxy: Sequence[float], cls: str,
         return None
     cam_xy = frame.camera_xyz[:2]
     chosen = labels == best
+    if prior is not None and not plausible_extent(pts[chosen], prior, params):
+        return None  # cluster merged with a wall or a neighbour: clamping would misplace it
     obj = fit_box(pts[chosen], cls, score, prior, params, cam_xy)
     if params.merge_parts_fraction < 1.0 and labels.max() > 0:
         # Other parts of the same object (split at thin links) lie in the clamped box.
@@ -1001,6 +1012,24 @@ def segment_detection(frame: DepthFrame, box_xyxy: Sequence[float], cls: str,
             chosen = np.isin(labels, np.union1d(parts, [best]))
             obj = fit_box(pts[chosen], cls, score, prior, params, cam_xy)
     return obj, pts[chosen], depth[chosen]
+
+
+def plausible_extent(points_map: npt.NDArray[np.floating], prior: SizePrior,
+                     params: ObjectParams) -> bool:
+    """False when a cluster is far larger than its class can be.
+
+    The footprint (minimum-area rectangle) or height exceeding ``prior_reject_factor``
+    times the prior's maximum means the cluster took in a wall or a neighbouring object;
+    clamping such a cluster to the prior would still place the box wrongly, so the
+    observation is dropped. ``prior_reject_factor`` 0 disables the test.
+    """
+    if params.prior_reject_factor <= 0 or len(points_map) == 0:
+        return True
+    pts = np.asarray(points_map, dtype=np.float64)
+    _, sxy, _ = footprint_orientation(pts[:, :2], params.orientation_method)
+    height = float(pts[:, 2].max() - (0.0 if params.boxes_on_floor else pts[:, 2].min()))
+    f = params.prior_reject_factor
+    return max(sxy) <= f * prior.max_xy_m and height <= f * prior.max_z_m
 
 
 def object_from_detection(frame: DepthFrame, box_xyxy: Sequence[float], cls: str,
@@ -1338,8 +1367,12 @@ class ObjectMap:
         centre = tuple(float(v) for v in
                        (np.asarray(old.center_xyz) * w_old + np.asarray(new.center_xyz) * w_new)
                        / (w_old + w_new))
-        size = [max(old.size_xyz[0], nsx), max(old.size_xyz[1], nsy),
-                max(old.size_xyz[2], new.size_xyz[2])]
+        # Max of the sizes (a table seen more completely grows), but by at most
+        # merge_growth_max per observation, so one bad cluster cannot blow a box up.
+        g = self.params.merge_growth_max
+        size = [max(old.size_xyz[0], min(nsx, g * old.size_xyz[0])),
+                max(old.size_xyz[1], min(nsy, g * old.size_xyz[1])),
+                max(old.size_xyz[2], min(new.size_xyz[2], g * old.size_xyz[2]))]
         prior = self.priors.get(cls)
         if prior is not None:
             size = [min(size[0], prior.max_xy_m), min(size[1], prior.max_xy_m),
