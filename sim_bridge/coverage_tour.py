@@ -60,6 +60,8 @@ class TourParams:
         "doc": "sampling step along a beam", "unit": "cells"})
     two_opt_max_sweeps: int = field(default=50, metadata={
         "doc": "bound on the 2-opt improvement sweeps"})
+    prune_passes: int = field(default=3, metadata={
+        "doc": "bound on the passes of the viewpoint pruning"})
     sample_spacing_m: float = field(default=0.25, metadata={
         "doc": "the sensor also scans every this far along the tour", "unit": "m"})
     coverage_fraction: float = field(default=0.99, metadata={
@@ -76,7 +78,7 @@ class TourParams:
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
         if not (math.isfinite(self.clearance_m) and self.clearance_m >= 0):
             raise ValueError(f"clearance_m must be finite and >= 0, got {self.clearance_m}")
-        for name in ("num_beams", "target_stride_cells", "two_opt_max_sweeps"):
+        for name in ("num_beams", "target_stride_cells", "two_opt_max_sweeps", "prune_passes"):
             v = getattr(self, name)
             if int(v) != v or v < 1:
                 raise ValueError(f"{name} must be an integer >= 1, got {v}")
@@ -261,21 +263,26 @@ def coverage_tour(world: World, start_xy: tuple[float, float] | None = None,
         ids = tid[_visible_cells(lidar, xy, geom, p)]
         return ids[ids >= 0]
 
-    walker = _PathWalker(fields_, pts_rc, geom, p, target_ids, int(coverable.sum()))
+    walker = _PathWalker(fields_, pts_rc, geom, p, target_ids, int(coverable.sum()), passable)
 
     # 5. prune viewpoints that the path to the others already brings into view
     keep = list(range(1, n))
     order = _tour_order(dist[np.ix_([0] + keep, [0] + keep)], p.two_opt_max_sweeps)
     best_len, best_order = walker.length([([0] + keep)[i] for i in order])
-    for v in sorted(keep, key=lambda i: len(sets[chosen[i - 1]])):
-        trial = [i for i in keep if i != v]
-        sub = [0] + trial
-        o = _tour_order(dist[np.ix_(sub, sub)], p.two_opt_max_sweeps)
-        length, ordered = walker.length([sub[i] for i in o])
-        if math.isfinite(length) and length <= best_len + 1e-9:
-            keep, best_len, best_order = trial, length, ordered
-    cells = walker.cells(best_order)
-    px, py = geom.cells_to_world(cells[:, 0], cells[:, 1])
+    for _ in range(p.prune_passes):
+        removed = False
+        for v in sorted(keep, key=lambda i: len(sets[chosen[i - 1]])):
+            trial = [i for i in keep if i != v]
+            sub = [0] + trial
+            o = _tour_order(dist[np.ix_(sub, sub)], p.two_opt_max_sweeps)
+            length, ordered = walker.length([sub[i] for i in o])
+            if math.isfinite(length) and length <= best_len + 1e-9:
+                keep, best_len, best_order = trial, length, ordered
+                removed = True
+        if not removed:
+            break
+    verts = walker.vertices(best_order)
+    px, py = geom.cells_to_world(verts[:, 0], verts[:, 1])
     vis = [pts_rc[i] for i in best_order[1:]]
     vx, vy = geom.cells_to_world(np.asarray([v[0] for v in vis]), np.asarray([v[1] for v in vis]))
     return TourResult(
@@ -286,29 +293,64 @@ def coverage_tour(world: World, start_xy: tuple[float, float] | None = None,
         n_candidates=int(cand_rc.shape[0]), n_targets=int(tflat.size))
 
 
+def _shortcut(cells: npt.NDArray[np.int64], passable: npt.NDArray[np.bool_],
+              window: int = 256) -> npt.NDArray[np.float64]:
+    """Any-angle version of a cell path: from each kept vertex jump to the farthest path
+    cell (within ``window`` cells ahead) reachable in a straight line over passable cells
+    (segment sampled every half cell), as a path follower smooths a grid plan.
+
+    Returns
+    -------
+    ndarray of float64, shape (K, 2)
+        Kept (row, col) vertices, first and last cell included.
+    """
+    pts = np.asarray(cells, dtype=np.float64)
+    n = len(pts)
+    keep = [0]
+    i = 0
+    h, w = passable.shape
+    while i < n - 1:
+        cand = np.arange(min(n - 1, i + window), i, -1)            # far to near
+        diff = pts[cand] - pts[i]
+        steps = int(2 * np.abs(diff).max()) + 1
+        t = np.linspace(0.0, 1.0, steps + 1)
+        rr = np.clip(np.rint(pts[i, 0] + t[None, :] * diff[:, :1]), 0, h - 1).astype(np.int64)
+        cc = np.clip(np.rint(pts[i, 1] + t[None, :] * diff[:, 1:]), 0, w - 1).astype(np.int64)
+        clear = passable[rr, cc].all(axis=1)
+        i = int(cand[int(np.argmax(clear))]) if clear.any() else i + 1
+        keep.append(i)
+    return pts[keep]
+
+
 class _PathWalker:
-    """Coverage gathered while driving a tour: scans every ``sample_spacing_m`` along the
-    geodesic legs (cached per cell), tour length until ``coverage_fraction`` is seen."""
+    """Coverage gathered while driving a tour: the geodesic legs are smoothed
+    (:func:`_shortcut`), the sensor scans every ``sample_spacing_m`` along them (cached per
+    cell), and the tour length counts until ``coverage_fraction`` is in view."""
 
     def __init__(self, fields_: list[npt.NDArray[np.float64]], pts_rc: list[tuple[int, int]],
-                 geom: GridMap, params: TourParams, visible, n_coverable: int) -> None:
+                 geom: GridMap, params: TourParams, visible, n_coverable: int,
+                 passable: npt.NDArray[np.bool_]) -> None:
         self._fields = fields_
         self._pts = pts_rc
         self._geom = geom
         self._p = params
         self._visible = visible
+        self._passable = passable
         self._need = int(math.ceil(params.coverage_fraction * n_coverable))
-        self._legs: dict[tuple[int, int], npt.NDArray[np.int64]] = {}
+        self._legs: dict[tuple[int, int], npt.NDArray[np.float64]] = {}
         self._seen: dict[tuple[int, int], npt.NDArray[np.int64]] = {}
 
-    def _leg(self, a: int, b: int) -> npt.NDArray[np.int64]:
+    def _leg(self, a: int, b: int) -> npt.NDArray[np.float64]:
         key = (a, b)
         if key not in self._legs:
-            self._legs[key] = extract_path(self._fields[a], self._pts[b])
+            pas = self._passable.copy()
+            pas[self._pts[a]] = True       # the start may sit in the inflated margin
+            self._legs[key] = _shortcut(extract_path(self._fields[a], self._pts[b]), pas)
         return self._legs[key]
 
-    def cells(self, order: list[int]) -> npt.NDArray[np.int64]:
-        parts = [np.asarray([self._pts[order[0]]], dtype=np.int64)]
+    def vertices(self, order: list[int]) -> npt.NDArray[np.float64]:
+        """The tour as (row, col) polyline vertices (float cells)."""
+        parts = [np.asarray([self._pts[order[0]]], dtype=np.float64)]
         parts += [self._leg(order[i], order[i + 1])[1:] for i in range(len(order) - 1)]
         return np.vstack(parts)
 
@@ -319,16 +361,17 @@ class _PathWalker:
 
     def length(self, order: list[int]) -> tuple[float, list[int]]:
         """(length until the coverage goal is met or inf, the order)."""
-        cells = self.cells(order)
+        v = self.vertices(order)
         res = self._geom.resolution_m
-        d = np.hypot(*np.diff(cells.astype(np.float64), axis=0).T) * res
+        d = np.hypot(*np.diff(v, axis=0).T) * res
         cum = np.concatenate([[0.0], np.cumsum(d)])
         spacing = self._p.sample_spacing_m
-        marks = np.searchsorted(cum, np.arange(0.0, cum[-1] + spacing, spacing))
-        idx = np.unique(np.concatenate([np.minimum(marks, len(cells) - 1), [len(cells) - 1]]))
+        s = np.append(np.arange(0.0, cum[-1], spacing), cum[-1])
+        rows = np.interp(s, cum, v[:, 0])
+        cols = np.interp(s, cum, v[:, 1])
         seen: set[int] = set()
-        for i in idx:
-            seen.update(self._scan((int(cells[i, 0]), int(cells[i, 1]))).tolist())
+        for k in range(len(s)):
+            seen.update(self._scan((int(round(rows[k])), int(round(cols[k])))).tolist())
             if len(seen) >= self._need:
-                return float(cum[i]), order
+                return float(s[k]), order
         return math.inf, order

@@ -465,7 +465,8 @@ class _ObjectPipeline:
         t1 = time.perf_counter()
         depth = DepthFrame(fr.depth_m, self.intrinsics, tf)
         res = process_frame(depth, dets, self.priors, self.params, scan_points_map(self.engine))
-        self.map.update(res.objects + res.unknown, depth, int(round(cam.stamp_s * 1e9)))
+        self.map.update(res.objects + res.unknown, depth, int(round(cam.stamp_s * 1e9)),
+                        robot_xy=self.engine.pose[:2])
         timings["detection"].append((t1 - t0) * 1e3)
         timings["objects"].append((time.perf_counter() - t1) * 1e3)
         return True

@@ -160,6 +160,11 @@ class ObjectParams:
         "Re-detections of a class whose centres are closer than this merge", "m"))
     merge_iou: float = field(default=0.2, metadata=_doc(
         "Re-detections whose footprints overlap more than this (IoU) merge", "0..1"))
+    robot_radius_m: float = field(default=0.22, metadata=_doc(
+        "Robot radius: object boxes reaching into the robot's disk are wrong", "m"))
+    robot_clear_fraction: float = field(default=0.5, metadata=_doc(
+        "Drop boxes that reach this fraction of robot_radius_m into the robot's disk "
+        "(0 = never)", "0..1"))
     prior_reject_factor: float = field(default=1.2, metadata=_doc(
         "Drop a detection whose cluster footprint or height exceeds this factor times its "
         "class prior's maximum (0 = never drop, only clamp)"))
@@ -245,7 +250,7 @@ class ObjectParams:
             if not math.isfinite(v):
                 raise ValueError(f"{name} must be finite, got {v}")
         fractions = ("min_score", "merge_iou", "miss_free_fraction",
-                     "merge_parts_fraction", "unknown_top_fraction")
+                     "merge_parts_fraction", "unknown_top_fraction", "robot_clear_fraction")
         for name in fractions:
             v = getattr(self, name)
             if not 0.0 <= v <= 1.0:
@@ -260,6 +265,8 @@ class ObjectParams:
                 raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
         if not (self.prior_reject_factor == 0 or self.prior_reject_factor >= 1.0):
             raise ValueError(f"prior_reject_factor must be 0 or >= 1, got {self.prior_reject_factor}")
+        if not self.robot_radius_m >= 0:
+            raise ValueError(f"robot_radius_m must be >= 0, got {self.robot_radius_m}")
         if not self.merge_growth_max >= 1.0:
             raise ValueError(f"merge_growth_max must be >= 1, got {self.merge_growth_max}")
         if not self.unknown_top_band_m > 0:
@@ -1298,7 +1305,7 @@ class ObjectMap:
 
     # ------------------------------------------------------------------ update
     def update(self, observations: Sequence[Object3D], frame: DepthFrame | None = None,
-               stamp_ns: int = 0) -> None:
+               stamp_ns: int = 0, robot_xy: Sequence[float] | None = None) -> None:
         """Fuse one frame's observations; count misses of unseen objects.
 
         Parameters
@@ -1310,7 +1317,15 @@ class ObjectMap:
             camera sees through). Without it nothing is missed.
         stamp_ns : int
             Frame time.
+        robot_xy : sequence of 2 float, optional
+            Robot position (map frame). The robot's own body proves that no object stands
+            there: observations and tracked objects whose footprint reaches more than
+            ``robot_clear_fraction`` of ``robot_radius_m`` into the robot's disk are
+            dropped (else a misplaced box can enclose the robot and end exploration).
         """
+        if robot_xy is not None and self.params.robot_clear_fraction > 0:
+            observations = [o for o in observations if not self._on_robot(o, robot_xy)]
+            self._objects = [t for t in self._objects if not self._on_robot(t.obj, robot_xy)]
         matched: set[int] = set()
         for obs in observations:
             t = self._best_match(obs)
@@ -1335,6 +1350,12 @@ class ObjectMap:
             self._objects.sort(key=lambda t: (t.misses, -t.hits, -t.last_seen_ns, t.id))
             del self._objects[self.params.max_objects:]
             self._objects.sort(key=lambda t: t.id)
+
+    def _on_robot(self, obj: Object3D, robot_xy: Sequence[float]) -> bool:
+        """True when ``obj``'s footprint overlaps the robot's disk (see :meth:`update`)."""
+        reach = self.params.robot_radius_m * self.params.robot_clear_fraction
+        return bool(points_in_rect(np.asarray([robot_xy], dtype=np.float64), obj.center_xyz[:2],
+                                   obj.size_xyz[:2], obj.yaw, reach)[0])
 
     @staticmethod
     def _compatible(a: str, b: str) -> bool:
