@@ -35,10 +35,11 @@ def run(node_cls: Callable[..., Node] | Sequence[Callable[..., Node]],
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
+        # Stop the executor (and its worker threads) before the nodes go away, so no
+        # callback runs on a destroyed node.
+        executor.shutdown(timeout_sec=5.0)
         for node in nodes:
-            executor.remove_node(node)
             node.destroy_node()
-        executor.shutdown()
         rclpy.try_shutdown()
     return 0
 

@@ -142,6 +142,10 @@ class ObjectParams:
         "camera is sampled in strips); larger = fewer links", "rad"))
     min_cluster_points: int = field(default=15, metadata=_doc(
         "Euclidean clustering: smaller clusters are discarded"))
+    near_vote_share: float = field(default=0.1, metadata=_doc(
+        "Clusters with at least this share of the best cluster's centre-weighted votes "
+        "compete on depth: the nearest is the object (objects occlude the wall or desk "
+        "behind them); 1 = most votes win", "0..1"))
     merge_parts_fraction: float = field(default=0.5, metadata=_doc(
         "After choosing a cluster and clamping its box, other clusters with at least this "
         "fraction of their points inside that footprint (grown by cluster_tolerance_m) join "
@@ -223,6 +227,11 @@ class ObjectParams:
     unknown_top_fraction: float = field(default=0.5, metadata=_doc(
         "Share of the depth points in the densest unknown_top_band_m band; walls and door "
         "jambs (vertical surfaces over leg-like wall ends) spread over all heights and fail"))
+    unknown_min_top_cover: float = field(default=0.5, metadata=_doc(
+        "Share of the legs' rectangle that depth points of the top must cover (cells of "
+        "unknown_cover_cell_m); legs of two objects grouped across open floor fail", "0..1"))
+    unknown_cover_cell_m: float = field(default=0.1, metadata=_doc(
+        "Cell size for unknown_min_top_cover", "m"))
     unknown_pixel_stride: int = field(default=4, metadata=_doc(
         "Use every n-th depth pixel (rows and columns) for unclassified objects", "px"))
 
@@ -231,6 +240,7 @@ class ObjectParams:
                     "merge_distance_m", "miss_sample_spacing_m", "cloud_spacing_m",
                     "leg_cluster_gap_m", "leg_max_width_m", "leg_isolation_m",
                     "leg_group_distance_m", "leg_max_range_m", "unknown_max_height_m",
+                    "unknown_cover_cell_m",
                     "sor_std")
         for name in positive:
             v = getattr(self, name)
@@ -250,7 +260,8 @@ class ObjectParams:
             if not math.isfinite(v):
                 raise ValueError(f"{name} must be finite, got {v}")
         fractions = ("min_score", "merge_iou", "miss_free_fraction",
-                     "merge_parts_fraction", "unknown_top_fraction", "robot_clear_fraction")
+                     "merge_parts_fraction", "unknown_top_fraction", "near_vote_share", "robot_clear_fraction",
+                     "unknown_min_top_cover")
         for name in fractions:
             v = getattr(self, name)
             if not 0.0 <= v <= 1.0:
@@ -728,14 +739,18 @@ def euclidean_clusters(points: npt.NDArray[np.floating], tolerance_m: float, min
     return labels
 
 
-def select_cluster(labels: npt.NDArray[np.integer], pixels_uv: npt.NDArray[np.floating],
-                   depth_m: npt.NDArray[np.floating], box_xyxy: Sequence[float]) -> int:
-    """Pick the cluster that is the detected object.
+def rank_clusters(labels: npt.NDArray[np.integer], pixels_uv: npt.NDArray[np.floating],
+                  depth_m: npt.NDArray[np.floating], box_xyxy: Sequence[float],
+                  near_vote_share: float = 1.0) -> list[int]:
+    """Clusters in the order in which they are taken to be the detected object.
 
     Every point votes for its cluster with a weight that falls linearly from 1 at the
     box centre to 0 at the box border in each image direction (a tent); detectors centre
-    boxes on the object, while background shows at the borders and through gaps. Ties
-    go to the nearest median depth (objects occlude what is seen around them).
+    boxes on the object, while background shows at the borders and through gaps. Objects
+    occlude what is behind them, and an object split into parts (a chair's back, seat and
+    base) or seen through (legs) can get fewer votes than the wall behind it: clusters
+    with at least ``near_vote_share`` of the top votes come first, nearest median depth
+    first; the others follow by decreasing votes (ties to the nearest median depth).
 
     Parameters
     ----------
@@ -746,27 +761,53 @@ def select_cluster(labels: npt.NDArray[np.integer], pixels_uv: npt.NDArray[np.fl
     depth_m : ndarray, shape (N,)
         Optical-axis depth of each point.
     box_xyxy : sequence of 4 float
+    near_vote_share : float
+        In [0, 1]; 1 ranks by votes alone.
+
+    Returns
+    -------
+    list of int
+        Every label >= 0 present in ``labels``, best first.
+    """
+    valid = labels >= 0
+    if not np.any(valid):
+        return []
+    x0, y0, x1, y1 = (float(v) for v in box_xyxy)
+    cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+    hw, hh = max(0.5 * (x1 - x0), 0.5), max(0.5 * (y1 - y0), 0.5)
+    weight = (np.clip(1.0 - np.abs(pixels_uv[:, 0] - cx) / hw, 0.0, 1.0)
+              * np.clip(1.0 - np.abs(pixels_uv[:, 1] - cy) / hh, 0.0, 1.0))
+    lab = labels[valid]
+    votes = np.bincount(lab, weights=weight[valid])
+    present = np.flatnonzero(np.bincount(lab))
+    order = np.argsort(lab, kind="stable")
+    bounds = np.searchsorted(lab[order], present)
+    dv = np.asarray(depth_m)[valid][order]
+    ends = np.append(bounds[1:], len(dv))
+    med = {int(k): float(np.median(dv[a:b])) for k, a, b in zip(present, bounds, ends)}
+    top = float(votes[present].max())
+    share = min(max(float(near_vote_share), 0.0), 1.0)
+
+    def key(k: int) -> tuple:
+        v = float(votes[k])
+        strong = top > 0 and v >= share * top - 1e-12
+        return (0, med[k], -v) if strong else (1, -round(v, 9), med[k])
+
+    return sorted((int(k) for k in present), key=key)
+
+
+def select_cluster(labels: npt.NDArray[np.integer], pixels_uv: npt.NDArray[np.floating],
+                   depth_m: npt.NDArray[np.floating], box_xyxy: Sequence[float],
+                   near_vote_share: float = 1.0) -> int:
+    """Pick the cluster that is the detected object (the first of :func:`rank_clusters`).
 
     Returns
     -------
     int
         Chosen label, -1 if there is no cluster.
     """
-    valid = labels >= 0
-    if not np.any(valid):
-        return -1
-    x0, y0, x1, y1 = (float(v) for v in box_xyxy)
-    cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
-    hw, hh = max(0.5 * (x1 - x0), 0.5), max(0.5 * (y1 - y0), 0.5)
-    weight = (np.clip(1.0 - np.abs(pixels_uv[:, 0] - cx) / hw, 0.0, 1.0)
-              * np.clip(1.0 - np.abs(pixels_uv[:, 1] - cy) / hh, 0.0, 1.0))
-    votes = np.bincount(labels[valid], weights=weight[valid])
-    best, best_key = -1, None
-    for lab in np.flatnonzero(np.bincount(labels[valid])):
-        key = (round(float(votes[lab]), 9), -float(np.median(depth_m[labels == lab])))
-        if best_key is None or key > best_key:
-            best, best_key = int(lab), key
-    return best
+    ranked = rank_clusters(labels, pixels_uv, depth_m, box_xyxy, near_vote_share)
+    return ranked[0] if ranked else -1
 
 
 def footprint_orientation(points_xy: npt.NDArray[np.floating], method: str = "min_area_rect"
@@ -980,6 +1021,37 @@ def segment_detection(frame: DepthFrame, box_xyxy: Sequence[float], cls: str,
     ValueError
         When the box is malformed or outside the image (see :func:`box_mask`).
     """
+    seg = _cluster_detection(frame, box_xyxy, params)
+    if seg is None:
+        return None
+    for lab in seg.ranked:
+        out = _fit_cluster(seg, lab, frame, cls, score, prior, params)
+        if out is not None:
+            return out
+    return None
+
+
+@dataclass
+class _Clusters:
+    """Clustered points under one detection box (internal to :func:`process_frame`)."""
+
+    box_xyxy: tuple[float, float, float, float]
+    pts: npt.NDArray[np.float64]       # (N, 3) map frame
+    uv: npt.NDArray[np.float64]        # (N, 2) pixel (column, row)
+    depth: npt.NDArray[np.float32]     # (N,) optical depth
+    labels: npt.NDArray[np.int64]      # (N,) cluster labels, -1 = none
+    ranked: list[int]                  # labels, best first (rank_clusters)
+
+
+def _cluster_detection(frame: DepthFrame, box_xyxy: Sequence[float], params: ObjectParams
+                       ) -> _Clusters | None:
+    """Steps 1-5 of the pipeline and the cluster ranking for one box (None: too few points).
+
+    Raises
+    ------
+    ValueError
+        When the box is malformed or outside the image (see :func:`box_mask`).
+    """
     stride = box_stride(box_xyxy, params.pixel_stride, params.max_box_samples)
     mask = box_mask(box_xyxy, frame.depth_m.shape, stride)
     pts, uv, depth = frame_points(frame, mask, params.max_depth_m)
@@ -1000,9 +1072,18 @@ def segment_detection(frame: DepthFrame, box_xyxy: Sequence[float], cls: str,
     pts, uv, depth = pts[inl], uv[inl], depth[inl]
     labels = euclidean_clusters(pts, params.cluster_tolerance_m, params.min_cluster_points,
                                 new_index[edges])
-    best = select_cluster(labels, uv, depth, box_xyxy)
-    if best < 0:
+    ranked = rank_clusters(labels, uv, depth, box_xyxy, params.near_vote_share)
+    if not ranked:
         return None
+    box = tuple(float(v) for v in np.asarray(box_xyxy, dtype=np.float64).reshape(-1))
+    return _Clusters(box, pts, uv, depth, labels, ranked)
+
+
+def _fit_cluster(seg: _Clusters, best: int, frame: DepthFrame, cls: str, score: float,
+                 prior: SizePrior | None, params: ObjectParams
+                 ) -> tuple[Object3D, npt.NDArray[np.float64], npt.NDArray[np.float32]] | None:
+    """Steps 6-8 for the cluster ``best`` of ``seg`` (None: implausible for the prior)."""
+    pts, labels = seg.pts, seg.labels
     cam_xy = frame.camera_xyz[:2]
     chosen = labels == best
     if prior is not None and not plausible_extent(pts[chosen], prior, params):
@@ -1016,9 +1097,72 @@ def segment_detection(frame: DepthFrame, box_xyxy: Sequence[float], cls: str,
         frac = np.bincount(lab, weights=inside) / np.bincount(lab)
         parts = np.flatnonzero(frac >= params.merge_parts_fraction)
         if len(parts) > 1 or (len(parts) == 1 and parts[0] != best):
-            chosen = np.isin(labels, np.union1d(parts, [best]))
-            obj = fit_box(pts[chosen], cls, score, prior, params, cam_xy)
-    return obj, pts[chosen], depth[chosen]
+            merged = np.isin(labels, np.union1d(parts, [best]))
+            if prior is None or plausible_extent(pts[merged], prior, params):
+                chosen = merged
+                obj = fit_box(pts[chosen], cls, score, prior, params, cam_xy)
+    return obj, pts[chosen], seg.depth[chosen]
+
+
+def _voxel_keys(points: npt.NDArray[np.floating], voxel_m: float) -> npt.NDArray[np.int64]:
+    """Sorted unique int64 codes of the voxels (edge ``voxel_m``) holding ``points``."""
+    k = np.floor(np.asarray(points, dtype=np.float64) / voxel_m).astype(np.int64)
+    k = np.clip(k + (1 << 20), 0, (1 << 21) - 1)
+    return np.unique((k[:, 0] << 42) | (k[:, 1] << 21) | k[:, 2])
+
+
+def _box_fit(seg: _Clusters, lab: int) -> float:
+    """IoU of a cluster's pixel bounding box with the detection box (how well it fills it)."""
+    uv = seg.uv[seg.labels == lab]
+    x0, y0, x1, y1 = seg.box_xyxy
+    u0, v0 = uv.min(axis=0)
+    u1, v1 = uv.max(axis=0)
+    iw = max(min(x1, u1) - max(x0, u0), 0.0)
+    ih = max(min(y1, v1) - max(y0, v0), 0.0)
+    inter = iw * ih
+    union = (x1 - x0) * (y1 - y0) + (u1 - u0) * (v1 - v0) - inter
+    return inter / union if union > 0 else 0.0
+
+
+def _assign_clusters(segs: list[_Clusters | None], params: ObjectParams) -> list[int]:
+    """One cluster per detection, no cluster for two detections (index into ``ranked``).
+
+    Each detection takes its best-ranked cluster. When two detections take the same
+    points (more than half of the smaller cluster's voxels shared: a chair in front of a
+    desk is the nearest cluster in both boxes), the detection whose box the cluster fills
+    better (IoU of the cluster's pixel bounding box with the box) keeps it and the other
+    moves on to its next cluster. Returns -1 for detections left without a cluster.
+    """
+    voxel = params.voxel_size_m if params.voxel_size_m > 0 else params.cluster_tolerance_m
+    pick = [0 if s is not None else -1 for s in segs]
+    cache: dict[tuple[int, int], tuple[npt.NDArray[np.int64], float]] = {}
+
+    def info(i: int) -> tuple[npt.NDArray[np.int64], float]:
+        key = (i, pick[i])
+        if key not in cache:
+            s = segs[i]
+            lab = s.ranked[pick[i]]
+            cache[key] = (_voxel_keys(s.pts[s.labels == lab], voxel), _box_fit(s, lab))
+        return cache[key]
+
+    changed = True
+    while changed:
+        changed = False
+        for i in range(len(segs)):
+            for j in range(i + 1, len(segs)):
+                if pick[i] < 0 or pick[j] < 0:
+                    continue
+                ki, fi = info(i)
+                kj, fj = info(j)
+                shared = len(np.intersect1d(ki, kj, assume_unique=True))
+                if shared <= 0.5 * min(len(ki), len(kj)):
+                    continue
+                loser = j if fi >= fj else i
+                pick[loser] += 1
+                if pick[loser] >= len(segs[loser].ranked):
+                    pick[loser] = -1
+                changed = True
+    return pick
 
 
 def plausible_extent(points_map: npt.NDArray[np.floating], prior: SizePrior,
@@ -1152,6 +1296,48 @@ def top_fraction(heights_m: npt.NDArray[np.floating], band_m: float) -> float:
     return float((upper - np.arange(z.size)).max() / z.size)
 
 
+def top_cover(points_xy: npt.NDArray[np.floating], center_xy: Sequence[float],
+              size_xy: Sequence[float], yaw: float, cell_m: float) -> float:
+    """Share of a rotated rectangle covered by points (x, y).
+
+    The rectangle is cut into cells of about ``cell_m``; a cell is covered when a point
+    lies within ``cell_m`` of its centre. A table top covers its legs' rectangle; legs of
+    two tables grouped together leave the floor between them uncovered.
+
+    Parameters
+    ----------
+    points_xy : ndarray, shape (N, 2)
+    center_xy, size_xy : sequence of 2 float
+    yaw : float
+    cell_m : float
+        > 0.
+
+    Returns
+    -------
+    float
+        In [0, 1]; 0 without points.
+
+    Raises
+    ------
+    ValueError
+        If ``cell_m`` is not > 0.
+    """
+    if not cell_m > 0:
+        raise ValueError(f"cell_m must be > 0, got {cell_m}")
+    pts = np.asarray(points_xy, dtype=np.float64).reshape(-1, 2)
+    if len(pts) == 0:
+        return 0.0
+    c, s = math.cos(yaw), math.sin(yaw)
+    nu = max(int(math.ceil(float(size_xy[0]) / cell_m)), 1)
+    nv = max(int(math.ceil(float(size_xy[1]) / cell_m)), 1)
+    gu, gv = np.meshgrid(((np.arange(nu) + 0.5) / nu - 0.5) * float(size_xy[0]),
+                         ((np.arange(nv) + 0.5) / nv - 0.5) * float(size_xy[1]), indexing="ij")
+    cells = np.column_stack([center_xy[0] + gu.ravel() * c - gv.ravel() * s,
+                             center_xy[1] + gu.ravel() * s + gv.ravel() * c])
+    d, _ = cKDTree(pts).query(cells, distance_upper_bound=cell_m)
+    return float(np.mean(np.isfinite(d)))
+
+
 def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
                     params: ObjectParams, known: Iterable[Object3D] = (),
                     prior: SizePrior | None = None) -> list[Object3D]:
@@ -1181,16 +1367,14 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
     """
     cam_xy = frame.camera_xyz[:2]
     legs = scan_legs(scan_xy_map, params, cam_xy)
-    groups = group_legs(legs, params.leg_group_distance_m, params.min_legs)
-    known = list(known)
-    kept = []
-    for g in groups:
-        inside = np.zeros(len(g), dtype=bool)
-        for obj in known:
-            inside |= points_in_rect(g, obj.center_xyz[:2], obj.size_xyz[:2], obj.yaw,
-                                     params.unknown_radius_m)
-        if not np.all(inside):
-            kept.append(g)
+    # Legs of objects already found are no evidence of another object (and would join
+    # two neighbouring desks into one group spanning the floor between them).
+    for obj in known:
+        if len(legs) == 0:
+            break
+        legs = legs[~points_in_rect(legs, obj.center_xyz[:2], obj.size_xyz[:2], obj.yaw,
+                                    params.unknown_radius_m)]
+    kept = group_legs(legs, params.leg_group_distance_m, params.min_legs)
     if not kept:
         return []
     stride = params.unknown_pixel_stride
@@ -1206,6 +1390,8 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
             rc, rs, ryaw = (rcx, rcy), (w, h), math.radians(ang)
         else:
             rc, rs, ryaw = footprint_orientation(g, "pca")
+        if prior is not None and max(rs) > prior.max_xy_m:
+            continue  # legs of several objects: the rectangle spans open floor
         sel = pts[points_in_rect(pts[:, :2], rc, rs, ryaw, params.unknown_radius_m)]
         # The legs themselves are not evidence of a top: drop points right above them.
         if len(sel):
@@ -1217,6 +1403,9 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
             continue  # a vertical surface (wall, door jamb, cabinet front): no table top
         inl = statistical_outlier_mask(sel, params.sor_k, params.sor_std)
         sel = sel[inl]
+        if top_cover(sel[:, :2], rc, rs, ryaw, params.unknown_cover_cell_m) \
+                < params.unknown_min_top_cover:
+            continue  # no top over most of the legs' rectangle (open floor between them)
         legs3d = np.column_stack([g, np.full(len(g), float(sel[:, 2].min()))])
         obj = fit_box(np.vstack([sel, legs3d]), UNKNOWN_CLASS, 1.0, prior, params, cam_xy)
         out.append(replace(obj, n_points=int(len(sel))))
@@ -1341,8 +1530,8 @@ class ObjectMap:
             matched.add(t.id)
         self._merge_overlapping()
         if frame is not None:
-            for t in self._objects:
-                if t.id not in matched and self._seen_through(t.obj, frame):
+            for t, visible in zip(self._objects, self._in_view(frame)):
+                if visible and t.id not in matched and self._seen_through(t.obj, frame):
                     t.misses += 1
             self._objects = [t for t in self._objects
                              if t.misses < self.params.clear_after_misses]
@@ -1361,15 +1550,31 @@ class ObjectMap:
     def _compatible(a: str, b: str) -> bool:
         return a == b or a == UNKNOWN_CLASS or b == UNKNOWN_CLASS
 
+    def _centres_radii(self) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """Footprint centres (N, 2) and circumradii (N,) of the tracked objects."""
+        if not self._objects:
+            return np.zeros((0, 2)), np.zeros(0)
+        c = np.array([t.obj.center_xyz[:2] for t in self._objects], dtype=np.float64)
+        r = 0.5 * np.array([math.hypot(t.obj.size_xyz[0], t.obj.size_xyz[1])
+                            for t in self._objects], dtype=np.float64)
+        return c, r
+
     def _best_match(self, obs: Object3D) -> TrackedObject | None:
+        if not self._objects:
+            return None
+        centres, radii = self._centres_radii()
+        dist = np.hypot(centres[:, 0] - obs.center_xyz[0], centres[:, 1] - obs.center_xyz[1])
+        r_obs = 0.5 * math.hypot(obs.size_xyz[0], obs.size_xyz[1])
+        # Only footprints whose circumcircles meet can overlap (vectorised pre-filter).
+        near = np.flatnonzero((dist <= self.params.merge_distance_m) | (dist < radii + r_obs))
         best, best_key = None, None
-        for t in self._objects:
+        for i in near:
+            t = self._objects[int(i)]
             if not self._compatible(t.obj.cls, obs.cls):
                 continue
-            dist = math.dist(t.obj.center_xyz[:2], obs.center_xyz[:2])
             iou = footprint_iou(t.obj, obs)
-            if dist <= self.params.merge_distance_m or iou > self.params.merge_iou:
-                key = (iou, -dist)
+            if dist[i] <= self.params.merge_distance_m or iou > self.params.merge_iou:
+                key = (iou, -float(dist[i]))
                 if best_key is None or key > best_key:
                     best, best_key = t, key
         return best
@@ -1404,22 +1609,48 @@ class ObjectMap:
                         int(min(old.n_points + new.n_points, 2**31 - 1)))
 
     def _merge_overlapping(self) -> None:
-        """Merge tracked objects that came to overlap (same class, IoU > merge_iou)."""
-        i = 0
-        while i < len(self._objects):
-            j = i + 1
-            while j < len(self._objects):
-                a, b = self._objects[i], self._objects[j]
-                if (self._compatible(a.obj.cls, b.obj.cls)
-                        and footprint_iou(a.obj, b.obj) > self.params.merge_iou):
-                    a.obj = self._merge(a.obj, b.obj)
-                    a.hits += b.hits
-                    a.misses = min(a.misses, b.misses)
-                    a.last_seen_ns = max(a.last_seen_ns, b.last_seen_ns)
-                    del self._objects[j]
-                else:
-                    j += 1
-            i += 1
+        """Merge tracked objects that came to overlap (same class, IoU > merge_iou).
+
+        Only pairs whose footprint circumcircles meet are tested (vectorised pre-filter).
+        """
+        while True:
+            centres, radii = self._centres_radii()
+            n = len(self._objects)
+            if n < 2:
+                return
+            d = np.hypot(centres[:, None, 0] - centres[None, :, 0],
+                         centres[:, None, 1] - centres[None, :, 1])
+            ii, jj = np.nonzero(np.triu(d < radii[:, None] + radii[None, :], k=1))
+            pair = next(((int(i), int(j)) for i, j in zip(ii, jj)
+                         if self._compatible(self._objects[i].obj.cls, self._objects[j].obj.cls)
+                         and footprint_iou(self._objects[i].obj, self._objects[j].obj)
+                         > self.params.merge_iou), None)
+            if pair is None:
+                return
+            a, b = self._objects[pair[0]], self._objects[pair[1]]
+            a.obj = self._merge(a.obj, b.obj)
+            a.hits += b.hits
+            a.misses = min(a.misses, b.misses)
+            a.last_seen_ns = max(a.last_seen_ns, b.last_seen_ns)
+            del self._objects[pair[1]]
+
+    def _in_view(self, frame: DepthFrame) -> npt.NDArray[np.bool_]:
+        """Objects whose bounding sphere meets the camera's view frustum (up to
+        ``max_depth_m``), shape (N,) bool (vectorised pre-filter of :meth:`_seen_through`)."""
+        if not self._objects:
+            return np.zeros(0, dtype=bool)
+        c = np.array([t.obj.center_xyz for t in self._objects], dtype=np.float64)
+        r = 0.5 * np.linalg.norm(np.array([t.obj.size_xyz for t in self._objects]), axis=1)
+        opt = apply_transform(invert_transform(frame.map_from_optical), c)
+        x, y, z = opt[:, 0], opt[:, 1], opt[:, 2]
+        k = frame.intrinsics
+        ok = (z > -r) & (z < self.params.max_depth_m + r)
+        # Side planes through the optical centre (u = -0.5, u = W - 0.5, same for v).
+        for f, cc, n, coord in ((k.fx, k.cx, k.width, x), (k.fy, k.cy, k.height, y)):
+            lo, hi = -0.5 - cc, n - 0.5 - cc
+            ok &= (f * coord - lo * z) / math.hypot(f, lo) >= -r
+            ok &= (hi * z - f * coord) / math.hypot(f, hi) >= -r
+        return ok
 
     def _seen_through(self, obj: Object3D, frame: DepthFrame) -> bool:
         """True when the camera sees beyond most of the box's visible sample points."""
@@ -1470,8 +1701,12 @@ class ObjectMap:
             # Cell (r, c) spans [c, c + 1): its centre is at c + 0.5 -> pixel c in cv2.
             pts = np.stack([cols - 0.5, rows - 0.5], axis=1) * (1 << shift)
             polys.append(np.round(pts).astype(np.int32))
+        # One fill per box: a single fillPoly over all boxes fills even-odd, so the
+        # overlap of two boxes (a chair pushed under a desk) would be left out.
+        for poly in polys:
+            cv2.fillConvexPoly(img, poly, int(p.object_value), lineType=cv2.LINE_8,
+                               shift=shift)
         if polys:
-            cv2.fillPoly(img, polys, int(p.object_value), lineType=cv2.LINE_8, shift=shift)
             cv2.polylines(img, polys, True, int(p.object_value), lineType=cv2.LINE_8,
                           shift=shift)
         return grid.with_data(img)
@@ -1540,18 +1775,28 @@ def process_frame(frame: DepthFrame, detections: Iterable[BoxDetection],
     """
     objects: list[Object3D] = []
     dropped: list[str] = []
+    dets: list[BoxDetection] = []
+    segs: list[_Clusters | None] = []
     for det in detections:
         if det.score < params.min_score or det.cls_name == UNKNOWN_CLASS \
                 or det.cls_name not in priors:
             continue
         try:
-            obj = object_from_detection(frame, det.box_xyxy, det.cls_name, det.score,
-                                        priors[det.cls_name], params)
+            seg = _cluster_detection(frame, det.box_xyxy, params)
         except ValueError as err:
             dropped.append(f"{det.cls_name}: {err}")
             continue
-        if obj is not None:
-            objects.append(obj)
+        dets.append(det)
+        segs.append(seg)
+    for det, seg, first in zip(dets, segs, _assign_clusters(segs, params)):
+        if seg is None or first < 0:
+            continue
+        for lab in seg.ranked[first:]:
+            fit = _fit_cluster(seg, lab, frame, det.cls_name, det.score,
+                               priors[det.cls_name], params)
+            if fit is not None:
+                objects.append(fit[0])
+                break
     unknown: list[Object3D] = []
     if params.unknown_enabled and scan_xy_map is not None and len(scan_xy_map):
         unknown = unknown_objects(frame, scan_xy_map, params, objects,
