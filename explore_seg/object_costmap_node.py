@@ -30,7 +30,7 @@ from explore_seg.core.detector import Detector, DetectorParams
 from explore_seg.core.grid import GridMap, quaternion_from_yaw
 from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D, ObjectMap,
                                       ObjectParams, load_priors, parse_class_ids,
-                                      process_frame)
+                                      process_frame, wall_mask)
 from explore_seg.node_util import run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS, SENSOR_QOS, map_qos
@@ -281,7 +281,8 @@ class ObjectCostmapNode(Node):
             p.camera_yaw_rad)
         frame = DepthFrame(depth, self._info, transform)
         scan_xy = self._scan_points(t_ns, pose)
-        result = process_frame(frame, detections, self._priors, p, scan_xy)
+        walls = wall_mask(self._grid, p) if self._grid is not None else None
+        result = process_frame(frame, detections, self._priors, p, scan_xy, walls)
         for reason in result.dropped:
             self._drop("box", reason)
         self._objects.update(result.objects + result.unknown, frame, t_ns, robot_xy=pose[:2])

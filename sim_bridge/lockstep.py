@@ -62,7 +62,7 @@ from explore_seg.core.frontiers import Frontier, FrontierParams, find_frontiers,
     traversable_mask
 from explore_seg.core.grid import GridMap
 from explore_seg.core.objects import DepthFrame, ObjectMap, ObjectParams, load_priors, \
-    process_frame
+    process_frame, wall_mask
 from explore_seg.core.segmentation import IncrementalSegmenter, SegmentationParams
 from explore_seg.core.selection import Action, GoalManager, PathGraphs, SelectionParams
 from sim_bridge import worlds
@@ -464,7 +464,8 @@ class _ObjectPipeline:
         dets = self.detector.detect(fr.rgb, semantic=fr.semantic, instance=fr.instance)
         t1 = time.perf_counter()
         depth = DepthFrame(fr.depth_m, self.intrinsics, tf)
-        res = process_frame(depth, dets, self.priors, self.params, scan_points_map(self.engine))
+        res = process_frame(depth, dets, self.priors, self.params, scan_points_map(self.engine),
+                            wall_mask(self.engine.map, self.params))
         self.map.update(res.objects + res.unknown, depth, int(round(cam.stamp_s * 1e9)),
                         robot_xy=self.engine.pose[:2])
         timings["detection"].append((t1 - t0) * 1e3)

@@ -142,7 +142,7 @@ class ObjectParams:
         "camera is sampled in strips); larger = fewer links", "rad"))
     min_cluster_points: int = field(default=15, metadata=_doc(
         "Euclidean clustering: smaller clusters are discarded"))
-    near_vote_share: float = field(default=0.1, metadata=_doc(
+    near_vote_share: float = field(default=0.2, metadata=_doc(
         "Clusters with at least this share of the best cluster's centre-weighted votes "
         "compete on depth: the nearest is the object (objects occlude the wall or desk "
         "behind them); 1 = most votes win", "0..1"))
@@ -164,9 +164,15 @@ class ObjectParams:
         "Re-detections of a class whose centres are closer than this merge", "m"))
     merge_iou: float = field(default=0.2, metadata=_doc(
         "Re-detections whose footprints overlap more than this (IoU) merge", "0..1"))
+    wall_cluster_fraction: float = field(default=0.7, metadata=_doc(
+        "A cluster with at least this share of its points over occupied cells of the 2D "
+        "map (walls seen by the lidar, grown by wall_margin_m) is a wall or door jamb, not "
+        "the detected object (0 = off)", "0..1"))
+    wall_margin_m: float = field(default=0.05, metadata=_doc(
+        "Growth of the map's occupied cells for wall_cluster_fraction", "m"))
     robot_radius_m: float = field(default=0.22, metadata=_doc(
         "Robot radius: object boxes reaching into the robot's disk are wrong", "m"))
-    robot_clear_fraction: float = field(default=0.5, metadata=_doc(
+    robot_clear_fraction: float = field(default=1.0, metadata=_doc(
         "Drop boxes that reach this fraction of robot_radius_m into the robot's disk "
         "(0 = never)", "0..1"))
     prior_reject_factor: float = field(default=1.2, metadata=_doc(
@@ -276,6 +282,8 @@ class ObjectParams:
                 raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
         if not (self.prior_reject_factor == 0 or self.prior_reject_factor >= 1.0):
             raise ValueError(f"prior_reject_factor must be 0 or >= 1, got {self.prior_reject_factor}")
+        if not self.wall_margin_m >= 0:
+            raise ValueError(f"wall_margin_m must be >= 0, got {self.wall_margin_m}")
         if not self.robot_radius_m >= 0:
             raise ValueError(f"robot_radius_m must be >= 0, got {self.robot_radius_m}")
         if not self.merge_growth_max >= 1.0:
@@ -1043,8 +1051,40 @@ class _Clusters:
     ranked: list[int]                  # labels, best first (rank_clusters)
 
 
-def _cluster_detection(frame: DepthFrame, box_xyxy: Sequence[float], params: ObjectParams
-                       ) -> _Clusters | None:
+@dataclass(frozen=True)
+class WallMask:
+    """Occupied cells of the 2D (lidar) map, grown by ``wall_margin_m``: see
+    :func:`wall_mask`."""
+
+    grid: GridMap
+    mask: npt.NDArray[np.bool_]
+
+    def fraction_on(self, points_xy: npt.NDArray[np.floating]) -> float:
+        """Share of the points (map frame) lying on a wall cell (outside the map: not)."""
+        if len(points_xy) == 0:
+            return 0.0
+        r, c = self.grid.world_to_cells(points_xy[:, 0], points_xy[:, 1])
+        ok = (r >= 0) & (r < self.grid.height) & (c >= 0) & (c < self.grid.width)
+        hits = np.zeros(len(r), dtype=bool)
+        hits[ok] = self.mask[r[ok], c[ok]]
+        return float(hits.mean())
+
+
+def wall_mask(grid: GridMap, params: ObjectParams, occupied_threshold: int = 65) -> WallMask:
+    """The map's occupied cells grown by ``params.wall_margin_m``.
+
+    A depth cluster lying mostly on them is a wall or door jamb (what the lidar sees as a
+    long obstacle), while chairs and tables stand on free cells but for their thin legs.
+    """
+    occ = grid.data >= occupied_threshold
+    r = int(round(params.wall_margin_m / grid.resolution_m))
+    if r > 0 and occ.any():
+        occ = cv2.dilate(occ.astype(np.uint8), np.ones((2 * r + 1, 2 * r + 1), np.uint8)) > 0
+    return WallMask(grid, occ)
+
+
+def _cluster_detection(frame: DepthFrame, box_xyxy: Sequence[float], params: ObjectParams,
+                       walls: WallMask | None = None) -> _Clusters | None:
     """Steps 1-5 of the pipeline and the cluster ranking for one box (None: too few points).
 
     Raises
@@ -1073,6 +1113,9 @@ def _cluster_detection(frame: DepthFrame, box_xyxy: Sequence[float], params: Obj
     labels = euclidean_clusters(pts, params.cluster_tolerance_m, params.min_cluster_points,
                                 new_index[edges])
     ranked = rank_clusters(labels, uv, depth, box_xyxy, params.near_vote_share)
+    if walls is not None and params.wall_cluster_fraction > 0:
+        ranked = [lab for lab in ranked
+                  if walls.fraction_on(pts[labels == lab, :2]) < params.wall_cluster_fraction]
     if not ranked:
         return None
     box = tuple(float(v) for v in np.asarray(box_xyxy, dtype=np.float64).reshape(-1))
@@ -1754,7 +1797,8 @@ class FrameResult:
 
 def process_frame(frame: DepthFrame, detections: Iterable[BoxDetection],
                   priors: dict[str, SizePrior], params: ObjectParams,
-                  scan_xy_map: npt.NDArray[np.floating] | None = None) -> FrameResult:
+                  scan_xy_map: npt.NDArray[np.floating] | None = None,
+                  walls: WallMask | None = None) -> FrameResult:
     """Detections + depth (+ scan) of one frame -> 3D boxes in the map frame.
 
     Detections below ``min_score`` or of classes without a prior are skipped; malformed
@@ -1768,6 +1812,9 @@ def process_frame(frame: DepthFrame, detections: Iterable[BoxDetection],
     params : ObjectParams
     scan_xy_map : ndarray, shape (N, 2), optional
         Laser points in the map frame; None or empty skips unclassified objects.
+    walls : WallMask, optional
+        From :func:`wall_mask` of the current 2D map: clusters lying on walls are never
+        taken for a detected object (a chair seen through a doorway is not the jamb).
 
     Returns
     -------
@@ -1782,7 +1829,7 @@ def process_frame(frame: DepthFrame, detections: Iterable[BoxDetection],
                 or det.cls_name not in priors:
             continue
         try:
-            seg = _cluster_detection(frame, det.box_xyxy, params)
+            seg = _cluster_detection(frame, det.box_xyxy, params, walls)
         except ValueError as err:
             dropped.append(f"{det.cls_name}: {err}")
             continue

@@ -104,6 +104,8 @@ class SelectionParams:
     unknown_path_factor: float = field(default=1.5, metadata={
         "doc": "when no cPoint is reachable through known free space, distances through "
                "unknown cells are used, multiplied by this factor (>= 1)"})
+    blacklist_retries: int = field(default=1, metadata={
+        "doc": "times the blacklist is cleared to retry its frontiers before DONE"})
     done_confirmations: int = field(default=3, metadata={
         "doc": "consecutive decisions without a reachable frontier before DONE"})
     return_to_start: bool = field(default=False, metadata={
@@ -168,6 +170,8 @@ class SelectionParams:
             raise ValueError(f"blacklist_max must be >= 1, got {self.blacklist_max}")
         if not self.unknown_path_factor >= 1.0:
             raise ValueError(f"unknown_path_factor must be >= 1, got {self.unknown_path_factor}")
+        if self.blacklist_retries < 0:
+            raise ValueError(f"blacklist_retries must be >= 0, got {self.blacklist_retries}")
         if self.done_confirmations < 1:
             raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
         self.frontier_params()  # validates the detection fields
@@ -529,6 +533,7 @@ class GoalManager:
         self._arrived_s: float | None = None
         self._arrived_stamp_ns = 0
         self._empty_ticks = 0
+        self._retries_left = self.params.blacklist_retries
         self.start_xy_m: tuple[float, float] | None = None
         self._start_yaw = 0.0
         if clear_blacklist:
@@ -700,6 +705,16 @@ class GoalManager:
                     self._start_progress(self.goal, robot_xy_m, now_s)
                     return StepResult(Action.NEW_GOAL, self.goal,
                                       "no reachable frontier: returning to start", sel)
+            if self._retries_left > 0 and self._blacklist and \
+                    bool(self._blacklisted(frontiers).any()):
+                # The map changed since those goals failed (a doorway seen, a false
+                # obstacle cleared): give the blacklisted frontiers another chance.
+                self._retries_left -= 1
+                self._blacklist.clear()
+                self._empty_ticks = 0
+                return StepResult(Action.WAIT, None,
+                                  "only blacklisted frontiers left: blacklist cleared, retrying",
+                                  sel)
             self.done = True
             return StepResult(Action.DONE, None, "no reachable frontier", sel)
         self._empty_ticks = 0
