@@ -140,6 +140,17 @@ def path_msg(xy: npt.ArrayLike, frame_id: str, stamp: Time | int | None = None) 
 # ---------------------------------------------------------------------- occupancy
 
 
+def _meta_checked(info: MapMetaData) -> tuple[float, float, float, float]:
+    """(resolution, origin x, origin y, origin yaw) of MapMetaData, validated."""
+    res = float(info.resolution)
+    if not (math.isfinite(res) and res > 0):
+        raise ValueError(f"map resolution must be finite and > 0, got {res}")
+    ox, oy = float(info.origin.position.x), float(info.origin.position.y)
+    if not (math.isfinite(ox) and math.isfinite(oy)):
+        raise ValueError(f"map origin must be finite, got ({ox}, {oy})")
+    return res, ox, oy, _yaw_checked(info.origin.orientation, "map origin")
+
+
 def grid_from_msg(msg: OccupancyGrid) -> GridMap:
     """nav_msgs/OccupancyGrid -> :class:`GridMap` (row = y, no flip).
 
@@ -154,13 +165,7 @@ def grid_from_msg(msg: OccupancyGrid) -> GridMap:
     n = len(msg.data)
     if n != w * h:
         raise ValueError(f"map data has {n} cells, expected width*height={w}*{h}={w * h}")
-    res = float(info.resolution)
-    if not (math.isfinite(res) and res > 0):
-        raise ValueError(f"map resolution must be finite and > 0, got {res}")
-    ox, oy = float(info.origin.position.x), float(info.origin.position.y)
-    if not (math.isfinite(ox) and math.isfinite(oy)):
-        raise ValueError(f"map origin must be finite, got ({ox}, {oy})")
-    yaw = _yaw_checked(info.origin.orientation, "map origin")
+    res, ox, oy, yaw = _meta_checked(info)
     data = np.frombuffer(_as_bytes(msg.data), dtype=np.int8, count=n).reshape(h, w).copy()
     if data.size and (data.min() < -1 or data.max() > 100):
         raise ValueError(f"map values must be in -1..100, got {data.min()}..{data.max()}")
@@ -189,13 +194,7 @@ def grid_to_msg(grid: GridMap, stamp: Time | int | None = None) -> OccupancyGrid
 
 def geometry_from_meta(info: MapMetaData, frame_id: str = "map") -> GridMap:
     """An all-unknown :class:`GridMap` with the geometry of a MapMetaData."""
-    res = float(info.resolution)
-    if not (math.isfinite(res) and res > 0):
-        raise ValueError(f"map resolution must be finite and > 0, got {res}")
-    ox, oy = float(info.origin.position.x), float(info.origin.position.y)
-    if not (math.isfinite(ox) and math.isfinite(oy)):
-        raise ValueError(f"map origin must be finite, got ({ox}, {oy})")
-    yaw = _yaw_checked(info.origin.orientation, "map origin")
+    res, ox, oy, yaw = _meta_checked(info)
     data = np.full((int(info.height), int(info.width)), -1, dtype=np.int8)
     return GridMap(data, res, (ox, oy), yaw, frame_id, stamp_to_ns(info.map_load_time))
 

@@ -27,13 +27,12 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.grid import GridMap
+from explore_seg.core.grid import MAP_IMAGE_MODES, GridMap, occupancy_from_map_image
 from explore_seg.core.segmentation import SegmentationParams, segment
 
 #: map_server defaults.
 _DEFAULT_OCC_THRESH = 0.65
 _DEFAULT_FREE_THRESH = 0.196
-_MODES = ("trinary", "scale", "raw")
 #: Largest id a 16-bit PNG holds.
 _MAX_ID_16 = 65535
 
@@ -59,29 +58,6 @@ def _read_grey(path: Path) -> npt.NDArray[np.uint8]:
     return img
 
 
-def map_values(img: npt.NDArray[np.uint8], mode: str, negate: bool, occupied_thresh: float,
-               free_thresh: float) -> npt.NDArray[np.int8]:
-    """Occupancy values (-1 / 0..100) of a map_server image, rows as in the image.
-
-    Raises
-    ------
-    ValueError
-        On an unknown mode.
-    """
-    if mode not in _MODES:
-        raise ValueError(f"mode must be one of {_MODES}, got {mode!r}")
-    v = img.astype(np.float64)
-    if mode == "raw":
-        return np.where(v > 100, -1, v).astype(np.int8)
-    occ = v / 255.0 if negate else (255.0 - v) / 255.0
-    out = np.full(img.shape, -1, np.int8)
-    out[occ > occupied_thresh] = 100
-    out[occ < free_thresh] = 0
-    if mode == "scale":
-        mid = (occ <= occupied_thresh) & (occ >= free_thresh)
-        scaled = 99.0 * (occ - free_thresh) / max(occupied_thresh - free_thresh, 1e-9)
-        out[mid] = np.clip(np.round(scaled[mid]), 0, 100).astype(np.int8)
-    return out
 
 
 def _number(doc: dict, key: str, default: float | None, path: Path) -> float:
@@ -138,8 +114,8 @@ def load_map(path: str | Path, resolution_m: float = 0.05, free_grey: int = 250
                            for v in origin[:3])):
             raise MapFileError(f"{path}: origin must be [x, y, yaw], got {origin!r}")
         mode = str(doc.get("mode", "trinary"))
-        if mode not in _MODES:
-            raise MapFileError(f"{path}: mode must be one of {_MODES}, got {mode!r}")
+        if mode not in MAP_IMAGE_MODES:
+            raise MapFileError(f"{path}: mode must be one of {MAP_IMAGE_MODES}, got {mode!r}")
         negate = doc.get("negate", 0)
         occ_t = _number(doc, "occupied_thresh", _DEFAULT_OCC_THRESH, path)
         free_t = _number(doc, "free_thresh", _DEFAULT_FREE_THRESH, path)
@@ -147,7 +123,7 @@ def load_map(path: str | Path, resolution_m: float = 0.05, free_grey: int = 250
         if not img_path.is_absolute():
             img_path = path.parent / img_path
         img = _read_grey(img_path)
-        values = map_values(img, mode, bool(negate), occ_t, free_t)
+        values = occupancy_from_map_image(img, mode, bool(negate), occ_t, free_t)
         yaw = float(origin[2]) if len(origin) > 2 else 0.0
         return GridMap(values[::-1].copy(), res, (float(origin[0]), float(origin[1])), yaw)
     img = _read_grey(path)

@@ -30,6 +30,7 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.grid import OCCUPIED_THRESHOLD, GridMap
+from explore_seg.core.fields import param_meta as _doc
 from sim_bridge import worlds
 from sim_bridge.mapping import MappingParams, ScanMapper
 from sim_bridge.metrics import CollisionEvent, SimMetrics
@@ -37,14 +38,6 @@ from sim_bridge.navigation import NavParams, NavState, NavStatus, Navigator
 from sim_bridge.sensors import CameraParams, DepthCamera, Lidar, LidarParams
 from sim_bridge.world import World
 
-
-def _doc(text: str, unit: str | None = None, read_only: bool = False) -> dict[str, Any]:
-    meta: dict[str, Any] = {"doc": text}
-    if unit:
-        meta["unit"] = unit
-    if read_only:
-        meta["read_only"] = True
-    return meta
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ import numpy.typing as npt
 import yaml
 from scipy import ndimage
 
-from explore_seg.core.grid import OCCUPIED_THRESHOLD, GridMap
+from explore_seg.core.grid import MAP_IMAGE_MODES, OCCUPIED_THRESHOLD, GridMap, occupancy_from_map_image
 from sim_bridge.world import SHAPES, Primitive, World, WorldObject
 
 WORLD_FORMAT = "explore_seg_world/1"
@@ -58,7 +58,6 @@ _OBJ_REQUIRED = {"name", "class", "pose", "aabb"}
 _MAP_KEYS = {"image", "mode", "resolution", "origin", "negate", "occupied_thresh",
              "free_thresh"}
 _MAP_REQUIRED = {"image", "resolution", "origin"}
-_MAP_MODES = ("trinary", "scale", "raw")
 
 
 # ============================================================ ground truth rasters
@@ -369,33 +368,6 @@ def _read_map_image(path: Path, where: str) -> npt.NDArray[np.uint8]:
     return np.asarray(np.round(img), dtype=np.uint8)
 
 
-def map_values_from_image(img: npt.NDArray[np.uint8], mode: str, negate: bool,
-                          occupied_thresh: float, free_thresh: float
-                          ) -> npt.NDArray[np.int8]:
-    """OccupancyGrid values (-1 / 0..100) of a map_server image (as ROS map_server does).
-
-    Rows are returned as in the image (row 0 = top); flip them for grid layout.
-
-    Raises
-    ------
-    ValueError
-        On an unknown ``mode``.
-    """
-    if mode not in _MAP_MODES:
-        raise ValueError(f"mode must be one of {_MAP_MODES}, got {mode!r}")
-    v = img.astype(np.float64)
-    if mode == "raw":
-        out = np.where(v > 100, -1, v)
-        return out.astype(np.int8)
-    occ = v / 255.0 if negate else (255.0 - v) / 255.0
-    out = np.full(img.shape, -1, np.int8)
-    out[occ > occupied_thresh] = 100
-    out[occ < free_thresh] = 0
-    if mode == "scale":
-        mid = (occ <= occupied_thresh) & (occ >= free_thresh)
-        scaled = 99.0 * (occ - free_thresh) / (occupied_thresh - free_thresh)
-        out[mid] = np.clip(np.round(scaled[mid]), 0, 100).astype(np.int8)
-    return out
 
 
 def _merge_cells_to_rects(mask: npt.NDArray[np.bool_]) -> list[tuple[int, int, int, int]]:
@@ -466,8 +438,8 @@ def _parse_map_yaml(doc: Any, path: Path,
     if origin[2] != 0.0:
         raise _err(where, f"key 'origin' yaw must be 0 (turned maps unsupported), got {origin[2]}")
     mode = doc.get("mode", "trinary")
-    if mode not in _MAP_MODES:
-        raise _err(where, f"key 'mode' must be one of {_MAP_MODES}, got {mode!r}")
+    if mode not in MAP_IMAGE_MODES:
+        raise _err(where, f"key 'mode' must be one of {MAP_IMAGE_MODES}, got {mode!r}")
     negate = doc.get("negate", 0)
     if negate not in (0, 1, True, False):
         raise _err(where, f"key 'negate' must be 0 or 1, got {negate!r}")
@@ -484,7 +456,7 @@ def _parse_map_yaml(doc: Any, path: Path,
     if not isinstance(image, str):
         raise _err(where, f"key 'image' must be a string, got {image!r}")
     img = _read_map_image(path.parent / image, where)
-    values = map_values_from_image(img, mode, bool(negate), thr["occupied_thresh"],
+    values = occupancy_from_map_image(img, mode, bool(negate), thr["occupied_thresh"],
                                    thr["free_thresh"])[::-1].copy()   # row = y
     grid = GridMap(values, float(res), (origin[0], origin[1]))
     occ = grid.occupied_mask()

@@ -40,6 +40,7 @@ from typing import Protocol
 import cv2
 import numpy as np
 import numpy.typing as npt
+from explore_seg.core.fields import param_meta as _doc
 
 LOG = logging.getLogger(__name__)
 
@@ -93,9 +94,6 @@ DEFAULT_ORACLE_CLASS_MAP: tuple[str, ...] = (
     "fridge:refrigerator", "refrigerator:refrigerator", "oven:oven", "sink:sink",
 )
 
-
-def _doc(text: str, unit: str | None = None) -> dict[str, str]:
-    return {"doc": text, "unit": unit} if unit else {"doc": text}
 
 
 @dataclass(frozen=True)

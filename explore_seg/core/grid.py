@@ -282,3 +282,51 @@ def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
 def quaternion_from_yaw(yaw_rad: float) -> tuple[float, float, float, float]:
     """(x, y, z, w) of a rotation by ``yaw_rad`` about +z."""
     return (0.0, 0.0, math.sin(yaw_rad / 2.0), math.cos(yaw_rad / 2.0))
+
+
+#: map_server image interpretation modes.
+MAP_IMAGE_MODES = ("trinary", "scale", "raw")
+
+
+def occupancy_from_map_image(img: npt.NDArray[np.uint8], mode: str, negate: bool,
+                             occupied_thresh: float, free_thresh: float
+                             ) -> npt.NDArray[np.int8]:
+    """OccupancyGrid values (-1 / 0..100) of a map_server image, as ROS map_server reads it.
+
+    Rows are returned as in the image (row 0 = top); flip them (``[::-1]``) for grid layout.
+
+    Parameters
+    ----------
+    img : ndarray of uint8, shape (H, W)
+        Grey levels.
+    mode : str
+        ``trinary``, ``scale`` or ``raw``.
+    negate : bool
+    occupied_thresh, free_thresh : float
+        Thresholds on the occupancy probability ``(255 - v) / 255`` (or ``v / 255`` negated).
+
+    Raises
+    ------
+    ValueError
+        On an unknown ``mode``.
+
+    Examples
+    --------
+    >>> occupancy_from_map_image(np.array([[0, 254, 205]], np.uint8), "trinary", False,
+    ...                          0.65, 0.196).tolist()
+    [[100, 0, -1]]
+    """
+    if mode not in MAP_IMAGE_MODES:
+        raise ValueError(f"mode must be one of {MAP_IMAGE_MODES}, got {mode!r}")
+    v = img.astype(np.float64)
+    if mode == "raw":
+        return np.where(v > 100, -1, v).astype(np.int8)
+    occ = v / 255.0 if negate else (255.0 - v) / 255.0
+    out = np.full(img.shape, -1, np.int8)
+    out[occ > occupied_thresh] = 100
+    out[occ < free_thresh] = 0
+    if mode == "scale":
+        mid = (occ <= occupied_thresh) & (occ >= free_thresh)
+        scaled = 99.0 * (occ - free_thresh) / max(occupied_thresh - free_thresh, 1e-9)
+        out[mid] = np.clip(np.round(scaled[mid]), 0, 100).astype(np.int8)
+    return out

@@ -47,6 +47,7 @@ from scipy.spatial import cKDTree
 
 from explore_seg.core.camera import CameraIntrinsics, apply_transform, invert_transform
 from explore_seg.core.grid import GridMap
+from explore_seg.core.fields import param_meta as _doc
 
 #: Class name given to objects found from laser legs without a detection.
 UNKNOWN_CLASS = "unknown"
@@ -54,13 +55,6 @@ UNKNOWN_CLASS = "unknown"
 _ORIENTATION_METHODS = ("pca", "min_area_rect")
 _POSE_SOURCES = ("odom", "pose")
 
-
-def _doc(doc: str, unit: str | None = None, **extra) -> dict:
-    meta = {"doc": doc}
-    if unit:
-        meta["unit"] = unit
-    meta.update(extra)
-    return meta
 
 
 # ------------------------------------------------------------------------- params

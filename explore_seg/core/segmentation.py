@@ -28,19 +28,13 @@ import numpy.typing as npt
 
 from explore_seg.core.dude import DudeSettings, decompose_mask, find_cuts
 from explore_seg.core.grid import GridMap
+from explore_seg.core.fields import param_meta as _doc
 
 #: Bounds on the DuDe checks of one incremental update: seams between new and clean
 #: pieces, and clean pieces whose shape changed.
 _MAX_SEAM_TESTS = 6
 _MAX_SHAPE_TESTS = 4
 
-
-def _doc(text: str, unit: str | None = None, **extra) -> dict:
-    md = {"doc": text}
-    if unit:
-        md["unit"] = unit
-    md.update(extra)
-    return md
 
 
 @dataclass(frozen=True)
