@@ -13,7 +13,7 @@ published per map update. Each result is published as
   colour scheme): every region id hashed to 1..99, -1 where there is no region;
 * ``~/timing`` (std_msgs/Float64): wall time of the update in milliseconds.
 
-Ids of regions that did not change stay the same between updates (docs/dude.md §12).
+Ids of regions that did not change stay the same between updates (DuDe spec shared/docs/dude.md §12).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Recall / precision of a room segmentation against ground-truth rooms.
 
 The metric of Bormann et al. (ICRA 2016), as computed by IPA's
-``evaluation_segmentation.cpp`` (docs/dude.md §17, caveat 3):
+``evaluation_segmentation.cpp`` (DuDe spec shared/docs/dude.md §17, caveat 3):
 
 * ground-truth rooms are the distinct ids > 0 of ``gt_labels`` (or, with
   ``gt_connected=True``, the 8-connected components of ``gt_labels > 0``, which is how

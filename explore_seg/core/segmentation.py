@@ -1,6 +1,6 @@
 """Room segmentation of an occupancy grid by (incremental) Dual-Space Decomposition.
 
-Implements docs/dude.md: cleaning of the grid into a free-space mask (§4), DuDe on every
+Implements DuDe spec shared/docs/dude.md: cleaning of the grid into a free-space mask (§4), DuDe on every
 free component (§5-§9, in :mod:`.dude`, raster shortcut), labelling back onto the true
 free cells with gap filling and small-region merging (§10, §15), the incremental update
 that redoes only the pieces touched by newly seen free space (§11) and region ids that
@@ -39,7 +39,7 @@ _MAX_SHAPE_TESTS = 4
 
 @dataclass(frozen=True)
 class SegmentationParams:
-    """Parameters of the DuDe room segmentation (docs/dude.md §13).
+    """Parameters of the DuDe room segmentation (DuDe spec shared/docs/dude.md §13).
 
     Raises
     ------
@@ -76,7 +76,7 @@ class SegmentationParams:
         "merged into a neighbour", "m"))
     corridor_merge: bool = field(default=False, metadata=_doc(
         "merge two adjacent regions whose shared border is longer than "
-        "max_door_width_m and whose union stays convex enough (docs/dude.md §15)"))
+        "max_door_width_m and whose union stays convex enough (DuDe spec shared/docs/dude.md §15)"))
     max_door_width_m: float = field(default=1.2, metadata=_doc(
         "corridor merge: borders at most this long are doors and never merged", "m"))
     merge_concavity_factor: float = field(default=2.0, metadata=_doc(
@@ -185,7 +185,7 @@ def _square(r: int) -> npt.NDArray[np.uint8]:
 
 def clean_free_space(grid: GridMap, params: SegmentationParams
                      ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
-    """Raw free cells and the cleaned free-space mask F of a grid (docs/dude.md §4).
+    """Raw free cells and the cleaned free-space mask F of a grid (DuDe spec shared/docs/dude.md §4).
 
     Parameters
     ----------
@@ -577,7 +577,7 @@ class IncrementalSegmenter:
         -------
         ndarray of int32, shape (grid.height, grid.width)
             Region ids (0 = no region), stable between calls for regions that did not
-            change (docs/dude.md §11-§12).
+            change (DuDe spec shared/docs/dude.md §11-§12).
 
         Raises
         ------
