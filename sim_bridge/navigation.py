@@ -68,7 +68,7 @@ class NavParams:
 
     robot_radius_m: float = field(default=0.22, metadata={
         "doc": "radius of the robot's collision disk", "unit": "m"})
-    inflation_margin_m: float = field(default=0.05, metadata={
+    inflation_margin_m: float = field(default=0.0, metadata={
         "doc": "clearance beyond the radius every plan keeps (lethal zone = radius + this)",
         "unit": "m"})
     inflation_radius_m: float = field(default=0.6, metadata={
@@ -87,7 +87,7 @@ class NavParams:
         "doc": "map/layer cells at or above this value are obstacles", "unit": "%"})
     planner_goal_tolerance_m: float = field(default=0.5, metadata={
         "doc": "a blocked goal is replaced by the nearest free cell within this", "unit": "m"})
-    plan_downsample: int = field(default=2, metadata={
+    plan_downsample: int = field(default=1, metadata={
         "doc": "plan on cells this many times coarser (1 = map resolution)"})
     plan_window_margin_m: float = field(default=3.0, metadata={
         "doc": "first search window: path costs up to 1.5 x straight line + this", "unit": "m"})
