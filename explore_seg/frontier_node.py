@@ -24,7 +24,7 @@ from explore_seg import convert
 from explore_seg.core.frontiers import Frontier, FrontierParams, find_frontiers, object_obstacles, \
     traversable_mask
 from explore_seg.core.grid import GridMap
-from explore_seg.node_util import run
+from explore_seg.node_util import WarnThrottle, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import map_qos
 
@@ -122,7 +122,7 @@ class FrontierDetectorNode(Node):
         self._state = State.WAITING_FOR_MAP
         self.frontiers: list[Frontier] = []
         self.runs = 0
-        self._last_warn: dict[str, float] = {}
+        self._warn = WarnThrottle(self, _WARN_PERIOD_S)
 
         self._pub_cells = self.create_publisher(PointCloud2, "frontiers", 1)
         self._pub_groups = self.create_publisher(PointCloud2, "frontiers/groups", 1)
@@ -144,11 +144,6 @@ class FrontierDetectorNode(Node):
         """Current state."""
         return self._state
 
-    def _warn(self, key: str, msg: str) -> None:
-        now = time.monotonic()
-        if now - self._last_warn.get(key, -1e18) >= _WARN_PERIOD_S:
-            self._last_warn[key] = now
-            self.get_logger().warn(msg)
 
     def _params_changed(self, old: FrontierParams, new: FrontierParams) -> None:
         self._dirty = True

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+import time
 from typing import Callable, Sequence
 
 import rclpy
@@ -43,3 +45,23 @@ def run(node_cls: Callable[..., Node] | Sequence[Callable[..., Node]],
         rclpy.try_shutdown()
     return 0
 
+
+
+class WarnThrottle:
+    """Warn at most once per ``period_s`` (wall time) for each cause.
+
+    rclpy's ``throttle_duration_sec`` throttles per call site; malformed input of several
+    kinds arriving through one callback needs a throttle per cause instead.
+    """
+
+    def __init__(self, node: Node, period_s: float = 5.0) -> None:
+        self._logger = node.get_logger()
+        self._period_s = period_s
+        self._last: dict[str, float] = {}
+
+    def __call__(self, key: str, msg: str) -> None:
+        """Log ``msg`` unless a warning of cause ``key`` was logged less than a period ago."""
+        now = time.monotonic()
+        if now - self._last.get(key, -math.inf) >= self._period_s:
+            self._last[key] = now
+            self._logger.warn(msg)

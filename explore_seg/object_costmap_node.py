@@ -11,7 +11,6 @@ arrive while a frame is processed are dropped (only the newest few are kept for 
 from __future__ import annotations
 
 import collections
-import math
 import time
 from enum import Enum
 from typing import Any
@@ -31,7 +30,7 @@ from explore_seg.core.grid import GridMap, quaternion_from_yaw
 from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D, ObjectMap,
                                       ObjectParams, load_priors, parse_class_ids,
                                       process_frame, wall_mask)
-from explore_seg.node_util import run
+from explore_seg.node_util import WarnThrottle, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS, SENSOR_QOS, map_qos
 
@@ -89,7 +88,7 @@ class ObjectCostmapNode(Node):
         #: Last message per drop reason.
         self.last_drop: dict[str, str] = {}
         self.frames_processed = 0
-        self._last_warn: dict[str, float] = {}
+        self._warn = WarnThrottle(self, _WARN_PERIOD_S)
 
         self._pub_grid = self.create_publisher(OccupancyGrid, "object_costmap", MAP_QOS)
         self._pub_cloud = self.create_publisher(PointCloud2, "object_costmap/cloud", 1)
@@ -134,10 +133,7 @@ class ObjectCostmapNode(Node):
         """Count a dropped input and warn at most every _WARN_PERIOD_S per reason."""
         self.dropped[reason] += 1
         self.last_drop[reason] = detail
-        now = time.monotonic()
-        if now - self._last_warn.get(reason, -math.inf) >= _WARN_PERIOD_S:
-            self._last_warn[reason] = now
-            self.get_logger().warn(f"dropped {reason}: {detail}")
+        self._warn(reason, f"dropped {reason}: {detail}")
 
     def _params_changed(self, old: ObjectParams, new: ObjectParams) -> None:
         self._objects.params = new

@@ -32,7 +32,7 @@ from explore_seg import convert
 from explore_seg.core.grid import GridMap
 from explore_seg.core.segmentation import (IncrementalSegmenter, SegmentationNodeParams,
                                            SegmentationParams)
-from explore_seg.node_util import run
+from explore_seg.node_util import WarnThrottle, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, map_qos
 
@@ -69,7 +69,7 @@ class SegmentationNode(Node):
         self._seg = IncrementalSegmenter(self._algo_params(p))
         self._latest: OccupancyGrid | None = None
         self._state = State.WAITING_FOR_MAP
-        self._last_warn: dict[str, float] = {}
+        self._warn = WarnThrottle(self, _WARN_PERIOD_S)
         #: Number of maps segmented and of maps skipped as stale.
         self.processed = 0
         self.skipped = 0
@@ -104,11 +104,6 @@ class SegmentationNode(Node):
         """The segmenter (its ``last_update_info`` tells what the last update did)."""
         return self._seg
 
-    def _warn(self, key: str, msg: str) -> None:
-        now = time.monotonic()
-        if now - self._last_warn.get(key, -1e18) >= _WARN_PERIOD_S:
-            self._last_warn[key] = now
-            self.get_logger().warn(msg)
 
     def _params_changed(self, old: SegmentationNodeParams,
                         new: SegmentationNodeParams) -> None:

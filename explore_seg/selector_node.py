@@ -37,7 +37,7 @@ from explore_seg.core.frontiers import (Frontier, find_frontiers, object_obstacl
                                          traversable_mask)
 from explore_seg.core.grid import GridMap, resample_array
 from explore_seg.core.selection import Action, Goal, GoalManager, PathGraphs, SelectionParams
-from explore_seg.node_util import run
+from explore_seg.node_util import WarnThrottle, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS, map_qos
 
@@ -84,7 +84,7 @@ class TargetSelectorNode(Node):
         self._done_published: bool | None = None
         self._last_goal_pub_s = -math.inf
         self._region_warned = False
-        self._last_warn: dict[str, float] = {}
+        self._warn = WarnThrottle(self, _WARN_PERIOD_S)
         self.last_reason = ""
         self.goals_sent = 0
 
@@ -125,11 +125,6 @@ class TargetSelectorNode(Node):
         """The goal manager (current goal, blacklist)."""
         return self._manager
 
-    def _warn(self, key: str, msg: str) -> None:
-        now = time.monotonic()
-        if now - self._last_warn.get(key, -math.inf) >= _WARN_PERIOD_S:
-            self._last_warn[key] = now
-            self.get_logger().warn(msg)
 
     def _now_s(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
@@ -245,13 +240,11 @@ class TargetSelectorNode(Node):
                                            f"{geom.frame_id!r} at {geom.resolution_m} m, the map "
                                            f"in {grid.frame_id!r} at {grid.resolution_m} m: "
                                            "ignored until they match")
-            self._labels_dirty = True   # retry with the next map
-            return
+            return  # a new map or new labels mark them dirty again
         if not geom.same_geometry(grid):
             # Labels of a slightly older map (the map grew or shifted since): carry them
             # over cell by cell through world coordinates; new cells get no region (0).
             labels = resample_array(labels, geom, grid, fill=0)
-            self._labels_dirty = True   # take the exact labels as soon as they arrive
         self._labels = labels
 
     def _update_frontiers(self, grid: GridMap) -> float:
