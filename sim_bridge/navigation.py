@@ -36,11 +36,9 @@ from typing import Callable
 import cv2
 import numpy as np
 import numpy.typing as npt
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from explore_seg.core.grid import OCCUPIED_THRESHOLD, GridMap
-from explore_seg.core.paths import SQRT2, extract_path, inflate
+from explore_seg.core.paths import cost_distance_field, extract_path, inflate
 
 
 class NavState(enum.Enum):
@@ -197,67 +195,6 @@ def cost_grid(blocked: npt.NDArray[np.bool_], unknown: npt.NDArray[np.bool_] | N
         cost[unknown] += params.unknown_cost
     cost[lethal] = np.inf
     return cost
-
-
-def cost_distance_field(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
-                        resolution_m: float = 1.0, limit: float = math.inf
-                        ) -> npt.NDArray[np.float64]:
-    """Cheapest 8-connected path cost from ``start_rc`` to every cell.
-
-    A move between neighbours costs ``step length * mean of the two cell costs``; cells
-    with infinite cost are impassable; diagonal moves need both side cells passable (no
-    corner cutting). The start is passable (cost 1 if it was lethal).
-
-    Parameters
-    ----------
-    cost : ndarray of float64, shape (H, W)
-        Per-metre cost, >= 1, ``inf`` = impassable.
-    start_rc : (int, int)
-    resolution_m : float
-        Step length of one cell.
-    limit : float
-        Cells costlier than this are not expanded (reported ``inf``).
-
-    Returns
-    -------
-    ndarray of float64, shape (H, W)
-        ``inf`` for unreachable cells.
-
-    Raises
-    ------
-    ValueError
-        When the start lies outside the grid.
-    """
-    h, w = cost.shape
-    r, c = start_rc
-    if not (0 <= r < h and 0 <= c < w):
-        raise ValueError(f"start cell {start_rc} outside grid of shape {cost.shape}")
-    cst = cost.copy()
-    if not np.isfinite(cst[r, c]):
-        cst[r, c] = 1.0
-    pas = np.isfinite(cst)
-    idx = np.full((h, w), -1, dtype=np.int64)
-    n = int(pas.sum())
-    idx[pas] = np.arange(n)
-    src_l, dst_l, wt_l = [], [], []
-    for dr, dc, step in ((0, 1, 1.0), (1, 0, 1.0), (1, 1, SQRT2), (1, -1, SQRT2)):
-        r0, r1 = max(0, -dr), h - max(0, dr)
-        c0, c1 = max(0, -dc), w - max(0, dc)
-        a = pas[r0:r1, c0:c1]
-        b = pas[r0 + dr:r1 + dr, c0 + dc:c1 + dc]
-        ok = a & b
-        if dr and dc:
-            ok &= pas[r0 + dr:r1 + dr, c0:c1] & pas[r0:r1, c0 + dc:c1 + dc]
-        src_l.append(idx[r0:r1, c0:c1][ok])
-        dst_l.append(idx[r0 + dr:r1 + dr, c0 + dc:c1 + dc][ok])
-        wt_l.append(0.5 * step * resolution_m
-                    * (cst[r0:r1, c0:c1][ok] + cst[r0 + dr:r1 + dr, c0 + dc:c1 + dc][ok]))
-    graph = csr_matrix((np.concatenate(wt_l), (np.concatenate(src_l), np.concatenate(dst_l))),
-                       shape=(n, n))
-    d = dijkstra(graph, directed=False, indices=int(idx[r, c]), limit=limit)
-    out = np.full((h, w), np.inf)
-    out[pas] = d
-    return out
 
 
 def plan_path(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],

@@ -3,8 +3,9 @@
 The object pipeline runs here exactly as the ``object_costmap`` node runs it per frame:
 a simulated RGB-D frame (:class:`sim_bridge.sensors.DepthCamera`) goes through the oracle
 detector, :func:`~explore_seg.core.objects.process_frame` (with the frame's laser scan for
-unclassified objects) and :meth:`~explore_seg.core.objects.ObjectMap.update`; the layer
-is :meth:`~explore_seg.core.objects.ObjectMap.rasterize` on the ground-truth grid.
+unclassified objects and the walls of the 2D map, here the ground-truth lidar map) and
+:meth:`~explore_seg.core.objects.ObjectMap.update`; the layer is
+:meth:`~explore_seg.core.objects.ObjectMap.rasterize` on the ground-truth grid.
 
 * Coverage: the robot is put at viewpoints 1.5-2.5 m from every chair and desk/table of
   ``small_cluttered`` (collision-free, no wall in between, facing the object). Every
@@ -37,7 +38,8 @@ from explore_seg.core.frontiers import (Frontier, find_frontiers, object_obstacl
                                         traversable_mask)
 from explore_seg.core.grid import GridMap
 from explore_seg.core.objects import (DepthFrame, Object3D, ObjectMap, ObjectParams,
-                                      load_priors, points_in_rect, process_frame)
+                                      load_priors, points_in_rect, process_frame,
+                                      wall_mask)
 from explore_seg.core.paths import BlockGraph
 from explore_seg.core.selection import SelectionParams, frontier_distances, select_goal
 from sim_bridge.engine import Collider, SimEngine, SimParams
@@ -199,13 +201,16 @@ def run_pipeline(world: World, gt: GroundTruth, views: list[Viewpoint],
                  lidar_params: LidarParams = LidarParams()) -> PipelineRun:
     """Render, detect (oracle) and fuse one frame per viewpoint, in order, as the node does.
 
-    The transform map <- optical is the frame's own (``rotation``, ``translation``).
+    The transform map <- optical is the frame's own (``rotation``, ``translation``). The
+    2D map whose walls :func:`process_frame` gets (the node: the SLAM map) is the
+    ground-truth lidar map, as after the lidar has mapped the room.
     """
     cam = DepthCamera(world, camera)
     lidar = Lidar(world, lidar_params)
     intrinsics = camera.intrinsics()
     detector = Detector(DetectorParams(backend="oracle"), sim_class_ids=CLASS_IDS)
     priors = load_priors(params.priors_path or None)
+    walls = wall_mask(gt.as_map("lidar"), params)
     run = PipelineRun(ObjectMap(params, priors), np.zeros(len(world.objects), np.int64),
                       np.zeros(gt.lidar.shape, dtype=bool))
     floor_mask = np.zeros((camera.height, camera.width), dtype=bool)
@@ -220,7 +225,7 @@ def run_pipeline(world: World, gt: GroundTruth, views: list[Viewpoint],
         dets = detector.detect(fr.rgb, semantic=fr.semantic, instance=fr.instance)
         t1 = time.perf_counter()
         frame = DepthFrame(fr.depth_m, intrinsics, tf)
-        res = process_frame(frame, dets, priors, params, scan)
+        res = process_frame(frame, dets, priors, params, scan, walls)
         run.object_map.update(res.objects + res.unknown, frame, i * FRAME_PERIOD_NS)
         t2 = time.perf_counter()
         run.detect_ms.append((t1 - t0) * 1e3)
@@ -372,10 +377,6 @@ def test_viewpoints_reach_every_furniture_piece_without_collision(small, tour):
         assert collider.clearance(v.pose[0], v.pose[1])[0] >= sim.robot_radius_m + VIEW_MARGIN_M
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "known gap (issue 7): desks standing against a wall are covered 85-89 % (desk_4, desk_2 "
-    "of small_cluttered): their depth cluster touches the wall and is clipped or rejected; "
-    "strict, so this turns into a failure once it is fixed"))
 def test_layer_covers_every_seen_chair_and_desk(small, tour):
     """Issue 7: >= 90 % of each seen chair / desk footprint (all heights) is in the layer."""
     world, gt = small

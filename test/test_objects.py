@@ -16,7 +16,7 @@ import pytest
 from explore_seg.core.camera import (CameraIntrinsics, apply_transform, base_from_optical,
                                      depth_to_points, invert_transform, map_from_base,
                                      project_points)
-from explore_seg.core.grid import grid_from_ascii
+from explore_seg.core.grid import GridMap, grid_from_ascii
 from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D, ObjectMap,
                                       ObjectParams, SizePrior, box_mask, clamp_to_prior,
                                       euclidean_clusters, fit_box, footprint_iou,
@@ -24,7 +24,7 @@ from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D, Objec
                                       object_from_detection, points_in_rect, process_frame,
                                       scan_legs,
                                       segment_detection, statistical_outlier_mask,
-                                      unknown_objects, voxel_downsample)
+                                      unknown_objects, voxel_downsample, wall_mask)
 
 K = CameraIntrinsics(fx=525.0, fy=525.0, cx=319.5, cy=239.5, width=640, height=480)
 PRIORS = load_priors()
@@ -279,6 +279,7 @@ def test_load_priors_rejects_bad_files(tmp_path, text, match):
     (dict(background_value=-2), "background_value"),
     (dict(camera_z_m=float("inf")), "camera_z_m"),
     (dict(map_frame=""), "map_frame"),
+    (dict(wall_min_length_m=-0.1), "wall_min_length_m"),
 ])
 def test_object_params_validation(kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -360,6 +361,54 @@ def test_cluster_choice_ignores_background_in_the_box():
                                         ObjectParams())
     assert pts[:, 0].max() < 2.3          # no wall point
     np.testing.assert_allclose(obj.center_xyz[:2], (2.0, 0.0), atol=0.05)
+
+
+def desk_at_wall_map(desk, wall_x_m, wall_half_m=0.05):
+    """2D map (0.05 m cells, x 0..4, y -2..2) of a wall (|x - wall_x_m| <= wall_half_m)
+    and the legs of ``desk`` (table_parts), as the lidar maps them."""
+    grid = GridMap(np.zeros((80, 80), np.int8), 0.05, (0.0, -2.0))
+    x, y = grid.cells_to_world(*np.indices(grid.shape))
+    occ = np.abs(x - wall_x_m) <= wall_half_m
+    for (cx, cy, _), _, _ in desk[1:]:
+        occ |= (np.abs(x - cx) <= 0.03) & (np.abs(y - cy) <= 0.03)
+    return grid.with_data(np.where(occ, 100, 0).astype(np.int8))
+
+
+def test_wall_mask_holds_walls_grown_but_not_furniture_legs():
+    desk = table_parts((2.3, 0.0), 1.2, 0.6, 0.75, yaw=math.pi / 2)
+    grid = desk_at_wall_map(desk, 2.7)
+    walls = wall_mask(grid, ObjectParams())
+    legs = np.array([c[:2] for c, _, _ in desk[1:]])
+    assert grid.data[grid.world_to_cells(legs[:, 0], legs[:, 1])].min() == 100
+    assert not walls.on(legs).any()                    # legs are short: kept
+    # the wall and one margin cell (0.05 m) on either side; beyond that free
+    on = walls.on(np.array([[2.7, 0.0], [2.62, 1.5], [2.78, -1.5], [2.55, 0.0], [4.5, 0.0]]))
+    assert on.tolist() == [True, True, True, False, False]
+    every = wall_mask(grid, ObjectParams(wall_min_length_m=0.0, wall_margin_m=0.0))
+    assert every.on(legs).all()
+    assert every.mask.sum() == (grid.data == 100).sum()
+
+
+def test_desk_against_a_wall_gets_its_own_box_with_the_map_walls():
+    """The wall behind a desk shows between its legs and beside it: with the 2D map's
+    walls its points are dropped before clustering, so the box is the desk's."""
+    pose = camera_pose(y=0.3)
+    desk = table_parts((2.3, 0.0), 1.2, 0.6, 0.75, yaw=math.pi / 2)   # x 2.0..2.6
+    wall = [box_parts((2.7, 0.0), (0.1, 6.0, 2.0))]                    # face at x = 2.65
+    frame = DepthFrame(render_depth(desk + wall, pose), K, pose)
+    walls = wall_mask(desk_at_wall_map(desk, 2.7), ObjectParams())
+    res = process_frame(frame, [Det("dining table", project_box(desk, pose))], PRIORS,
+                        ObjectParams(), walls=walls)
+    assert len(res.objects) == 1
+    corners = res.objects[0].footprint()
+    # the desk's front (x = 2.0) and ends (y = +-0.6) are kept; the 0.6 m depth grows to
+    # the prior's 0.75 m away from the camera, i.e. into the wall
+    np.testing.assert_allclose(corners.min(axis=0), (2.0, -0.6), atol=0.04)
+    np.testing.assert_allclose(corners.max(axis=0), (2.75, 0.6), atol=0.04)
+    # the scene does exercise the wall: without the drop the box is pushed off the front
+    off = process_frame(frame, [Det("dining table", project_box(desk, pose))], PRIORS,
+                        ObjectParams(drop_wall_points=False), walls=walls)
+    assert not off.objects or off.objects[0].footprint()[:, 0].min() > 2.1
 
 
 def test_process_frame_skips_unknown_classes_and_reports_bad_boxes():

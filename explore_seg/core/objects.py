@@ -5,7 +5,7 @@ Pipeline (Kim, Kim & Lee, RA-L 2022, Sec. IV-C), per detection of a class with a
 1. crop the depth image by the 2D box (valid depth only, every ``pixel_stride``-th pixel,
    coarser for large boxes: ``max_box_samples``);
 2. back-project to the optical frame and move to the map frame (robot pose + extrinsics);
-3. drop floor and ceiling points, voxel-downsample;
+3. drop floor and ceiling points and points over the 2D map's walls, voxel-downsample;
 4. statistical outlier removal (mean distance to the k nearest neighbours);
 5. Euclidean clustering (connected components of the fixed-radius neighbour graph);
 6. keep the cluster that best matches the box (most points, weighted by closeness to
@@ -158,12 +158,17 @@ class ObjectParams:
         "Re-detections of a class whose centres are closer than this merge", "m"))
     merge_iou: float = field(default=0.2, metadata=_doc(
         "Re-detections whose footprints overlap more than this (IoU) merge", "0..1"))
-    wall_cluster_fraction: float = field(default=0.7, metadata=_doc(
-        "A cluster with at least this share of its points over occupied cells of the 2D "
-        "map (walls seen by the lidar, grown by wall_margin_m) is a wall or door jamb, not "
-        "the detected object (0 = off)", "0..1"))
+    drop_wall_points: bool = field(default=True, metadata=_doc(
+        "Drop the depth points over walls of the 2D map (occupied components at least "
+        "wall_min_length_m long, grown by wall_margin_m) before clustering: a desk against "
+        "a wall then forms its own cluster instead of one merged with the wall, and a door "
+        "jamb is never taken for the detected object"))
+    wall_min_length_m: float = field(default=0.5, metadata=_doc(
+        "Occupied components of the 2D map whose bounding box is shorter than this on both "
+        "sides are furniture legs or bases, not walls: their depth points are kept (the "
+        "legs give a table's extent)", "m"))
     wall_margin_m: float = field(default=0.05, metadata=_doc(
-        "Growth of the map's occupied cells for wall_cluster_fraction", "m"))
+        "Growth of the map's wall cells for drop_wall_points", "m"))
     robot_radius_m: float = field(default=0.22, metadata=_doc(
         "Robot radius: object boxes reaching into the robot's disk are wrong", "m"))
     robot_clear_fraction: float = field(default=1.0, metadata=_doc(
@@ -278,6 +283,9 @@ class ObjectParams:
             raise ValueError(f"prior_reject_factor must be 0 or >= 1, got {self.prior_reject_factor}")
         if not self.wall_margin_m >= 0:
             raise ValueError(f"wall_margin_m must be >= 0, got {self.wall_margin_m}")
+        if not (math.isfinite(self.wall_min_length_m) and self.wall_min_length_m >= 0):
+            raise ValueError(f"wall_min_length_m must be finite and >= 0, "
+                             f"got {self.wall_min_length_m}")
         if not self.robot_radius_m >= 0:
             raise ValueError(f"robot_radius_m must be >= 0, got {self.robot_radius_m}")
         if not self.merge_growth_max >= 1.0:
@@ -984,11 +992,21 @@ def frame_points(frame: DepthFrame, mask: npt.NDArray[np.bool_], max_depth_m: fl
     pixels_uv : ndarray of float64, shape (N, 2)
     depth : ndarray of float32, shape (N,)
     """
-    d = frame.depth_m
+    # Work on the mask's bounding window only (a detection box is a small part of the
+    # image); np.nonzero's row-major order is the same as on the whole image.
+    any_row = np.flatnonzero(mask.any(axis=1))
+    if len(any_row) == 0:
+        empty = np.zeros((0, 2), dtype=np.float64)
+        return np.zeros((0, 3), dtype=np.float64), empty, np.zeros(0, dtype=np.float32)
+    any_col = np.flatnonzero(mask[any_row[0]:any_row[-1] + 1].any(axis=0))
+    r0, c0 = int(any_row[0]), int(any_col[0])
+    win = (slice(r0, int(any_row[-1]) + 1), slice(c0, int(any_col[-1]) + 1))
+    d = frame.depth_m[win]
     with np.errstate(invalid="ignore"):
-        valid = mask & np.isfinite(d) & (d > 0) & (d <= max_depth_m)
+        valid = mask[win] & np.isfinite(d) & (d > 0) & (d <= max_depth_m)
     rows, cols = np.nonzero(valid)
     z = d[rows, cols]
+    rows, cols = rows + r0, cols + c0
     k = frame.intrinsics
     x = (cols - k.cx) * z / k.fx
     y = (rows - k.cy) * z / k.fy
@@ -1047,30 +1065,57 @@ class _Clusters:
 
 @dataclass(frozen=True)
 class WallMask:
-    """Occupied cells of the 2D (lidar) map, grown by ``wall_margin_m``: see
-    :func:`wall_mask`."""
+    """Wall cells of the 2D (lidar) map, grown by ``wall_margin_m``: see :func:`wall_mask`.
+
+    ``mask`` has ``grid``'s shape (H, W), bool.
+    """
 
     grid: GridMap
     mask: npt.NDArray[np.bool_]
 
-    def fraction_on(self, points_xy: npt.NDArray[np.floating]) -> float:
-        """Share of the points (map frame) lying on a wall cell (outside the map: not)."""
-        if len(points_xy) == 0:
-            return 0.0
-        r, c = self.grid.world_to_cells(points_xy[:, 0], points_xy[:, 1])
+    def on(self, points_xy: npt.NDArray[np.floating]) -> npt.NDArray[np.bool_]:
+        """True for the points (map frame, shape (N, 2)) lying on a wall cell; points
+        outside the map are not. Returns shape (N,) bool."""
+        pts = np.asarray(points_xy, dtype=np.float64).reshape(-1, 2)
+        hits = np.zeros(len(pts), dtype=bool)
+        if len(pts) == 0:
+            return hits
+        r, c = self.grid.world_to_cells(pts[:, 0], pts[:, 1])
         ok = (r >= 0) & (r < self.grid.height) & (c >= 0) & (c < self.grid.width)
-        hits = np.zeros(len(r), dtype=bool)
         hits[ok] = self.mask[r[ok], c[ok]]
-        return float(hits.mean())
+        return hits
 
 
 def wall_mask(grid: GridMap, params: ObjectParams, occupied_threshold: int = 65) -> WallMask:
-    """The map's occupied cells grown by ``params.wall_margin_m``.
+    """The walls of a 2D map: its long occupied structures, grown by ``wall_margin_m``.
 
-    A depth cluster lying mostly on them is a wall or door jamb (what the lidar sees as a
-    long obstacle), while chairs and tables stand on free cells but for their thin legs.
+    Occupied cells (``>= occupied_threshold``) form 8-connected components; those whose
+    bounding box is at least ``params.wall_min_length_m`` long on one side are walls (and
+    door jambs, large furniture seen as a long obstacle), smaller ones are the legs or
+    bases of furniture the lidar cuts and are left out. The walls are then grown by
+    ``params.wall_margin_m`` (a depth point on a wall face lies on or next to its cell).
+    :func:`process_frame` drops depth points on them before clustering.
+
+    Parameters
+    ----------
+    grid : GridMap
+        The 2D (lidar / SLAM) map.
+    params : ObjectParams
+    occupied_threshold : int
+        Cells at or above it are occupied.
+
+    Returns
+    -------
+    WallMask
     """
     occ = grid.data >= occupied_threshold
+    if params.wall_min_length_m > 0 and occ.any():
+        _, comp, stats, _ = cv2.connectedComponentsWithStats(occ.astype(np.uint8),
+                                                             connectivity=8)
+        side_cells = np.maximum(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
+        is_wall = side_cells * grid.resolution_m >= params.wall_min_length_m
+        is_wall[0] = False                       # label 0: the unoccupied background
+        occ = is_wall[comp]
     r = int(round(params.wall_margin_m / grid.resolution_m))
     if r > 0 and occ.any():
         occ = cv2.dilate(occ.astype(np.uint8), np.ones((2 * r + 1, 2 * r + 1), np.uint8)) > 0
@@ -1081,6 +1126,10 @@ def _cluster_detection(frame: DepthFrame, box_xyxy: Sequence[float], params: Obj
                        walls: WallMask | None = None) -> _Clusters | None:
     """Steps 1-5 of the pipeline and the cluster ranking for one box (None: too few points).
 
+    With ``walls`` (and ``drop_wall_points``), points over wall cells are dropped with the
+    floor and the ceiling, before the pixel links and the clustering: the object's own
+    points then form a cluster not merged with the wall behind or beside it.
+
     Raises
     ------
     ValueError
@@ -1090,6 +1139,8 @@ def _cluster_detection(frame: DepthFrame, box_xyxy: Sequence[float], params: Obj
     mask = box_mask(box_xyxy, frame.depth_m.shape, stride)
     pts, uv, depth = frame_points(frame, mask, params.max_depth_m)
     keep = (pts[:, 2] >= params.floor_height_m) & (pts[:, 2] <= params.ceiling_height_m)
+    if walls is not None and params.drop_wall_points:
+        keep &= ~walls.on(pts[:, :2])
     pts, uv, depth = pts[keep], uv[keep], depth[keep]
     # Links between neighbouring pixels (grazing surfaces), moved to voxel level.
     k = frame.intrinsics
@@ -1107,9 +1158,6 @@ def _cluster_detection(frame: DepthFrame, box_xyxy: Sequence[float], params: Obj
     labels = euclidean_clusters(pts, params.cluster_tolerance_m, params.min_cluster_points,
                                 new_index[edges])
     ranked = rank_clusters(labels, uv, depth, box_xyxy, params.near_vote_share)
-    if walls is not None and params.wall_cluster_fraction > 0:
-        ranked = [lab for lab in ranked
-                  if walls.fraction_on(pts[labels == lab, :2]) < params.wall_cluster_fraction]
     if not ranked:
         return None
     box = tuple(float(v) for v in np.asarray(box_xyxy, dtype=np.float64).reshape(-1))
@@ -1270,15 +1318,20 @@ def scan_legs(scan_xy: npt.NDArray[np.floating], params: ObjectParams,
     if len(pts) == 0:
         return np.zeros((0, 2))
     labels = euclidean_clusters(pts, params.leg_cluster_gap_m, 1)
+    # Size and width of every cluster at once (walls give many clusters, few are legs).
+    order = np.argsort(labels, kind="stable")
+    counts = np.bincount(labels)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    ptp = np.maximum.reduceat(pts[order], starts) - np.minimum.reduceat(pts[order], starts)
+    widths = np.hypot(ptp[:, 0], ptp[:, 1])
+    candidates = np.flatnonzero((counts >= params.leg_min_points)
+                                & (widths >= params.leg_min_width_m)
+                                & (widths <= params.leg_max_width_m))
     tree = cKDTree(pts)
     centres = []
-    for lab in range(int(labels.max()) + 1):
+    for lab in candidates:
         sel = pts[labels == lab]
-        if len(sel) < params.leg_min_points:
-            continue
-        width = float(np.hypot(*np.ptp(sel, axis=0)))
-        if not params.leg_min_width_m <= width <= params.leg_max_width_m:
-            continue
+        width = float(widths[lab])
         centre = sel.mean(axis=0)
         radius = params.leg_isolation_m + 0.5 * width
         if len(tree.query_ball_point(centre, radius)) > len(sel):
@@ -1807,8 +1860,9 @@ def process_frame(frame: DepthFrame, detections: Iterable[BoxDetection],
     scan_xy_map : ndarray, shape (N, 2), optional
         Laser points in the map frame; None or empty skips unclassified objects.
     walls : WallMask, optional
-        From :func:`wall_mask` of the current 2D map: clusters lying on walls are never
-        taken for a detected object (a chair seen through a doorway is not the jamb).
+        From :func:`wall_mask` of the current 2D map: depth points on walls are dropped
+        before clustering (``drop_wall_points``), so a desk against a wall is not merged
+        with it and a chair seen through a doorway is not the jamb.
 
     Returns
     -------

@@ -106,12 +106,15 @@ def _component_box(pas: npt.NDArray[np.bool_], start_rc: tuple[int, int]
     return lab[y:y + h, x:x + w] == k, y, x
 
 
-def _grid_csr(pas: npt.NDArray[np.bool_], resolution_m: float
+def _grid_csr(pas: npt.NDArray[np.bool_], resolution_m: float,
+              cell_cost: npt.NDArray[np.float64] | None = None
               ) -> tuple[csr_matrix, npt.NDArray[np.int64]]:
     """Directed CSR graph (both directions stored) of the passable cells of ``pas``.
 
     Returns the graph and an (H, W) int64 image of node ids (-1 where not passable).
-    Edges are built row by row in node order, so no sorting is needed.
+    Edges are built row by row in node order, so no sorting is needed. A move costs its
+    length; with ``cell_cost`` (same shape, finite on ``pas``) its length times the mean
+    of the two cells' costs.
     """
     h, w = pas.shape
     n = int(pas.sum())
@@ -122,6 +125,11 @@ def _grid_csr(pas: npt.NDArray[np.bool_], resolution_m: float
     nbr = np.empty((n, 8), dtype=np.int64)
     ok = np.empty((n, 8), dtype=bool)
     wts = np.empty(8, dtype=np.float64)
+    if cell_cost is not None:
+        padc = np.ones((h + 2, w + 2), dtype=np.float64)
+        padc[1:h + 1, 1:w + 1][pas] = cell_cost[pas]
+        own = padc[1:h + 1, 1:w + 1][pas]
+        ecost = np.empty((n, 8), dtype=np.float64)
     for j, (dr, dc, step) in enumerate(_MOVES8):
         sub = idx[1 + dr:h + 1 + dr, 1 + dc:w + 1 + dc][pas]
         good = sub >= 0
@@ -131,11 +139,13 @@ def _grid_csr(pas: npt.NDArray[np.bool_], resolution_m: float
         nbr[:, j] = sub
         ok[:, j] = good
         wts[j] = step * resolution_m
+        if cell_cost is not None:
+            ecost[:, j] = 0.5 * wts[j] * (own + padc[1 + dr:h + 1 + dr, 1 + dc:w + 1 + dc][pas])
     counts = ok.sum(axis=1)
     indptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(counts, out=indptr[1:])
     indices = nbr[ok]
-    data = np.broadcast_to(wts, (n, 8))[ok]
+    data = ecost[ok] if cell_cost is not None else np.broadcast_to(wts, (n, 8))[ok]
     graph = csr_matrix((data, indices, indptr), shape=(n, n))
     return graph, idx[1:h + 1, 1:w + 1]
 
@@ -176,6 +186,63 @@ def distance_field(passable: npt.NDArray[np.bool_], start_rc: tuple[int, int],
     comp, r0, c0 = _component_box(pas, start)
     graph, idx = _grid_csr(comp, resolution_m)
     d = dijkstra(graph, directed=True, indices=int(idx[start[0] - r0, start[1] - c0]))
+    out = np.full(pas.shape, np.inf)
+    sub = out[r0:r0 + comp.shape[0], c0:c0 + comp.shape[1]]
+    sub[comp] = d
+    return out
+
+
+def cost_distance_field(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
+                        resolution_m: float = 1.0, limit: float = math.inf
+                        ) -> npt.NDArray[np.float64]:
+    """Cheapest 8-connected path cost from ``start_rc`` to every cell (weighted
+    :func:`distance_field`).
+
+    A move between neighbours costs ``step length * mean of the two cell costs``; cells
+    with infinite cost are impassable; diagonal moves need both side cells passable (no
+    corner cutting). The start is passable (cost 1 if it was not). Only the start's
+    connected component is searched.
+
+    Parameters
+    ----------
+    cost : ndarray of float64, shape (H, W)
+        Per-metre cost, >= 1 (so costs bound lengths), ``inf`` = impassable.
+    start_rc : (int, int)
+        Start cell (row, col), inside the grid.
+    resolution_m : float
+        Step length of one cell.
+    limit : float
+        Cells costlier than this are not expanded (reported ``inf``).
+
+    Returns
+    -------
+    ndarray of float64, shape (H, W)
+        ``inf`` for unreachable cells.
+
+    Raises
+    ------
+    ValueError
+        When the start lies outside the grid or the resolution is not > 0.
+
+    Examples
+    --------
+    >>> c = np.ones((1, 3)); c[0, 2] = 3.0
+    >>> cost_distance_field(c, (0, 0)).tolist()
+    [[0.0, 1.0, 3.0]]
+    """
+    cost = np.asarray(cost, dtype=np.float64)
+    _check_start(cost, start_rc)
+    _check_resolution(resolution_m)
+    start = (int(start_rc[0]), int(start_rc[1]))
+    if not np.isfinite(cost[start]):
+        cost = cost.copy()
+        cost[start] = 1.0
+    pas = np.isfinite(cost)
+    comp, r0, c0 = _component_box(pas, start)
+    box = cost[r0:r0 + comp.shape[0], c0:c0 + comp.shape[1]]
+    graph, idx = _grid_csr(comp, resolution_m, box)
+    d = dijkstra(graph, directed=True, indices=int(idx[start[0] - r0, start[1] - c0]),
+                 limit=limit)
     out = np.full(pas.shape, np.inf)
     sub = out[r0:r0 + comp.shape[0], c0:c0 + comp.shape[1]]
     sub[comp] = d
