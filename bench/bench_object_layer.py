@@ -10,7 +10,8 @@ layer is ``ObjectMap.rasterize`` on the ground-truth grid (0.05 m).
 
 Printed per world: per object (name, class, most pixels seen in one frame, footprint
 cells = floor projection of all its primitives, covered %), the min / mean coverage over
-the seen objects (>= SEEN_MIN_PX pixels), the false-positive cells (seen free floor
+the seen objects (>= SEEN_MIN_PX pixels), a PASS / FAIL line for issue 7's "every seen
+chair / desk >= 90 % covered", the false-positive cells (seen free floor
 farther than 0.3 m from any object that the layer covers), and p50 / p95 per frame of the
 oracle detection and of process_frame + ObjectMap.update. The column ``union`` is a
 diagnostic: the coverage when every fused box is rasterised on its own and the results
@@ -103,6 +104,9 @@ def bench_world(label: str, world) -> None:
           f"{low} below {100 * MIN_COVERAGE:.0f}%")
     print(f"false positives: {report.false_positive_cells} of {report.free_far_cells} seen free "
           f"cells far from objects ({100 * report.false_positive_share:.2f}%)")
+    verdict = "PASS" if low == 0 else "FAIL"
+    print(f"{verdict}: every seen chair/desk >= {100 * MIN_COVERAGE:.0f}% covered "
+          f"({len(seen) - low} of {len(seen)})")
     # Diagnostics: every box rasterised alone; which boxes make the false positives.
     far_free = free_floor_far(world, gt, run.seen_floor)
     ucov = [union_cov[o.name] for o in seen]

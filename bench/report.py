@@ -278,7 +278,9 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
           "(±0.2 m, any heading), the lidar noise and the oracle detector (10 % misses, 2 px "
           "jitter).",
           "* Completed = coverage >= 99 % of the ground-truth explorable area (free cells "
-          "reachable from the start at the lidar plane). A run also stops when the explorer "
+          "reachable from the start at the lidar plane), coverage being the share of those "
+          "cells the map knows (observed, free or occupied; see `sim_bridge/metrics.py`). "
+          "A run also stops when the explorer "
           "reports exploration done or at the sim time limit (5 s per m² of explorable area, "
           "600..7200 s).",
           "* Strategies: `paper` (eq. 1-3, regions + object costmap), `paper_noseg` (no "
@@ -287,7 +289,11 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
           "their packages would: no object costmap (not in frontiers, selection or planning) "
           "and no regions.",
           "* Robot: TurtleBot3-waffle-sized disk (0.22 m), 1.1 m tall: chair seats and table "
-          "tops are collisions although the 0.17 m lidar plane only sees legs.",
+          "tops are collisions although the 0.17 m lidar plane only sees legs. RGB-D camera "
+          "as on the paper's robot: 0.894 m up, pitched 0.1 rad down. Navigation stand-in: "
+          "grid planner + pure pursuit (arc kept out of the lethal zone); after a collision "
+          "it backs off 0.15 m and replans, twice per goal, before aborting the goal "
+          "(each contact counts as a collision).",
           "* Coverage tour: full-knowledge reference (`sim_bridge/coverage_tour.py`): "
           "viewpoints from a greedy set cover of a 5 m 360° sensor's view, ordered by nearest "
           "neighbour + 2-opt on geodesic distances (paths 0.27 m clear of the footprint "

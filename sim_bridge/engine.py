@@ -137,6 +137,9 @@ class SimParams:
         "abort a goal without 0.5 m progress for this long (0 = off)", "s"))
     nav_goal_timeout_s: float = field(default=NavParams.goal_timeout_s, metadata=_doc(
         "abort a goal after this long (0 = off)", "s"))
+    nav_collision_retries: int = field(default=NavParams.collision_retries, metadata=_doc(
+        "after a collision and the back-up, replan and go on this many times per goal "
+        "before aborting it (0 = abort at the first)"))
     # --- node (clock, publishing)
     lockstep: bool = field(default=False, metadata=_doc(
         "advance lockstep_dt_s of sim time per tick, as fast as ticks come, instead of "
@@ -204,7 +207,8 @@ class SimParams:
             max_linear_speed_mps=self.max_linear_speed_mps,
             max_angular_speed_radps=self.max_angular_speed_radps,
             progress_timeout_s=self.nav_progress_timeout_s,
-            goal_timeout_s=self.nav_goal_timeout_s)
+            goal_timeout_s=self.nav_goal_timeout_s,
+            collision_retries=self.nav_collision_retries)
 
     def mapping_params(self) -> MappingParams:
         """The mapper's parameters."""
@@ -701,7 +705,7 @@ class SimEngine:
             self._backup_dir = -1.0 if v >= 0.0 else 1.0
         else:
             self._backup_left_m = 0.0
-        self._nav.abort(f"collision with {obj or cls} ({part})")
+        self._nav.recover(f"collision with {obj or cls} ({part})", self._time_s, self._pose)
         self._track_nav_outcome()
         if self._in_contact:
             return

@@ -119,6 +119,10 @@ class NavParams:
         "doc": "abort when no progress for this long (0 = off)", "unit": "s"})
     goal_timeout_s: float = field(default=600.0, metadata={
         "doc": "abort a goal after this much sim time (0 = off)", "unit": "s"})
+    collision_retries: int = field(default=2, metadata={
+        "doc": "after a collision (and the engine's back-up) replan and go on, this many "
+               "times per goal, before aborting it (Nav2's navigate_to_pose tree retries "
+               "its planner/controller after recoveries); 0 = abort at the first"})
 
     def __post_init__(self) -> None:
         positive = ("robot_radius_m", "lookahead_m", "max_linear_speed_mps",
@@ -149,11 +153,17 @@ class NavParams:
             raise ValueError(f"occupied_threshold must be in 1..100, got {self.occupied_threshold}")
         if not 1 <= self.plan_downsample <= 8:
             raise ValueError(f"plan_downsample must be in 1..8, got {self.plan_downsample}")
+        if not self.collision_retries >= 0:
+            raise ValueError(f"collision_retries must be >= 0, got {self.collision_retries}")
 
     @property
     def lethal_radius_m(self) -> float:
         """Cells closer than this to an obstacle are never planned through."""
         return self.robot_radius_m + self.inflation_margin_m
+
+
+#: The pure-pursuit arc check skips this much of the arc next to the robot (m).
+ARC_FREE_START_M = 0.1
 
 
 def wrap_angle(a: float) -> float:
@@ -281,6 +291,9 @@ class Navigator:
         self._final_turn = False
         self._target_xy: tuple[float, float] | None = None
         self._plan_version = 0
+        self._retries_left = 0
+        self._plan_cost: npt.NDArray[np.float64] | None = None
+        self._plan_grid: GridMap | None = None
 
     # ---------------------------------------------------------------- inputs
     @property
@@ -367,6 +380,7 @@ class Navigator:
         self._need_plan = True
         self._final_turn = False
         self._target_xy = None
+        self._retries_left = self.params.collision_retries
 
     def cancel(self, reason: str = "canceled") -> None:
         """Cancel the active goal (no-op otherwise)."""
@@ -377,6 +391,24 @@ class Navigator:
         """Abort the active goal (e.g. after a collision)."""
         if self._status.state is NavState.ACTIVE:
             self._finish(NavState.ABORTED, reason)
+
+    def recover(self, reason: str, now_s: float, pose: tuple[float, float, float]) -> bool:
+        """After a collision: replan from ``pose`` at the next update and go on while
+        ``collision_retries`` are left for this goal (True), else abort it (False).
+        The progress checker restarts at ``pose``. No-op (False) without an active goal."""
+        if self._status.state is not NavState.ACTIVE:
+            return False
+        if self._retries_left <= 0:
+            self._finish(NavState.ABORTED, reason)
+            return False
+        self._retries_left -= 1
+        self._plan_xy = np.zeros((0, 2))
+        self._plan_version += 1
+        self._plan_index = 0
+        self._need_plan = True
+        self._final_turn = False
+        self._progress_xy, self._progress_s = (pose[0], pose[1]), now_s
+        return True
 
     def _finish(self, state: NavState, reason: str) -> None:
         self._status = NavStatus(state, reason, self._status.goal)
@@ -429,6 +461,7 @@ class Navigator:
             return False
         cost = self._cost(grid)
         self._escape_start(cost, start, res)
+        self._plan_cost, self._plan_grid = cost, grid
         k = p.plan_downsample
         coarse, s_rc, g_rc = _coarsen(cost, start, goal, k)
         known = grid.data >= 0
@@ -591,7 +624,12 @@ class Navigator:
         rest = path[self._plan_index:]
         dr = np.hypot(rest[:, 0] - x, rest[:, 1] - y)
         beyond = np.nonzero(dr >= p.lookahead_m)[0]
-        tx, ty = rest[beyond[0]] if beyond.size else rest[-1]
+        k = int(beyond[0]) if beyond.size else len(rest) - 1
+        # A lookahead point behind an obstacle corner would make the arc cut the corner:
+        # step back along the plan to the farthest point whose arc stays clear.
+        while k > 1 and not self._arc_clear(pose, rest[k]):
+            k -= 1
+        tx, ty = rest[k]
         alpha = wrap_angle(math.atan2(ty - y, tx - x) - yaw)
         if abs(alpha) > p.rotate_in_place_angle_rad:
             return 0.0, _clip(p.heading_gain * alpha, p.max_angular_speed_radps)
@@ -603,6 +641,36 @@ class Navigator:
             v = min(v, p.max_angular_speed_radps / abs(curvature))
         w = _clip(v * curvature, p.max_angular_speed_radps)
         return v, w
+
+
+    def _arc_clear(self, pose: tuple[float, float, float], target: npt.NDArray[np.float64]
+                   ) -> bool:
+        """True when the pure-pursuit arc from ``pose`` to ``target`` keeps out of the
+        lethal zone of the cost grid of the current plan (its first ``ARC_FREE_START_M``
+        are not checked: the robot may stand in the margin after a back-up)."""
+        cost, grid = self._plan_cost, self._plan_grid
+        if cost is None or grid is None:
+            return True
+        x, y, yaw = pose
+        ld = math.hypot(target[0] - x, target[1] - y)
+        if ld <= ARC_FREE_START_M:
+            return True
+        alpha = wrap_angle(math.atan2(target[1] - y, target[0] - x) - yaw)
+        if abs(alpha) > self.params.rotate_in_place_angle_rad:
+            return True          # turned in place first, then driven almost straight
+        kappa = 2.0 * math.sin(alpha) / ld
+        length = ld if abs(alpha) < 1e-6 else ld * alpha / math.sin(alpha)
+        s = np.arange(ARC_FREE_START_M, length + 1e-9, 0.5 * grid.resolution_m)
+        if abs(kappa) < 1e-9:
+            px, py = x + s * math.cos(yaw), y + s * math.sin(yaw)
+        else:
+            px = x + (np.sin(yaw + kappa * s) - math.sin(yaw)) / kappa
+            py = y - (np.cos(yaw + kappa * s) - math.cos(yaw)) / kappa
+        r, c = grid.world_to_cells(px, py)
+        ok = (r >= 0) & (r < cost.shape[0]) & (c >= 0) & (c < cost.shape[1])
+        if not ok.all():
+            return False
+        return bool(np.isfinite(cost[r, c]).all())
 
 
 def _clip(v: float, limit: float) -> float:

@@ -98,6 +98,10 @@ def make_frontier(fid: int, cells, point_rc, grid: GridMap, passable: bool = Tru
                     (float(gx[0]), float(gy[0])), cells)
 
 
+#: The default beta (the formulas below use it).
+B = SelectionParams().beta
+
+
 def two_frontiers(sizes=(10, 30)):
     g = GridMap(np.zeros((60, 60), np.int8), 0.05, (0.0, 0.0))
     f0 = make_frontier(0, [(5, c) for c in range(10, 10 + sizes[0])], (6, 12), g)
@@ -109,7 +113,7 @@ def two_frontiers(sizes=(10, 30)):
 
 
 @pytest.mark.parametrize("strategy,expected", [
-    ("paper", [0.25 + 0.01 / 0.25, 0.75 + 0.01 / 0.75 + 1.0]),
+    ("paper", [0.25 + B / 0.25, 0.75 + B / 0.75 + 1.0]),
     ("nearest", [1.0, 3.0]),
     ("explore_lite", [3.0 * 1.0 - 10 * 0.05, 3.0 * 3.0 - 30 * 0.05]),
 ])
@@ -125,7 +129,7 @@ def test_unreachable_frontier_costs_inf_and_leaves_the_normalisation():
     costs = compute_costs(fr + [f2], [1.0, 3.0, np.inf], labels, 1, SelectionParams())
     assert np.isinf(costs[2])
     # sizeGain counts every candidate (42 cells), distGain only the reachable ones
-    assert costs[:2].tolist() == pytest.approx([0.25 + 0.01 * 42 / 10, 0.75 + 0.01 * 42 / 30 + 1])
+    assert costs[:2].tolist() == pytest.approx([0.25 + B * 42 / 10, 0.75 + B * 42 / 30 + 1])
 
 
 def test_non_passable_cpoint_costs_inf():
@@ -139,7 +143,7 @@ def test_frontier_without_region_counts_as_same_region():
     _, fr, labels = two_frontiers()
     labels[40:] = 0
     costs = compute_costs(fr, [1.0, 3.0], labels, 1, SelectionParams())
-    assert costs[1] == pytest.approx(0.75 + 0.01 / 0.75)
+    assert costs[1] == pytest.approx(0.75 + B / 0.75)
 
 
 def test_all_unreachable_selects_nothing():

@@ -152,15 +152,32 @@ def test_automatic_back_off_makes_the_next_push_a_new_contact():
     assert eng.metrics.n_collisions == 2
 
 
-def test_collision_aborts_the_active_goal():
-    eng = SimEngine(room_world(bench(3.0, 2.0)), SimParams(**FAST))
+@pytest.mark.parametrize("retries", [0, 2])
+def test_collision_aborts_the_active_goal_after_the_retries(retries):
+    eng = SimEngine(room_world(bench(3.0, 2.0)),
+                    SimParams(nav_collision_retries=retries, **FAST))
     eng.step(0.1)
     eng.set_goal(5.0, 2.0, 0.0)       # straight under the seat the lidar cannot see
-    eng.run_until(lambda e: e.nav_status.state is not NavState.ACTIVE, 60.0)
+    eng.run_until(lambda e: e.nav_status.state is not NavState.ACTIVE, 120.0)
     assert eng.nav_status.state is NavState.ABORTED
     assert "collision with bench_1" in eng.nav_status.reason
-    assert eng.metrics.n_collisions == 1 and eng.metrics.goals_aborted == 1
-    assert eng.metrics.collisions[0].x_m == pytest.approx(3.0 - 0.25 - 0.22, abs=0.01)
+    # Every retry backs off, replans the same lane and bumps into the seat again.
+    assert eng.metrics.n_collisions == retries + 1 and eng.metrics.goals_aborted == 1
+    for ev in eng.metrics.collisions:
+        assert ev.x_m == pytest.approx(3.0 - 0.25 - 0.22, abs=0.01)
+
+
+def test_after_a_collision_with_retries_left_the_goal_stays_active_and_is_replanned():
+    eng = SimEngine(room_world(bench(3.0, 2.0)), SimParams(nav_collision_retries=1, **FAST))
+    eng.step(0.1)
+    eng.set_goal(5.0, 2.0, 0.0)
+    eng.run_until(lambda e: e.metrics.n_collisions == 1, 60.0)
+    plans = eng.navigator.plan_count
+    assert eng.nav_status.state is NavState.ACTIVE and eng.backing_up
+    eng.run_until(lambda e: not e.backing_up, 10.0)
+    eng.step(0.5)
+    assert eng.navigator.plan_count > plans              # replanned from the new pose
+    assert eng.nav_status.state is NavState.ACTIVE and eng.velocity[0] > 0.0
 
 
 # --------------------------------------------------------------------- mapping

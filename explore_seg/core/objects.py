@@ -10,10 +10,13 @@ Pipeline (Kim, Kim & Lee, RA-L 2022, Sec. IV-C), per detection of a class with a
 5. Euclidean clustering (connected components of the fixed-radius neighbour graph);
 6. keep the cluster that best matches the box (most points, weighted by closeness to
    the box centre; ties to the nearest median depth), plus clusters that lie inside its
-   clamped box (parts split at thin links);
+   clamped box (parts split at thin links); clusters far larger than the class (a wall,
+   a neighbour) or far smaller (a leg, a fragment: ``min_extent_fraction``) are not taken;
 7. 3D box: footprint orientation by the minimum-area rectangle (default) or PCA (the
    paper), extents by min/max along the footprint axes, heights from the floor (or the
-   lowest point) to the top;
+   lowest point) to the top. Where the view cuts the object (image border, an occluder
+   in front) the outline is the view's: those hull edges do not orient the box, and the
+   box's sides there are marked open (the object reaches at least that far);
 8. clamp the extents by the class's size prior: grown to the minimum away from the camera
    (the hidden side), shrunk to the maximum around the centre.
 
@@ -23,9 +26,10 @@ lidar plane over such a group (inside the legs' rectangle grown by a radius, in 
 band) give the footprint of an ``"unknown"`` object, so a table whose legs the lidar sees
 and whose top it misses becomes an obstacle.
 
-:class:`ObjectMap` fuses the per-frame boxes in the map frame (merging re-detections,
-counting misses where the camera sees through an object, bounded size) and renders the
-occupancy layer, the virtual point cloud and the boxes.
+:class:`ObjectMap` fuses the per-frame boxes in the map frame (merging re-detections by
+their measured footprints, :func:`fuse_boxes`: partial views add up, noise and the sides
+grown by the prior do not; counting misses where the camera sees through an object) and
+renders the occupancy layer, the virtual point cloud and the boxes.
 
 Frames: ``map`` (x, y on the floor, z up, z = 0 at the floor), ``base_link`` on the floor
 at the robot pose, camera optical frame (see :mod:`explore_seg.core.camera`).
@@ -177,8 +181,19 @@ class ObjectParams:
     prior_reject_factor: float = field(default=1.2, metadata=_doc(
         "Drop a detection whose cluster footprint or height exceeds this factor times its "
         "class prior's maximum (0 = never drop, only clamp)"))
+    min_extent_fraction: float = field(default=0.5, metadata=_doc(
+        "A cluster whose footprint's longer side is below this fraction of its class "
+        "prior's min_xy_m is a fragment (a leg, a corner at the image border) and is not "
+        "taken for the object: it gives neither the orientation nor the extent, and growing "
+        "it to the prior places the box at random (0 = never)", "0..1"))
     merge_growth_max: float = field(default=1.25, metadata=_doc(
         "Largest growth factor of a fused box's size per merged observation (>= 1)"))
+    merge_extend_margin_m: float = field(default=0.05, metadata=_doc(
+        "Fusion of the measured footprints (see fuse_boxes): a re-detection measuring the "
+        "same extent along an axis (within this, both sides seen) is averaged with the "
+        "box, noise does not inflate it; otherwise a side farther out than the box's by "
+        "more than this extends it (another part seen), sides within it are averaged, and "
+        "sides where the view was cut only push outwards", "m"))
     max_objects: int = field(default=200, metadata=_doc(
         "Most objects kept; the least confirmed are dropped first"))
     clear_after_misses: int = field(default=3, metadata=_doc(
@@ -264,7 +279,7 @@ class ObjectParams:
             v = getattr(self, name)
             if not math.isfinite(v):
                 raise ValueError(f"{name} must be finite, got {v}")
-        fractions = ("min_score", "merge_iou", "miss_free_fraction",
+        fractions = ("min_score", "merge_iou", "miss_free_fraction", "min_extent_fraction",
                      "merge_parts_fraction", "unknown_top_fraction", "near_vote_share", "robot_clear_fraction",
                      "unknown_min_top_cover")
         for name in fractions:
@@ -288,6 +303,9 @@ class ObjectParams:
                              f"got {self.wall_min_length_m}")
         if not self.robot_radius_m >= 0:
             raise ValueError(f"robot_radius_m must be >= 0, got {self.robot_radius_m}")
+        if not (math.isfinite(self.merge_extend_margin_m) and self.merge_extend_margin_m >= 0):
+            raise ValueError(f"merge_extend_margin_m must be finite and >= 0, "
+                             f"got {self.merge_extend_margin_m}")
         if not self.merge_growth_max >= 1.0:
             raise ValueError(f"merge_growth_max must be >= 1, got {self.merge_growth_max}")
         if not self.unknown_top_band_m > 0:
@@ -456,6 +474,16 @@ class Object3D:
         Rotation of the box about z (radians), normalised to [-pi/2, pi/2).
     n_points : int
         Points the box was fitted to.
+    measured_xy : tuple of 4 float, optional
+        The footprint the points themselves span, before the size prior grew or shrank it:
+        centre (x, y) and extents along the box's x and y axes (same ``yaw``). None when
+        unknown (the box is then taken as measured). :class:`ObjectMap` fuses these, so
+        that parts of an object seen from different sides add up while the sides grown by
+        the prior (hidden, not seen) do not.
+    open_sides : tuple of 4 bool
+        Sides of ``measured_xy`` (-x, +x, -y, +y in the box frame) where the view, not the
+        object, ended (image border, an occluder in front): the object reaches at least
+        that far. Closed sides are the object's own.
     """
 
     cls: str
@@ -464,6 +492,8 @@ class Object3D:
     size_xyz: tuple[float, float, float]
     yaw: float
     n_points: int
+    measured_xy: tuple[float, float, float, float] | None = None
+    open_sides: tuple[bool, bool, bool, bool] = (False, False, False, False)
 
     def footprint(self) -> npt.NDArray[np.float64]:
         """The 4 corners (x, y) of the footprint, counter-clockwise, shape (4, 2)."""
@@ -820,7 +850,8 @@ def select_cluster(labels: npt.NDArray[np.integer], pixels_uv: npt.NDArray[np.fl
     return ranked[0] if ranked else -1
 
 
-def footprint_orientation(points_xy: npt.NDArray[np.floating], method: str = "min_area_rect"
+def footprint_orientation(points_xy: npt.NDArray[np.floating], method: str = "min_area_rect",
+                          cut: npt.NDArray[np.bool_] | None = None
                           ) -> tuple[tuple[float, float], tuple[float, float], float]:
     """Oriented rectangle around footprint points.
 
@@ -831,6 +862,13 @@ def footprint_orientation(points_xy: npt.NDArray[np.floating], method: str = "mi
         ``"min_area_rect"``: the minimum-area enclosing rectangle (exact for rectangular
         furniture); ``"pca"``: axes from the principal components of the points (the
         paper; biased when the footprint is sampled unevenly or seen in part).
+    cut : ndarray of bool, shape (N,), optional
+        ``"min_area_rect"`` only: points where the view cuts the object (image border, an
+        occluder in front; :func:`view_cut`). A convex-hull edge between two such points
+        is the trace of the view, not a side of the object (a desk top cut by the side of
+        the image ends along the ray of that side, and the smallest rectangle turns with
+        it); the orientation then comes from the other hull edges, the object's own
+        outline (see ``_min_area_yaw``).
 
     Returns
     -------
@@ -860,8 +898,7 @@ def footprint_orientation(points_xy: npt.NDArray[np.floating], method: str = "mi
     if method not in _ORIENTATION_METHODS:
         raise ValueError(f"method must be one of {_ORIENTATION_METHODS}, got {method!r}")
     if method == "min_area_rect" and len(pts) >= 3:
-        (rcx, rcy), (w, h), ang = cv2.minAreaRect(pts.astype(np.float32))
-        yaw = math.radians(ang)
+        yaw = _min_area_yaw(pts, cut)
     elif len(pts) >= 2:
         mean = pts.mean(axis=0)
         cov = np.cov((pts - mean).T)
@@ -880,6 +917,39 @@ def footprint_orientation(points_xy: npt.NDArray[np.floating], method: str = "mi
     if size_u < size_v:     # canonical: x along the long side
         size_u, size_v, yaw = size_v, size_u, _wrap_half_pi(yaw + 0.5 * math.pi)
     return (float(center[0]), float(center[1])), (size_u, size_v), yaw
+
+
+def _min_area_yaw(pts: npt.NDArray[np.float64], cut: npt.NDArray[np.bool_] | None) -> float:
+    """Direction of a side of the rectangle around ``pts`` (N >= 3), see
+    :func:`footprint_orientation`.
+
+    Without cut points: the minimum-area rectangle. With them, the footprint's outline is
+    partly the view's (an image border's or occluder's trace, along a ray or across the
+    view) and the smallest rectangle follows that outline; the object's own outline is the
+    convex-hull edges not between two cut points, and on a rectangular object these run
+    along two perpendicular directions: the direction (modulo 90 degrees, 2-degree bins,
+    +-1 bin) holding the most length of them wins, refined by their length-weighted mean.
+    Less than 0.2 m of own outline: the minimum-area rectangle.
+    """
+    if cut is None or not np.any(cut):
+        return math.radians(cv2.minAreaRect(pts.astype(np.float32))[2])
+    hull = cv2.convexHull(pts.astype(np.float32), returnPoints=False).reshape(-1)
+    cut = np.asarray(cut, dtype=bool)
+    nxt = np.roll(hull, -1)
+    own = ~(cut[hull] & cut[nxt])
+    edge = pts[nxt[own]] - pts[hull[own]]
+    length = np.hypot(edge[:, 0], edge[:, 1])
+    if len(hull) < 3 or length.sum() < 0.2:
+        return math.radians(cv2.minAreaRect(pts.astype(np.float32))[2])
+    ang = np.mod(np.arctan2(edge[:, 1], edge[:, 0]), 0.5 * math.pi)
+    n_bins = 45
+    hist = np.bincount(np.minimum((ang / (0.5 * math.pi) * n_bins).astype(np.int64), n_bins - 1),
+                       weights=length, minlength=n_bins)
+    smooth = hist + np.roll(hist, 1) + np.roll(hist, -1)
+    peak = (int(np.argmax(smooth)) + 0.5) * 0.5 * math.pi / n_bins
+    diff = np.mod(ang - peak + 0.25 * math.pi, 0.5 * math.pi) - 0.25 * math.pi
+    near = np.abs(diff) <= 1.5 * 0.5 * math.pi / n_bins
+    return float(peak + np.sum(diff[near] * length[near]) / np.sum(length[near]))
 
 
 def _wrap_half_pi(yaw: float) -> float:
@@ -940,7 +1010,8 @@ def clamp_to_prior(center_xyz: Sequence[float], size_xyz: Sequence[float], yaw: 
 
 def fit_box(points_map: npt.NDArray[np.floating], cls: str, score: float,
             prior: SizePrior | None, params: ObjectParams,
-            camera_xy: Sequence[float] | None = None) -> Object3D:
+            camera_xy: Sequence[float] | None = None,
+            cut: npt.NDArray[np.bool_] | None = None) -> Object3D:
     """3D box of a cluster in the map frame, clamped by the class's prior.
 
     Parameters
@@ -954,6 +1025,8 @@ def fit_box(points_map: npt.NDArray[np.floating], cls: str, score: float,
         ``orientation_method`` and ``boxes_on_floor`` are used.
     camera_xy : sequence of 2 float, optional
         Camera position (map frame): footprints grow away from it.
+    cut : ndarray of bool, shape (N,), optional
+        Points seen at the image border (see :func:`footprint_orientation`).
 
     Returns
     -------
@@ -967,7 +1040,7 @@ def fit_box(points_map: npt.NDArray[np.floating], cls: str, score: float,
     pts = np.asarray(points_map, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0:
         raise ValueError(f"points_map must have shape (N>=1, 3), got {pts.shape}")
-    cxy, sxy, yaw = footprint_orientation(pts[:, :2], params.orientation_method)
+    cxy, sxy, yaw = footprint_orientation(pts[:, :2], params.orientation_method, cut)
     zmin = 0.0 if params.boxes_on_floor else float(pts[:, 2].min())
     zmax = max(float(pts[:, 2].max()), zmin)
     center = (cxy[0], cxy[1], 0.5 * (zmin + zmax))
@@ -975,7 +1048,28 @@ def fit_box(points_map: npt.NDArray[np.floating], cls: str, score: float,
     if prior is not None:
         center, size = clamp_to_prior(center, size, yaw, prior, camera_xy,
                                       0.0 if params.boxes_on_floor else None)
-    return Object3D(cls, float(score), tuple(center), tuple(size), yaw, int(len(pts)))
+    open_sides = (False, False, False, False)
+    if cut is not None and np.any(cut):
+        open_sides = _open_sides(pts[:, :2], np.asarray(cut, dtype=bool), cxy, sxy, yaw,
+                                 0.5 * params.cluster_tolerance_m)
+    return Object3D(cls, float(score), tuple(center), tuple(size), yaw, int(len(pts)),
+                    (float(cxy[0]), float(cxy[1]), float(sxy[0]), float(sxy[1])), open_sides)
+
+
+def _open_sides(points_xy: npt.NDArray[np.float64], cut: npt.NDArray[np.bool_],
+                center_xy: Sequence[float], size_xy: Sequence[float], yaw: float,
+                band_m: float) -> tuple[bool, bool, bool, bool]:
+    """Sides (-x, +x, -y, +y) of a fitted rectangle formed mostly (>= half) by cut points
+    (those within ``band_m`` of the side)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    dx, dy = points_xy[:, 0] - center_xy[0], points_xy[:, 1] - center_xy[1]
+    coords = (dx * c + dy * s, -dx * s + dy * c)
+    out = []
+    for i in range(2):
+        for sign in (-1.0, 1.0):
+            near = sign * coords[i] >= 0.5 * float(size_xy[i]) - band_m
+            out.append(bool(np.any(near) and np.mean(cut[near]) >= 0.5))
+    return (out[0], out[1], out[2], out[3])
 
 
 # ----------------------------------------------------------------- per frame
@@ -1041,7 +1135,7 @@ def segment_detection(frame: DepthFrame, box_xyxy: Sequence[float], cls: str,
     ValueError
         When the box is malformed or outside the image (see :func:`box_mask`).
     """
-    seg = _cluster_detection(frame, box_xyxy, params)
+    seg = _cluster_detection(frame, box_xyxy, params, prior=prior)
     if seg is None:
         return None
     for lab in seg.ranked:
@@ -1123,12 +1217,16 @@ def wall_mask(grid: GridMap, params: ObjectParams, occupied_threshold: int = 65)
 
 
 def _cluster_detection(frame: DepthFrame, box_xyxy: Sequence[float], params: ObjectParams,
-                       walls: WallMask | None = None) -> _Clusters | None:
+                       walls: WallMask | None = None, prior: SizePrior | None = None
+                       ) -> _Clusters | None:
     """Steps 1-5 of the pipeline and the cluster ranking for one box (None: too few points).
 
     With ``walls`` (and ``drop_wall_points``), points over wall cells are dropped with the
     floor and the ceiling, before the pixel links and the clustering: the object's own
-    points then form a cluster not merged with the wall behind or beside it.
+    points then form a cluster not merged with the wall behind or beside it. With
+    ``prior``, clusters of implausible extent (:func:`plausible_extent`: far larger than
+    the class, or a fragment of it) are left out of the ranking, so that they are neither
+    taken for the object nor contested between two detections.
 
     Raises
     ------
@@ -1158,6 +1256,8 @@ def _cluster_detection(frame: DepthFrame, box_xyxy: Sequence[float], params: Obj
     labels = euclidean_clusters(pts, params.cluster_tolerance_m, params.min_cluster_points,
                                 new_index[edges])
     ranked = rank_clusters(labels, uv, depth, box_xyxy, params.near_vote_share)
+    if prior is not None:
+        ranked = [lab for lab in ranked if plausible_extent(pts[labels == lab], prior, params)]
     if not ranked:
         return None
     box = tuple(float(v) for v in np.asarray(box_xyxy, dtype=np.float64).reshape(-1))
@@ -1173,7 +1273,11 @@ def _fit_cluster(seg: _Clusters, best: int, frame: DepthFrame, cls: str, score: 
     chosen = labels == best
     if prior is not None and not plausible_extent(pts[chosen], prior, params):
         return None  # cluster merged with a wall or a neighbour: clamping would misplace it
-    obj = fit_box(pts[chosen], cls, score, prior, params, cam_xy)
+    # Where the view cuts the object (image border, something in front): not its sides.
+    cut = view_cut(frame, seg.uv, seg.depth,
+                   box_stride(seg.box_xyxy, params.pixel_stride, params.max_box_samples),
+                   params.cluster_tolerance_m)
+    obj = fit_box(pts[chosen], cls, score, prior, params, cam_xy, cut[chosen])
     if params.merge_parts_fraction < 1.0 and labels.max() > 0:
         # Other parts of the same object (split at thin links) lie in the clamped box.
         lab = labels[labels >= 0]
@@ -1182,11 +1286,50 @@ def _fit_cluster(seg: _Clusters, best: int, frame: DepthFrame, cls: str, score: 
         frac = np.bincount(lab, weights=inside) / np.bincount(lab)
         parts = np.flatnonzero(frac >= params.merge_parts_fraction)
         if len(parts) > 1 or (len(parts) == 1 and parts[0] != best):
-            merged = np.isin(labels, np.union1d(parts, [best]))
+            # Only the parts' points inside the box join: a cluster half inside (the edge
+            # of a desk top beside a chair) must not stretch or turn the box.
+            merged = labels == best
+            merged[labels >= 0] |= np.isin(lab, parts) & inside
             if prior is None or plausible_extent(pts[merged], prior, params):
                 chosen = merged
-                obj = fit_box(pts[chosen], cls, score, prior, params, cam_xy)
+                obj = fit_box(pts[chosen], cls, score, prior, params, cam_xy, cut[chosen])
     return obj, pts[chosen], seg.depth[chosen]
+
+
+def view_cut(frame: DepthFrame, pixels_uv: npt.NDArray[np.floating],
+             depth_m: npt.NDArray[np.floating], step_px: int, margin_m: float
+             ) -> npt.NDArray[np.bool_]:
+    """Points where the view, not the object, ends: at the image border or beside a
+    nearer surface (an occluder).
+
+    Parameters
+    ----------
+    frame : DepthFrame
+    pixels_uv : ndarray, shape (N, 2)
+        Pixel (column, row) of each point.
+    depth_m : ndarray, shape (N,)
+        Optical depth of each point.
+    step_px : int
+        The sampling step: a point within ``step_px`` of the border, or whose pixel
+        ``step_px`` away (left, right, up, down) is nearer by more than ``margin_m``, is cut.
+    margin_m : float
+
+    Returns
+    -------
+    ndarray of bool, shape (N,)
+    """
+    k = frame.intrinsics
+    uv = np.asarray(pixels_uv, dtype=np.int64).reshape(-1, 2)
+    z = np.asarray(depth_m, dtype=np.float64).reshape(-1)
+    step = max(int(step_px), 1)
+    u, v = uv[:, 0], uv[:, 1]
+    cut = (u <= step) | (u >= k.width - 1 - step) | (v <= step) | (v >= k.height - 1 - step)
+    d = frame.depth_m
+    for du, dv in ((step, 0), (-step, 0), (0, step), (0, -step)):
+        nd = d[np.clip(v + dv, 0, k.height - 1), np.clip(u + du, 0, k.width - 1)]
+        with np.errstate(invalid="ignore"):
+            cut |= np.isfinite(nd) & (nd > 0) & (nd < z - margin_m)
+    return cut
 
 
 def _voxel_keys(points: npt.NDArray[np.floating], voxel_m: float) -> npt.NDArray[np.int64]:
@@ -1252,19 +1395,31 @@ def _assign_clusters(segs: list[_Clusters | None], params: ObjectParams) -> list
 
 def plausible_extent(points_map: npt.NDArray[np.floating], prior: SizePrior,
                      params: ObjectParams) -> bool:
-    """False when a cluster is far larger than its class can be.
+    """False when a cluster is far larger or far smaller than its class can be.
 
     The footprint (minimum-area rectangle) or height exceeding ``prior_reject_factor``
     times the prior's maximum means the cluster took in a wall or a neighbouring object;
     clamping such a cluster to the prior would still place the box wrongly, so the
     observation is dropped. ``prior_reject_factor`` 0 disables the test.
+
+    A footprint whose longer side is below ``min_extent_fraction`` times the prior's
+    ``min_xy_m`` is a fragment (a table leg, a chair leg in front of the chair, the corner
+    of a top cut by the image border): its minimum-area rectangle has an arbitrary
+    orientation, and growing it to the prior's minimum puts the box anywhere around it.
+    ``min_extent_fraction`` 0 disables this test.
     """
-    if params.prior_reject_factor <= 0 or len(points_map) == 0:
+    if len(points_map) == 0:
+        return True
+    f, g = params.prior_reject_factor, params.min_extent_fraction
+    if f <= 0 and g <= 0:
         return True
     pts = np.asarray(points_map, dtype=np.float64)
     _, sxy, _ = footprint_orientation(pts[:, :2], params.orientation_method)
+    if g > 0 and max(sxy) < g * prior.min_xy_m:
+        return False
+    if f <= 0:
+        return True
     height = float(pts[:, 2].max() - (0.0 if params.boxes_on_floor else pts[:, 2].min()))
-    f = params.prior_reject_factor
     return max(sxy) <= f * prior.max_xy_m and height <= f * prior.max_z_m
 
 
@@ -1550,6 +1705,144 @@ def box_samples(obj: Object3D, spacing_m: float, surface_only: bool = True
     return local @ rot.T + np.asarray(obj.center_xyz)
 
 
+def _fuse_side(a: float, a_open: bool, b: float, b_open: bool, w_a: float, w_b: float,
+               margin: float, outward: float) -> tuple[float, bool]:
+    """One side of :func:`fuse_boxes` (position along ``outward`` = +-1, open flag).
+
+    Two open sides (lower bounds): the farther. An open and a closed side: the closed one
+    unless the open one lies beyond it by more than ``margin``. Two closed sides: the
+    weighted mean when within ``margin``, else the farther (a part seen only once).
+    """
+    d = (b - a) * outward
+    if a_open and b_open:
+        return (b, True) if d > 0 else (a, True)
+    if a_open != b_open:
+        (o, c) = (a, b) if a_open else (b, a)
+        return (o, True) if (o - c) * outward > margin else (c, False)
+    if abs(d) > margin:
+        return (b, False) if d > 0 else (a, False)
+    return (a * w_a + b * w_b) / (w_a + w_b), False
+
+
+def fuse_boxes(old: Object3D, new: Object3D, params: ObjectParams,
+               prior: SizePrior | None = None) -> Object3D:
+    """Fuse a re-detection into a tracked box.
+
+    The yaw is the point-weighted mean (``new`` turned by a multiple of 90 degrees to
+    ``old``'s axes: a box is the same under such turns). Along each axis of the fused box
+    the *measured* footprints (:attr:`Object3D.measured_xy`, the extent of the points
+    before the prior's clamp) are fused:
+
+    * both boxes saw both sides (none open) and measure the same length (within
+      ``merge_extend_margin_m``): the sides are averaged (a shifted re-detection, noise,
+      does not inflate the box);
+    * otherwise side by side: two closed sides within ``merge_extend_margin_m`` are
+      averaged, else the farther wins (two partial views of a long desk add up); an open
+      side (:attr:`Object3D.open_sides`, where the view was cut: a lower bound) gives way
+      to a closed one unless it lies beyond it by more than the margin; of two open sides
+      the farther wins.
+
+    Growth beyond a closed side of ``old`` is limited to ``merge_growth_max`` times the
+    longer of the two extents (one cluster that took in a neighbour cannot blow the box
+    up). The size prior then clamps the fused extents: a side shorter than ``min_xy_m``
+    grows to it around the measured part, towards the point-weighted mean of the two
+    boxes' centres (each grown away from its camera); a side longer than ``max_xy_m``
+    shrinks around its centre. Heights: the larger, growing at most ``merge_growth_max``
+    times.
+
+    Parameters
+    ----------
+    old, new : Object3D
+    params : ObjectParams
+    prior : SizePrior, optional
+        The class's prior; None = no clamp.
+
+    Returns
+    -------
+    Object3D
+        With the classified class (over :data:`UNKNOWN_CLASS`), the higher score, the
+        summed point count and the fused measured footprint.
+    """
+    cls = old.cls if old.cls != UNKNOWN_CLASS else new.cls
+    w_old, w_new = float(max(old.n_points, 1)), float(max(new.n_points, 1))
+    mo = old.measured_xy or (*old.center_xyz[:2], *old.size_xyz[:2])
+    mn = new.measured_xy or (*new.center_xyz[:2], *new.size_xyz[:2])
+    # Align the new box's axes to the old one (boxes are symmetric under 90 degrees).
+    d = _wrap_half_pi(new.yaw - old.yaw)
+    swap = abs(d) > 0.25 * math.pi
+    if swap:
+        d = d - math.copysign(0.5 * math.pi, d)
+    yaw = _wrap_half_pi(old.yaw + d * w_new / (w_old + w_new))
+    axes = (np.array([math.cos(yaw), math.sin(yaw)]), np.array([-math.sin(yaw), math.cos(yaw)]))
+    # Both boxes keep their extents and turn about their centres to the fused yaw.
+    m_old = [(float(np.dot(mo[:2], ax)), mo[2 + i]) for i, ax in enumerate(axes)]
+    m_new = [(float(np.dot(mn[:2], ax)), mn[3 - i] if swap else mn[2 + i])
+             for i, ax in enumerate(axes)]
+    # Open flags of the new box's sides, by the fused side their outward normal is nearest.
+    cn, sn = math.cos(new.yaw), math.sin(new.yaw)
+    normals = [(-cn, -sn), (cn, sn), (sn, -cn), (-sn, cn)]
+    open_new = []
+    for ax in axes:
+        for sign in (-1.0, 1.0):
+            k = int(np.argmax([sign * (nx * ax[0] + ny * ax[1]) for nx, ny in normals]))
+            open_new.append(new.open_sides[k])
+    g, margin = params.merge_growth_max, params.merge_extend_margin_m
+    centre_xy = np.zeros(2)
+    meas_xy = np.zeros(2)
+    size_xy, meas_size = [0.0, 0.0], [0.0, 0.0]
+    open_out = [False] * 4
+    for i, ax in enumerate(axes):
+        (ca, la), (cb, lb) = m_old[i], m_new[i]
+        a0, a1, b0, b1 = ca - 0.5 * la, ca + 0.5 * la, cb - 0.5 * lb, cb + 0.5 * lb
+        flags = (old.open_sides[2 * i], old.open_sides[2 * i + 1],
+                 open_new[2 * i], open_new[2 * i + 1])
+        if not any(flags) and abs(lb - la) <= margin:
+            # The same extent measured twice, shifted by noise: average both sides.
+            lo = (a0 * w_old + b0 * w_new) / (w_old + w_new)
+            hi = (a1 * w_old + b1 * w_new) / (w_old + w_new)
+        else:
+            lo, open_out[2 * i] = _fuse_side(a0, flags[0], b0, flags[2], w_old, w_new,
+                                             margin, -1.0)
+            hi, open_out[2 * i + 1] = _fuse_side(a1, flags[1], b1, flags[3], w_old, w_new,
+                                                 margin, 1.0)
+            hi = max(hi, lo)
+        # Growth beyond a closed side contradicts it (a cluster that took in a neighbour):
+        # at most merge_growth_max times the longer extent. Beyond an open side (a lower
+        # bound) it is what the old view could not see.
+        cap = g * max(la, lb)
+        ext_lo = 0.0 if flags[0] else max(a0 - lo, 0.0)
+        ext_hi = 0.0 if flags[1] else max(hi - a1, 0.0)
+        if hi - lo > cap and ext_lo + ext_hi > 0:
+            excess = min(hi - lo - cap, ext_lo + ext_hi)
+            lo += excess * ext_lo / (ext_lo + ext_hi)
+            hi -= excess * ext_hi / (ext_lo + ext_hi)
+        # Where the clamped boxes put the object along this axis (their grown sides).
+        grown = (float(np.dot(old.center_xyz[:2], ax)) * w_old
+                 + float(np.dot(new.center_xyz[:2], ax)) * w_new) / (w_old + w_new)
+        length, mid = hi - lo, 0.5 * (lo + hi)
+        meas_xy += mid * ax
+        meas_size[i] = length
+        if prior is not None and length < prior.min_xy_m:
+            half = 0.5 * prior.min_xy_m
+            mid = min(max(grown, hi - half), lo + half)
+            length = prior.min_xy_m
+        elif prior is not None and length > prior.max_xy_m:
+            length = prior.max_xy_m
+        centre_xy += mid * ax
+        size_xy[i] = length
+    sz = max(old.size_xyz[2], min(new.size_xyz[2], g * old.size_xyz[2]))
+    if prior is not None:
+        sz = min(sz, prior.max_z_m)
+    cz = 0.5 * sz if params.boxes_on_floor else \
+        (old.center_xyz[2] * w_old + new.center_xyz[2] * w_new) / (w_old + w_new)
+    return Object3D(cls, max(old.score, new.score),
+                    (float(centre_xy[0]), float(centre_xy[1]), float(cz)),
+                    (float(size_xy[0]), float(size_xy[1]), float(sz)), yaw,
+                    int(min(old.n_points + new.n_points, 2**31 - 1)),
+                    (float(meas_xy[0]), float(meas_xy[1]), meas_size[0], meas_size[1]),
+                    (open_out[0], open_out[1], open_out[2], open_out[3]))
+
+
 class ObjectMap:
     """Objects fused in the map frame.
 
@@ -1670,33 +1963,9 @@ class ObjectMap:
         return best
 
     def _merge(self, old: Object3D, new: Object3D) -> Object3D:
-        """Weighted centre, max of sizes (capped by the prior), classified class wins."""
-        cls = old.cls if old.cls != UNKNOWN_CLASS else new.cls
-        w_old, w_new = float(max(old.n_points, 1)), float(max(new.n_points, 1))
-        # Align the new box's axes to the old one (boxes are symmetric under 90 degrees).
-        d = _wrap_half_pi(new.yaw - old.yaw)
-        nsx, nsy = new.size_xyz[0], new.size_xyz[1]
-        if abs(d) > 0.25 * math.pi:
-            nsx, nsy = nsy, nsx
-            d = d - math.copysign(0.5 * math.pi, d)
-        yaw = _wrap_half_pi(old.yaw + d * w_new / (w_old + w_new))
-        centre = tuple(float(v) for v in
-                       (np.asarray(old.center_xyz) * w_old + np.asarray(new.center_xyz) * w_new)
-                       / (w_old + w_new))
-        # Max of the sizes (a table seen more completely grows), but by at most
-        # merge_growth_max per observation, so one bad cluster cannot blow a box up.
-        g = self.params.merge_growth_max
-        size = [max(old.size_xyz[0], min(nsx, g * old.size_xyz[0])),
-                max(old.size_xyz[1], min(nsy, g * old.size_xyz[1])),
-                max(old.size_xyz[2], min(new.size_xyz[2], g * old.size_xyz[2]))]
-        prior = self.priors.get(cls)
-        if prior is not None:
-            size = [min(size[0], prior.max_xy_m), min(size[1], prior.max_xy_m),
-                    min(size[2], prior.max_z_m)]
-        if self.params.boxes_on_floor:
-            centre = (centre[0], centre[1], 0.5 * size[2])
-        return Object3D(cls, max(old.score, new.score), centre, tuple(size), yaw,
-                        int(min(old.n_points + new.n_points, 2**31 - 1)))
+        """Fuse a re-detection ``new`` into ``old`` (see :func:`fuse_boxes`)."""
+        return fuse_boxes(old, new, self.params, self.priors.get(
+            old.cls if old.cls != UNKNOWN_CLASS else new.cls))
 
     def _merge_overlapping(self) -> None:
         """Merge tracked objects that came to overlap (same class, IoU > merge_iou).
@@ -1877,7 +2146,7 @@ def process_frame(frame: DepthFrame, detections: Iterable[BoxDetection],
                 or det.cls_name not in priors:
             continue
         try:
-            seg = _cluster_detection(frame, det.box_xyxy, params, walls)
+            seg = _cluster_detection(frame, det.box_xyxy, params, walls, priors[det.cls_name])
         except ValueError as err:
             dropped.append(f"{det.cls_name}: {err}")
             continue
