@@ -271,6 +271,10 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
               f"strategy (seeds {s0}..{s0 + n - 1}), "
               f"{meta.get('jobs')} worker processes on {meta.get('cpus')} CPUs, "
               f"{meta.get('wall_s', '?')} s wall in total.", ""]
+    mount = meta.get("camera_mount") if meta else None
+    mount_txt = (f"{mount[0]:g} m above the floor, pitched {mount[1]:g} rad down"
+                 + (" (the paper's robot)" if mount and list(mount) == [0.894, 0.1] else "")
+                 if mount else "at the simulator's default mount")
     L += ["## Setup", "",
           "* Lock-step runs (`sim_bridge/lockstep.py`): the simulator and the explorer's core "
           "code (frontiers, selection + goal manager, DuDe segmentation, object costmap) in one "
@@ -290,7 +294,7 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
           "and no regions.",
           "* Robot: TurtleBot3-waffle-sized disk (0.22 m), 1.1 m tall: chair seats and table "
           "tops are collisions although the 0.17 m lidar plane only sees legs. RGB-D camera "
-          "as on the paper's robot: 0.894 m up, pitched 0.1 rad down. Navigation stand-in: "
+          f"{mount_txt}. Navigation stand-in: "
           "grid planner + pure pursuit (arc kept out of the lethal zone); after a collision "
           "it backs off 0.15 m and replans, twice per goal, before aborting the goal "
           "(each contact counts as a collision).",

@@ -49,7 +49,7 @@ import numpy as np  # noqa: E402
 
 from sim_bridge import worlds as sim_worlds  # noqa: E402
 from sim_bridge.coverage_tour import TourParams, coverage_tour  # noqa: E402
-from sim_bridge.engine import load_world  # noqa: E402
+from sim_bridge.engine import SimParams, load_world  # noqa: E402
 from sim_bridge.lockstep import STRATEGIES, LockstepParams, LockstepState, RunResult, \
     run_exploration  # noqa: E402
 
@@ -116,8 +116,21 @@ def sim_time_limit(area_m2: float, override: float | None) -> float:
 # ----------------------------------------------------------------------- workers
 
 
-def _run_task(task: tuple[str, str, int, float, str | None]) -> dict[str, Any]:
-    spec, strategy, seed, max_t, picture = task
+#: RGB-D camera mount of the paper's robot (height above the floor m, pitch rad down).
+PAPER_CAMERA_MOUNT = (0.894, 0.1)
+
+
+def sim_params_for(camera_mount: tuple[float, float] | None) -> SimParams:
+    """Simulator parameters of the runs: the defaults, with the camera at
+    ``camera_mount`` = (height m, pitch rad) unless None."""
+    if camera_mount is None:
+        return SimParams()
+    return SimParams(camera_mount_z_m=camera_mount[0], camera_pitch_rad=camera_mount[1])
+
+
+def _run_task(task: tuple[str, str, int, float, str | None, tuple[float, float] | None]
+              ) -> dict[str, Any]:
+    spec, strategy, seed, max_t, picture, mount = task
     world, gt = load(spec)
     last: dict[str, LockstepState] = {}
 
@@ -125,6 +138,7 @@ def _run_task(task: tuple[str, str, int, float, str | None]) -> dict[str, Any]:
         last["state"] = st
 
     res = run_exploration(world, strategy, seed, max_sim_time_s=max_t, ground_truth=gt,
+                          sim_params=sim_params_for(mount),
                           observer=keep_last if picture else None)
     if picture and "state" in last:
         _save_picture(last["state"], picture)
@@ -257,15 +271,37 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     ap.add_argument("--ros-strategy", default="paper", help="strategy of the ROS runs")
     ap.add_argument("--ros-rtf", type=float, default=8.0,
                     help="real-time factor of the ROS runs")
+    ap.add_argument("--camera-mount", default="paper",
+                    help="RGB-D camera mount of the runs: 'paper' (0.894 m up, pitched 0.1 rad "
+                         "down, as on the paper's robot), 'sim' (the simulator's default) or "
+                         "HEIGHT_M,PITCH_RAD")
     ap.add_argument("--report-only", action="store_true",
                     help="only redo plots and BENCHMARKS.md from --out")
     a = ap.parse_args(argv)
     if a.runs < 1 or a.jobs < 1:
         ap.error("--runs and --jobs must be >= 1")
+    try:
+        a.mount = _camera_mount(a.camera_mount)
+    except ValueError as err:
+        ap.error(str(err))
     bad = [s for s in a.strategies.split(",") if s not in STRATEGIES]
     if bad:
         ap.error(f"unknown strategies {bad}; choose from {list(STRATEGIES)}")
     return a
+
+
+def _camera_mount(text: str) -> tuple[float, float] | None:
+    """``--camera-mount`` value -> (height m, pitch rad), None for the sim default."""
+    if text == "paper":
+        return PAPER_CAMERA_MOUNT
+    if text == "sim":
+        return None
+    try:
+        z, pitch = (float(v) for v in text.split(","))
+    except ValueError:
+        raise ValueError(f"--camera-mount must be paper, sim or HEIGHT_M,PITCH_RAD, "
+                         f"got {text!r}") from None
+    return z, pitch
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -291,6 +327,8 @@ def main(argv: list[str] | None = None) -> int:
     meta = {"command": command, "runs": a.runs, "seed0": a.seed0, "worlds": specs,
             "strategies": strategies, "jobs": a.jobs, "cpus": os.cpu_count(),
             "lockstep_params": {k: v for k, v in vars(LockstepParams()).items()},
+            "camera_mount": (list(a.mount) if a.mount is not None else
+                             [SimParams().camera_mount_z_m, SimParams().camera_pitch_rad]),
             "started": time.strftime("%Y-%m-%d %H:%M:%S")}
     t_start = time.monotonic()
     ctx = mp.get_context("fork")
@@ -311,7 +349,7 @@ def main(argv: list[str] | None = None) -> int:
             for strat in strategies:
                 for k in range(a.runs):
                     pic = (str(out / "maps" / f"{_slug(s)}_{strat}.png") if k == 0 else None)
-                    tasks.append((s, strat, a.seed0 + k, limit, pic))
+                    tasks.append((s, strat, a.seed0 + k, limit, pic, a.mount))
         # Long worlds first so the pool does not end on one slow run.
         tasks.sort(key=lambda t: -areas[t[0]])
         prog = Progress(len(tasks), "runs")
@@ -341,8 +379,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"[bench] real detector: {yolo}", file=sys.stderr)
     if a.ros > 0:
         ros = compare_with_ros(specs[0], a.ros_strategy, [a.seed0 + k for k in range(a.ros)],
-                          out / "ros", a.ros_rtf, sim_time_limit(areas[specs[0]],
-                                                                  a.max_sim_time))
+                               out / "ros", a.ros_rtf,
+                               sim_time_limit(areas[specs[0]], a.max_sim_time), a.mount)
         (out / "ros.json").write_text(json.dumps(ros, indent=1))
     meta["wall_s"] = round(time.monotonic() - t_start, 1)
     (out / "meta.json").write_text(json.dumps(meta, indent=1))
@@ -353,7 +391,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf: float,
-                     max_sim_time_s: float) -> dict[str, Any]:
+                     max_sim_time_s: float, camera_mount: tuple[float, float] | None = None
+                     ) -> dict[str, Any]:
     """The same world/strategy/seeds in lock step and through ROS (``scripts/demo.py``:
     ``sim_bridge`` + ``explorer`` processes), both stopping at 99 % coverage.
 
@@ -367,7 +406,7 @@ def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf
     world_obj, gt = load(world)
     for seed in seeds:
         r = run_exploration(world_obj, strategy, seed, max_sim_time_s=max_sim_time_s,
-                            ground_truth=gt,
+                            ground_truth=gt, sim_params=sim_params_for(camera_mount),
                             params=LockstepParams(start_jitter_m=0.0, start_yaw_jitter_rad=0.0))
         rows.append({"seed": seed, "mode": "lock-step", "stop": r.stop_reason,
                      "coverage_pct": r.coverage_pct, "sim_time_s": r.sim_time_s,
@@ -377,6 +416,12 @@ def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf
         cmd = [sys.executable, str(ROOT / "scripts" / "demo.py"), str(d), "--world",
                world_path(world), "--strategy", strategy, "--seed", str(seed), "--rtf", str(rtf),
                "--max-sim-time", str(max_sim_time_s), "--stop-coverage", "99"]
+        if camera_mount is not None:   # the same mount in the simulator and the node
+            z, pitch = camera_mount
+            cmd += ["--sim-arg=-p", f"--sim-arg=camera_mount_z_m:={z}",
+                    "--sim-arg=-p", f"--sim-arg=camera_pitch_rad:={pitch}",
+                    "--explorer-arg=-p", f"--explorer-arg=camera_z_m:={z}",
+                    "--explorer-arg=-p", f"--explorer-arg=camera_pitch_rad:={pitch}"]
         proc = subprocess.run(cmd, cwd=str(ROOT), capture_output=True, text=True)
         mj = d / "metrics.json"
         m = json.loads(mj.read_text()) if mj.is_file() else {}

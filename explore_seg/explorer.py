@@ -79,7 +79,8 @@ def build_args(argv: list[str]) -> tuple[argparse.Namespace, list[str]]:
     if "--params-file" not in ros:
         pf = default_params_file()
         if pf is not None:
-            ros = (ros or ["--ros-args"]) + ["--params-file", str(pf)]
+            # First, so that the caller's -p overrides win (later ones take precedence).
+            ros = ["--ros-args", "--params-file", str(pf)] + ros[1:]
     return opts, ros
 
 

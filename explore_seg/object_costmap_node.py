@@ -11,6 +11,7 @@ arrive while a frame is processed are dropped (only the newest few are kept for 
 from __future__ import annotations
 
 import collections
+import math
 import time
 from enum import Enum
 from typing import Any
@@ -18,6 +19,7 @@ from typing import Any
 import numpy as np
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import OccupancyGrid, Odometry
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, Image, LaserScan, PointCloud2
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
@@ -32,7 +34,7 @@ from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D, Objec
                                       process_frame, wall_mask)
 from explore_seg.node_util import WarnThrottle, run
 from explore_seg.params import ParamBinding
-from explore_seg.qos import MAP_QOS, RELIABLE_QOS, SENSOR_QOS, map_qos
+from explore_seg.qos import MAP_QOS, POSE_QOS, RELIABLE_QOS, SENSOR_QOS, map_qos
 
 #: Colour/depth/semantic messages kept for stamp pairing (older ones are dropped).
 _PAIR_BUFFER = 4
@@ -102,11 +104,16 @@ class ObjectCostmapNode(Node):
         self.create_subscription(LaserScan, "scan", self._on_scan, SENSOR_QOS)
         self.create_subscription(OccupancyGrid, "map", self._on_map,
                                  map_qos(p.map_transient_local))
+        # Poses in their own callback group: with a multi-threaded executor they keep
+        # arriving while a frame is processed (else the poses around the next image's
+        # stamp are lost and that frame is dropped).
+        poses_group = MutuallyExclusiveCallbackGroup()
         if p.pose_topic_type == "odom":
-            self.create_subscription(Odometry, "odom", self._on_odom, RELIABLE_QOS)
+            self.create_subscription(Odometry, "odom", self._on_odom, RELIABLE_QOS,
+                                     callback_group=poses_group)
         else:
             self.create_subscription(PoseWithCovarianceStamped, "pose", self._on_pose,
-                                     RELIABLE_QOS)
+                                     POSE_QOS, callback_group=poses_group)
         # Used (and required for pairing) only by the oracle detector backend.
         self.create_subscription(Image, "camera/semantic/image_raw", self._on_semantic,
                                  SENSOR_QOS)
@@ -173,15 +180,19 @@ class ObjectCostmapNode(Node):
 
     def _on_odom(self, msg: Odometry) -> None:
         try:
-            self._poses.append((_stamp_ns(msg), convert.pose2d_from_odometry(msg)))
+            self._add_pose(_stamp_ns(msg), convert.pose2d_from_odometry(msg))
         except ValueError as err:
             self._drop("pose", str(err))
 
     def _on_pose(self, msg: PoseWithCovarianceStamped) -> None:
         try:
-            self._poses.append((_stamp_ns(msg), convert.pose2d_from_pose_msg(msg)))
+            self._add_pose(_stamp_ns(msg), convert.pose2d_from_pose_msg(msg))
         except ValueError as err:
             self._drop("pose", str(err))
+
+    def _add_pose(self, t_ns: int, pose: tuple[float, float, float]) -> None:
+        self._poses.append((t_ns, pose))
+        self._objects.note_robot_position(pose[0], pose[1])   # swept path: cleared
 
     # ------------------------------------------------------------------- tick
     def _tick(self) -> None:
@@ -204,10 +215,16 @@ class ObjectCostmapNode(Node):
         """Newest unprocessed depth with a colour (and semantic) image close in time."""
         tol_ns = int(self.params.sync_tolerance_s * 1e9)
         oracle = self._dp.params.backend == "oracle"
+        # Frames newer than the newest pose wait for their pose (the pose stream may lag
+        # behind the images while this node is busy); they are taken on a later tick.
+        newest_pose = self._poses[-1][0] if self._poses else None
+        pose_tol_ns = int(self.params.pose_tolerance_s * 1e9)
         for depth in sorted(self._depths, key=_stamp_ns, reverse=True):
             t = _stamp_ns(depth)
             if self._last_depth_ns is not None and t <= self._last_depth_ns:
                 return None
+            if newest_pose is not None and t > newest_pose + pose_tol_ns:
+                continue
             color = _closest(self._colors, t, tol_ns)
             semantic = _closest(self._semantics, t, tol_ns) if oracle else None
             if color is not None and (semantic is not None or not oracle):
@@ -216,10 +233,8 @@ class ObjectCostmapNode(Node):
 
     def _pose_at(self, t_ns: int) -> tuple[float, float, float] | None:
         tol_ns = int(self.params.pose_tolerance_s * 1e9)
-        best = min(self._poses, key=lambda sp: abs(sp[0] - t_ns), default=None)
-        if best is None or abs(best[0] - t_ns) > tol_ns:
-            return None
-        return best[1]
+        poses = list(self._poses)    # a copy: the pose callback may append meanwhile
+        return interpolate_pose(poses, t_ns, tol_ns)
 
     def _ensure_detector(self) -> Detector | None:
         if self._detector is None and not self._detector_failed:
@@ -238,10 +253,13 @@ class ObjectCostmapNode(Node):
     def _process(self, depth_msg: Image, color_msg: Image, semantic_msg: Image | None) -> None:
         p = self.params
         t_ns = _stamp_ns(depth_msg)
-        self._last_depth_ns = t_ns
         pose = self._pose_at(t_ns)
+        self._last_depth_ns = t_ns
         if pose is None:
-            self._drop("frame", f"no robot pose within {p.pose_tolerance_s} s of the image")
+            span = (f"poses {self._poses[0][0] / 1e9:.2f}..{self._poses[-1][0] / 1e9:.2f} s"
+                    if self._poses else "no pose received")
+            self._drop("frame", f"no robot pose within {p.pose_tolerance_s} s of the image "
+                                f"({t_ns / 1e9:.2f} s; {span})")
             return
         try:
             depth = convert.depth_from_msg(depth_msg)
@@ -322,6 +340,27 @@ class ObjectCostmapNode(Node):
         cloud = self._objects.virtual_cloud()
         self._pub_cloud.publish(convert.cloud_to_msg(convert.xyz_cloud(cloud), header))
         self._pub_markers.publish(_markers(self._objects.boxes(), header))
+
+
+def interpolate_pose(poses: list[tuple[int, tuple[float, float, float]]], t_ns: int,
+                     tol_ns: int) -> tuple[float, float, float] | None:
+    """The robot pose at ``t_ns`` from stamped poses (any order): linear between the
+    nearest poses before and after it (yaw along the shorter arc) when both lie within
+    ``tol_ns``, else the nearest one within ``tol_ns``; None when none does."""
+    before = max((sp for sp in poses if sp[0] <= t_ns), key=lambda sp: sp[0], default=None)
+    after = min((sp for sp in poses if sp[0] >= t_ns), key=lambda sp: sp[0], default=None)
+    ok_b = before is not None and t_ns - before[0] <= tol_ns
+    ok_a = after is not None and after[0] - t_ns <= tol_ns
+    if ok_b and ok_a and after[0] > before[0]:
+        w = (t_ns - before[0]) / (after[0] - before[0])
+        (x0, y0, a0), (x1, y1, a1) = before[1], after[1]
+        da = math.atan2(math.sin(a1 - a0), math.cos(a1 - a0))
+        yaw = math.atan2(math.sin(a0 + w * da), math.cos(a0 + w * da))
+        return x0 + w * (x1 - x0), y0 + w * (y1 - y0), yaw
+    cands = [sp for sp, ok in ((before, ok_b), (after, ok_a)) if ok]
+    if not cands:
+        return None
+    return min(cands, key=lambda sp: abs(sp[0] - t_ns))[1]
 
 
 def _closest(msgs, t_ns: int, tol_ns: int):

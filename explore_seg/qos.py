@@ -20,6 +20,13 @@ RELIABLE_QOS = QoSProfile(depth=10, history=HistoryPolicy.KEEP_LAST,
                           durability=DurabilityPolicy.VOLATILE)
 
 
+#: Pose streams (odom at up to 100 Hz): reliable, deep enough to keep every pose that
+#: arrives while a node is busy with a camera frame (poses are matched to image stamps).
+POSE_QOS = QoSProfile(depth=100, history=HistoryPolicy.KEEP_LAST,
+                      reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.VOLATILE)
+
+
 def map_qos(transient_local: bool = True) -> QoSProfile:
     """Map QoS; ``transient_local=False`` subscribes to a volatile map publisher.
 

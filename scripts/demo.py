@@ -46,7 +46,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from sim_bridge.lockstep import STRATEGY_SPECS  # noqa: E402
+from sim_bridge.lockstep import STRATEGY_SPECS, LockstepParams  # noqa: E402
 #: Longer side of the animation frames (px).
 GIF_SIDE_PX = 480
 #: Exit codes of :func:`main`.
@@ -138,7 +138,13 @@ def explorer_command(cfg: DemoConfig) -> list[str]:
     params = {"use_sim_time": True, "strategy": spec.selection,
               "use_regions": spec.use_regions, "use_object_costmap": spec.use_objects}
     if spec.use_objects:
-        params["backend"] = "oracle"
+        # The oracle backend as in the lock-step runs (LockstepParams): boxes from the
+        # simulator's semantic image with 10 % misses and 2 px corner jitter.
+        lp = LockstepParams()
+        params.update({"detector.backend": "oracle",
+                       "detector.oracle_miss_prob": lp.oracle_miss_prob,
+                       "detector.oracle_jitter_px": lp.oracle_jitter_px,
+                       "detector.oracle_seed": int(cfg.seed)})
     for k, v in params.items():
         cmd += ["-p", f"{k}:={_ros_value(v)}"]
     return cmd + list(cfg.explorer_args)

@@ -58,7 +58,6 @@ import numpy.typing as npt
 
 from explore_seg.core.camera import CameraIntrinsics
 from explore_seg.core.detector import Detector, DetectorParams
-from explore_seg.core.swept import SweptPath
 from explore_seg.core.frontiers import Frontier, FrontierParams, find_frontiers, \
     traversable_mask
 from explore_seg.core.grid import GridMap
@@ -446,18 +445,6 @@ class _ObjectPipeline:
         self.tolerance_m = lp.object_update_tolerance_m
         self._last_stamp = -1.0
         self._published: list[tuple[float, ...]] = []
-        self.swept = SweptPath()
-
-    def layer(self, grid: GridMap) -> GridMap:
-        """The object layer on ``grid``, cleared where the robot's body has been."""
-        lay = self.map.rasterize(grid)
-        radius = getattr(self.params, "swept_clear_radius_m", 0.25)
-        if radius > 0:
-            data = lay.data.copy()
-            data[self.swept.mask(grid, radius)] = \
-                self.params.background_value
-            lay = lay.with_data(data)
-        return lay
 
     def update(self, timings: dict[str, list[float]]) -> bool:
         """Process the newest camera frame if unseen; True when one was processed.
@@ -465,7 +452,7 @@ class _ObjectPipeline:
         Appends the oracle detection time to ``timings["detection"]`` and the rest
         (3D boxes, fusion; the layer is timed by the caller) to ``timings["objects"]``.
         """
-        self.swept.add(*self.engine.pose[:2])
+        self.map.note_robot_position(*self.engine.pose[:2])
         cam = self.engine.latest_camera
         if cam is None or cam.stamp_s <= self._last_stamp:
             return False
@@ -622,7 +609,7 @@ def run_exploration(world: World, strategy: str, seed: int, *,
             break
         if objects is not None and objects.update(res.timings_ms) and objects.changed():
             t0 = time.perf_counter()
-            layer = objects.layer(engine.map)
+            layer = objects.map.rasterize(engine.map)
             engine.add_costmap_layer(OBJECT_LAYER, layer)
             objects.mark_published()
             layer_version += 1

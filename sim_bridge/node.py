@@ -197,6 +197,10 @@ class SimBridgeNode(Node):
         for scan in eng.drain_scans():
             self._publish_scan(scan)
         for frame in eng.drain_camera():
+            # The pose at the frame's capture first (a real odom stream has one within a
+            # few ms of every image), so consumers need not match stale poses to images.
+            self._odom_pub.publish(convert.odometry_msg(
+                frame.pose, eng.velocity, MAP_FRAME, BASE_FRAME, _ns(frame.stamp_s)))
             self._publish_camera(frame)
         self._odom_pub.publish(convert.odometry_msg(eng.pose, eng.velocity, MAP_FRAME, BASE_FRAME, stamp))
         if t >= self._next_map_s:

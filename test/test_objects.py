@@ -783,6 +783,37 @@ def test_virtual_cloud_fills_boxes_and_is_bounded():
         omap.virtual_cloud(0.0)
 
 
+def test_layer_and_cloud_are_cleared_along_the_path_the_robot_drove():
+    """A box grown over the robot's own path (the robot drove there, so nothing stands
+    there) is cut out of the layer and the cloud along a robot-wide corridor; the rest of
+    the box stays, and without the path (or with the radius 0) nothing is cleared."""
+    grid, _ = grid_from_ascii("\n".join(["." * 60] * 30), resolution_m=0.05,
+                              origin_xy_m=(0.0, 0.0))
+    table = _obj(1.5, 0.75, "dining table", (1.6, 1.0, 0.75))   # x 0.7..2.3, y 0.25..1.25
+    plain = ObjectMap(ObjectParams(), PRIORS)
+    plain.update([table])
+    omap = ObjectMap(ObjectParams(), PRIORS)
+    omap.update([table])
+    off = ObjectMap(ObjectParams(swept_clear_radius_m=0.0), PRIORS)
+    off.update([table])
+    for x in np.arange(0.2, 2.81, 0.02):            # drove along y = 0.4 through the box
+        omap.note_robot_position(float(x), 0.4)
+        off.note_robot_position(float(x), 0.4)
+    full = plain.rasterize(grid).data == 100
+    cut = omap.rasterize(grid).data == 100
+    assert np.array_equal(off.rasterize(grid).data == 100, full)
+    x, y = grid.cells_to_world(*np.indices(grid.shape))
+    near = np.abs(y - 0.4) <= 0.22 - grid.resolution_m
+    far = np.abs(y - 0.4) > 0.22 + grid.resolution_m
+    assert full[near].any() and not cut[near].any()
+    assert np.array_equal(cut[far], full[far]) and cut.any()
+    cloud = omap.virtual_cloud(0.05)
+    assert len(cloud) and np.abs(cloud[:, 1] - 0.4).min() > 0.22 - 0.05
+    assert len(off.virtual_cloud(0.05)) == len(plain.virtual_cloud(0.05)) > len(cloud)
+    with pytest.raises(ValueError, match="swept_clear_radius_m"):
+        ObjectParams(swept_clear_radius_m=-0.1)
+
+
 def test_fig13_frontier_under_desk_top_becomes_occupied():
     """Paper Fig. 13: the lidar sees only the desk's legs, so the free cells under the
     top border unknown space and look like a frontier; the object layer covers them."""

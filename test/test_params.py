@@ -85,3 +85,19 @@ def test_load_node_params_merges_wildcard(tmp_path):
     f.write_text("target_selector: {}\n")
     with pytest.raises(ValueError, match="lacks 'ros__parameters'"):
         load_node_params(f, "target_selector")
+
+
+def test_explorer_puts_its_default_params_file_before_the_callers_overrides():
+    """rcl applies parameter arguments in order (the last wins): the default file must
+    come first so that a caller's ``-p detector.backend:=oracle`` is not overridden."""
+    from explore_seg.explorer import build_args, default_params_file
+
+    pf = default_params_file()
+    assert pf is not None
+    _, ros = build_args(["--threads", "2", "--ros-args", "-p", "detector.backend:=oracle"])
+    assert ros[:3] == ["--ros-args", "--params-file", str(pf)]
+    assert ros.index("--params-file") < ros.index("detector.backend:=oracle")
+    _, ros = build_args([])
+    assert ros == ["--ros-args", "--params-file", str(pf)]
+    _, ros = build_args(["--ros-args", "--params-file", "mine.yaml"])
+    assert ros == ["--ros-args", "--params-file", "mine.yaml"]

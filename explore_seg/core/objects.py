@@ -51,6 +51,7 @@ from scipy.spatial import cKDTree
 
 from explore_seg.core.camera import CameraIntrinsics, apply_transform, invert_transform
 from explore_seg.core.grid import GridMap
+from explore_seg.core.swept import SweptPath
 from explore_seg.core.fields import param_meta as _doc
 
 #: Class name given to objects found from laser legs without a detection.
@@ -178,6 +179,10 @@ class ObjectParams:
     robot_clear_fraction: float = field(default=1.0, metadata=_doc(
         "Drop boxes that reach this fraction of robot_radius_m into the robot's disk "
         "(0 = never)", "0..1"))
+    swept_clear_radius_m: float = field(default=0.22, metadata=_doc(
+        "The layer and the virtual cloud are cleared within this distance of the path the "
+        "robot has driven (its body proved the floor free there), so boxes grown from "
+        "partial views never close the way the robot came in (0 = off)", "m"))
     prior_reject_factor: float = field(default=1.2, metadata=_doc(
         "Drop a detection whose cluster footprint or height exceeds this factor times its "
         "class prior's maximum (0 = never drop, only clamp)"))
@@ -301,6 +306,9 @@ class ObjectParams:
         if not (math.isfinite(self.wall_min_length_m) and self.wall_min_length_m >= 0):
             raise ValueError(f"wall_min_length_m must be finite and >= 0, "
                              f"got {self.wall_min_length_m}")
+        if not (math.isfinite(self.swept_clear_radius_m) and self.swept_clear_radius_m >= 0):
+            raise ValueError(f"swept_clear_radius_m must be finite and >= 0, "
+                             f"got {self.swept_clear_radius_m}")
         if not self.robot_radius_m >= 0:
             raise ValueError(f"robot_radius_m must be >= 0, got {self.robot_radius_m}")
         if not (math.isfinite(self.merge_extend_margin_m) and self.merge_extend_margin_m >= 0):
@@ -1858,9 +1866,20 @@ class ObjectMap:
         self.priors = dict(priors)
         self._objects: list[TrackedObject] = []
         self._next_id = 0
+        self._swept = SweptPath()
 
     def __len__(self) -> int:
         return len(self._objects)
+
+    def note_robot_position(self, x_m: float, y_m: float) -> None:
+        """Record where the robot is (map frame; call at the pose rate): the layer and
+        the cloud are cleared along this path (``swept_clear_radius_m``)."""
+        self._swept.add(float(x_m), float(y_m))
+
+    @property
+    def swept(self) -> SweptPath:
+        """The robot's recorded path."""
+        return self._swept
 
     @property
     def tracked(self) -> list[TrackedObject]:
@@ -1895,6 +1914,8 @@ class ObjectMap:
             ``robot_clear_fraction`` of ``robot_radius_m`` into the robot's disk are
             dropped (else a misplaced box can enclose the robot and end exploration).
         """
+        if robot_xy is not None:
+            self.note_robot_position(robot_xy[0], robot_xy[1])
         if robot_xy is not None and self.params.robot_clear_fraction > 0:
             observations = [o for o in observations if not self._on_robot(o, robot_xy)]
             self._objects = [t for t in self._objects if not self._on_robot(t.obj, robot_xy)]
@@ -2068,6 +2089,8 @@ class ObjectMap:
         if polys:
             cv2.polylines(img, polys, True, int(p.object_value), lineType=cv2.LINE_8,
                           shift=shift)
+            if p.swept_clear_radius_m > 0 and len(self._swept):
+                img[self._swept.mask(grid, p.swept_clear_radius_m)] = p.background_value
         return grid.with_data(img)
 
     def virtual_cloud(self, spacing_m: float | None = None) -> npt.NDArray[np.float32]:
@@ -2092,7 +2115,19 @@ class ObjectMap:
                 break
             spacing *= 2.0
         clouds = [box_samples(t.obj, spacing, surface_only=False) for t in self._objects]
-        return np.vstack(clouds).astype(np.float32)
+        cloud = np.vstack(clouds)
+        r = self.params.swept_clear_radius_m
+        if r > 0 and len(self._swept) and len(cloud):
+            # Rasterise the swept corridor over the cloud's extent (cells of half the
+            # spacing) and drop the points on it, as rasterize() drops the cells.
+            res = 0.5 * spacing
+            lo = cloud[:, :2].min(axis=0) - res
+            shape = tuple(int(v) for v in np.ceil((cloud[:, :2].max(axis=0) - lo) / res) + 2)
+            geo = GridMap(np.zeros((shape[1], shape[0]), np.int8), res,
+                          (float(lo[0]), float(lo[1])))
+            rows, cols = geo.world_to_cells(cloud[:, 0], cloud[:, 1])
+            cloud = cloud[~self._swept.mask(geo, r)[rows, cols]]
+        return cloud.astype(np.float32)
 
     def boxes(self) -> list[tuple[int, Object3D]]:
         """``(id, Object3D)`` of every object (for markers)."""

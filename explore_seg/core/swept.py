@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from .grid import GridMap
+from explore_seg.core.grid import GridMap
 
 #: Sub-pixel bits of the cv2 drawing calls.
 _SHIFT = 4
