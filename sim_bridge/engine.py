@@ -55,6 +55,11 @@ class SimParams:
         "fixed physics step", "s", read_only=True))
     real_time_factor: float = field(default=1.0, metadata=_doc(
         "sim seconds per wall second when the node owns the clock"))
+    startup_real_time_factor: float = field(default=1.0, metadata=_doc(
+        "real-time factor until the first goal_pose arrives, while the explorer's nodes "
+        "discover the topics and start up (at a high real_time_factor those wall seconds "
+        "would cost many sim seconds, which the lock-step runs do not lose); 0 = "
+        "real_time_factor from the start"))
     # --- robot
     robot_radius_m: float = field(default=NavParams.robot_radius_m, metadata=_doc(
         "collision disk radius (waffle 281 x 306 mm -> 0.21 m circumscribed)", "m",
@@ -165,6 +170,10 @@ class SimParams:
         "rasterise the ground truth and track coverage", read_only=True))
 
     def __post_init__(self) -> None:
+        if not (math.isfinite(self.startup_real_time_factor)
+                and self.startup_real_time_factor >= 0):
+            raise ValueError(f"startup_real_time_factor must be finite and >= 0, got "
+                             f"{self.startup_real_time_factor}")
         positive = ("physics_dt_s", "real_time_factor", "robot_radius_m", "robot_height_m",
                     "max_linear_speed_mps", "max_angular_speed_radps", "map_resolution_m",
                     "map_rate_hz", "coverage_period_s", "lockstep_dt_s", "tick_period_s",

@@ -15,6 +15,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
+
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid, Odometry, Path as PathMsg
@@ -26,6 +28,7 @@ from sensor_msgs.msg import CameraInfo, Image, LaserScan
 from std_srvs.srv import Trigger
 
 from explore_seg import convert
+from explore_seg.core.grid import GridMap
 from explore_seg.node_util import run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS, SENSOR_QOS
@@ -85,6 +88,8 @@ class SimBridgeNode(Node):
             }
         self.create_subscription(PoseStamped, "goal_pose", self._on_goal, RELIABLE_QOS)
         self._layer_subs: dict[str, object] = {}
+        self._last_layers: dict[str, GridMap] = {}
+        self._goal_seen = False       # startup_real_time_factor applies until then
         self._subscribe_layers(p.costmap_layers)
         self.create_service(Trigger, "sim/save_metrics", self._on_save_metrics)
         self._p.on_change(self._on_params)
@@ -112,6 +117,7 @@ class SimBridgeNode(Node):
             self._engine.metrics.goal_rejected()
             self.get_logger().warn(f"rejected goal_pose: {err}", throttle_duration_sec=5.0)
             return
+        self._goal_seen = True
         try:
             self._engine.set_goal(x, y, yaw)
         except ValueError as err:
@@ -125,6 +131,11 @@ class SimBridgeNode(Node):
                 grid = convert.grid_from_msg(msg)
                 if grid.frame_id.lstrip("/") != MAP_FRAME:
                     raise ValueError(f"layer frame must be {MAP_FRAME!r}, got {grid.frame_id!r}")
+                last = self._last_layers.get(name)
+                if (last is not None and last.same_geometry(grid)
+                        and np.array_equal(last.data, grid.data)):
+                    return          # republished unchanged: no forced replan
+                self._last_layers[name] = grid
                 self._engine.add_costmap_layer(name, grid)
             except ValueError as err:
                 self.get_logger().warn(f"dropped layer {name!r}: {err}",
@@ -135,6 +146,7 @@ class SimBridgeNode(Node):
         for name in list(self._layer_subs):
             if name not in names:
                 self.destroy_subscription(self._layer_subs.pop(name))
+                self._last_layers.pop(name, None)
                 self._engine.remove_costmap_layer(name)
         for name in names:
             if name not in self._layer_subs:
@@ -183,7 +195,10 @@ class SimBridgeNode(Node):
             if self._last_wall_ns is None:
                 self._last_wall_ns = now_ns
                 return
-            dt = min(p.real_time_factor * (now_ns - self._last_wall_ns) / _NS_PER_S,
+            rtf = (p.startup_real_time_factor
+                   if p.startup_real_time_factor > 0 and not self._goal_seen
+                   else p.real_time_factor)
+            dt = min(rtf * (now_ns - self._last_wall_ns) / _NS_PER_S,
                      p.max_sim_step_per_tick_s)
         self._last_wall_ns = now_ns
         eng = self._engine

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -65,8 +66,9 @@ class Inbox:
 
 def test_node_publishes_clock_scan_odom_map(ros, sim):
     inbox = Inbox(ros)
-    ros.spin_until(lambda: inbox.has("/clock", "scan", "odom", "map", "sim/metrics"),
-                   what="/clock, scan, odom, map and sim/metrics")
+    ros.spin_until(lambda: inbox.has("/clock", "scan", "odom", "map", "sim/metrics")
+                   and (convert.grid_from_msg(inbox.last["map"]).data >= 65).any(),
+                   what="/clock, scan, odom, sim/metrics and a map with the first scan")
     scan = inbox.last["scan"]
     assert scan.header.frame_id == "base_scan"
     assert len(scan.ranges) == sim.engine.scan_geometry.num_beams
@@ -76,7 +78,7 @@ def test_node_publishes_clock_scan_odom_map(ros, sim):
     assert convert.pose2d_from_odometry(odom)[:2] == pytest.approx(
         sim.engine.world.start_pose[:2], abs=1e-6)
     grid = convert.grid_from_msg(inbox.last["map"])
-    assert grid.frame_id == "map" and (grid.data == 100).any() and (grid.data == 0).any()
+    assert grid.frame_id == "map" and (grid.data >= 65).any() and (grid.data == 0).any()
     t0 = inbox.clock_s()
     ros.spin_until(lambda: inbox.clock_s() > t0 + 1.0, what="sim time to advance 1 s")
     # Stamps are sim time.
@@ -111,6 +113,28 @@ def test_goal_pose_from_a_publisher_moves_the_robot_towards_it(ros, sim):
                    < d0 - 0.8, timeout_s=20.0, what="odom to approach the goal by 0.8 m")
     assert sim.engine.metrics.goals_received == 1
     assert sim.engine.metrics.n_collisions == 0
+
+
+def test_sim_time_runs_at_the_startup_factor_until_the_first_goal(ros, sim):
+    """Before any goal_pose the clock advances at startup_real_time_factor (1): sim time
+    never runs ahead of wall time while the explorer starts; after one, at 10x."""
+    from geometry_msgs.msg import PoseStamped
+
+    p = sim._p.params
+    assert p.startup_real_time_factor == 1.0 and p.real_time_factor == 10.0
+    inbox = Inbox(ros)
+    pub = inbox.node.create_publisher(PoseStamped, "goal_pose", RELIABLE_QOS)
+    ros.spin_until(lambda: inbox.has("/clock", "odom") and pub.get_subscription_count() > 0,
+                   what="/clock, odom and the goal_pose subscriber")
+    t0, w0 = inbox.clock_s(), time.monotonic()
+    ros.spin_until(lambda: time.monotonic() - w0 > 1.0, what="1 s of wall time")
+    assert inbox.clock_s() - t0 <= (time.monotonic() - w0) + 0.1
+    sx, sy, _ = sim.engine.world.start_pose
+    pub.publish(convert.pose_stamped(sx, sy, 0.0, "map"))
+    ros.spin_until(lambda: sim.engine.metrics.goals_received == 1, what="the goal")
+    t1, w1 = inbox.clock_s(), time.monotonic()
+    ros.spin_until(lambda: time.monotonic() - w1 > 1.0, what="1 s of wall time")
+    assert inbox.clock_s() - t1 > 2.0 * (time.monotonic() - w1)
 
 
 def test_nan_goal_and_bad_layer_are_rejected_and_the_node_keeps_publishing(ros, sim):

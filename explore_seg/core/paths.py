@@ -179,17 +179,7 @@ def distance_field(passable: npt.NDArray[np.bool_], start_rc: tuple[int, int],
     """
     passable = np.asarray(passable, dtype=bool)
     _check_start(passable, start_rc)
-    _check_resolution(resolution_m)
-    start = (int(start_rc[0]), int(start_rc[1]))
-    pas = np.ascontiguousarray(passable).copy()
-    pas[start] = True
-    comp, r0, c0 = _component_box(pas, start)
-    graph, idx = _grid_csr(comp, resolution_m)
-    d = dijkstra(graph, directed=True, indices=int(idx[start[0] - r0, start[1] - c0]))
-    out = np.full(pas.shape, np.inf)
-    sub = out[r0:r0 + comp.shape[0], c0:c0 + comp.shape[1]]
-    sub[comp] = d
-    return out
+    return cost_distance_field(np.where(passable, 1.0, np.inf), start_rc, resolution_m)
 
 
 def cost_distance_field(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
