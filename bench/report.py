@@ -342,9 +342,9 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
                      f"{_fmt(row.get('path_length_m'))} | {row.get('collisions', '-')} | "
                      f"{row.get('goals', '-')} |")
         L.append("")
-    L += ["Files: `runs.csv` (one row per run), `runs.jsonl` (samples and timings), "
-          "`tours.csv`, `yolo.json`, `meta.json` in "
-          f"`{rel.as_posix()}/`.", ""]
+    L += ["Files: `runs.csv` (one row per run), `runs.jsonl` (samples and every update's "
+          "timing; tens of MB, so kept out of git: rerun to get it), `tours.csv`, "
+          f"`yolo.json`, `meta.json` in `{rel.as_posix()}/`.", ""]
     md.write_text("\n".join(L))
     return md
 

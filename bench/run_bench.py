@@ -269,7 +269,7 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                     help="also run this many seeds of the first world through ROS "
                          "(sim_bridge + explorer processes) and compare")
     ap.add_argument("--ros-strategy", default="paper", help="strategy of the ROS runs")
-    ap.add_argument("--ros-rtf", type=float, default=8.0,
+    ap.add_argument("--ros-rtf", type=float, default=4.0,
                     help="real-time factor of the ROS runs")
     ap.add_argument("--camera-mount", default="paper",
                     help="RGB-D camera mount of the runs: 'paper' (0.894 m up, pitched 0.1 rad "

@@ -23,7 +23,7 @@ runs everything in a private network namespace when the kernel allows it.
 
 Usage (``scripts/run_demo.sh`` adds the network namespace)::
 
-    .venv/bin/python scripts/demo.py OUT [--world house_cluttered] [--rtf 8] [--max-sim-time 1500]
+    .venv/bin/python scripts/demo.py OUT [--world house_cluttered] [--rtf 4] [--max-sim-time 1500]
 """
 
 from __future__ import annotations
@@ -61,7 +61,7 @@ class DemoConfig:
     world: str = "house_cluttered"
     strategy: str = "paper"
     seed: int = 0
-    real_time_factor: float = 8.0
+    real_time_factor: float = 4.0
     max_sim_time_s: float = 1500.0
     wall_timeout_s: float = 900.0
     stall_wall_s: float = 30.0

@@ -20,7 +20,7 @@ export ROS_DOMAIN_ID=${ROS_DOMAIN_ID:-$(( 20 + $$ % 70 ))}
 export PYTHONDONTWRITEBYTECODE=1
 mkdir -p "$OUT"
 cmd=("$PY" scripts/demo.py "$OUT" --world "${DEMO_WORLD:-house_cluttered}"
-     --rtf "${DEMO_RTF:-8}" --max-sim-time "${DEMO_MAX_SIM_TIME:-1500}" "$@")
+     --rtf "${DEMO_RTF:-4}" --max-sim-time "${DEMO_MAX_SIM_TIME:-1500}" "$@")
 
 if [ "${EXPLORE_SEG_NO_NETNS:-0}" != 1 ] && unshare -n true 2>/dev/null; then
   echo "[demo] private network namespace (unshare -n), ROS_DOMAIN_ID=$ROS_DOMAIN_ID"

@@ -24,6 +24,12 @@ until it provably holds the cheapest path. A new plan replaces the current one o
 it is clearly cheaper (``switch_cost_ratio``) or the current one got blocked, which
 avoids the back-and-forth a planner through unknown space otherwise shows as walls
 appear piece by piece.
+
+Following: pure pursuit towards the plan point ``lookahead_m`` ahead, pulled back along
+the plan while the arc to it would enter the lethal zone (so the robot does not cut
+obstacle corners). After a collision (the engine backs the robot off) the goal stays
+active and is replanned up to ``collision_retries`` times, like Nav2's recoveries, and is
+then aborted.
 """
 
 from __future__ import annotations

@@ -507,3 +507,49 @@ def test_gif_writer_keeps_at_most_max_frames(tmp_path):
         assert im.n_frames == len(w) and max(im.size) <= 32
     with pytest.raises(ValueError, match="no frames"):
         GifWriter(tmp_path / "x.gif").write()
+
+
+
+def test_pursuit_arc_check_rejects_a_lookahead_point_around_an_obstacle_corner():
+    """The lookahead point is taken only if the arc to it stays out of the lethal zone."""
+    from sim_bridge.navigation import Navigator
+
+    res = 0.05
+    blocked = np.zeros((60, 60), bool)
+    blocked[30:, :30] = True              # x < 1.5 and y > 1.5: a corner at (1.5, 1.5)
+    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
+    nav = Navigator(NavParams())
+    assert nav._arc_clear((1.3, 1.25, 0.0), np.array([1.7, 1.62]))   # no plan yet: no check
+    nav._plan_cost = cost_grid(blocked, None, res, nav.params)
+    nav._plan_grid = grid
+    pose = (1.3, 1.25, 0.0)               # 0.25 m below the block, heading +x
+    # Around the corner: the arc passes ~0.1 m from it (robot radius 0.22).
+    assert not nav._arc_clear(pose, np.array([1.7, 1.62]))
+    # Straight on along the lane, or around the corner with room: clear.
+    assert nav._arc_clear(pose, np.array([1.7, 1.25]))
+    assert nav._arc_clear(pose, np.array([2.1, 1.62]))
+
+def _door_world(door_lo: float, door_hi: float, start) -> World:
+    """A 6 x 4 m room split at x = 3 by a wall with a door between door_lo and door_hi."""
+    t = WALL_T
+    return room_world([box("split_a", "wall", "wall", 3.0, door_lo / 2, t, door_lo, 0, WALL_H),
+                       box("split_b", "wall", "wall", 3.0, (door_hi + 4.0) / 2, t,
+                           4.0 - door_hi, 0, WALL_H)], start=start)
+
+
+@pytest.mark.parametrize("start, goal", [((1.2, 0.6, 0.0), (4.8, 0.6)),
+                                         ((1.5, 3.6, -0.5), (4.5, 0.5))])
+def test_robot_passes_a_door_at_a_sharp_angle_clear_of_its_jambs(start, goal):
+    """Through a 0.8 m door entered and left at sharp angles: no contact, and the robot's
+    centre keeps more than its radius from every jamb corner."""
+    eng = SimEngine(_door_world(2.6, 3.4, start), SimParams(nav_collision_retries=0, **FAST))
+    eng.run_until(lambda e: e.latest_scan is not None, 1.0)
+    eng.set_goal(goal[0], goal[1], 0.0)
+    eng.run_until(lambda e: e.nav_status.state is not NavState.ACTIVE, 120.0)
+    assert eng.nav_status.state is NavState.SUCCEEDED
+    xy = eng.trail
+    jambs = np.array([[3.0 - WALL_T / 2, 2.6], [3.0 + WALL_T / 2, 2.6],
+                      [3.0 - WALL_T / 2, 3.4], [3.0 + WALL_T / 2, 3.4]])
+    d = np.hypot(xy[:, None, 0] - jambs[None, :, 0], xy[:, None, 1] - jambs[None, :, 1])
+    assert eng.metrics.n_collisions == 0
+    assert float(d.min()) > 0.22
