@@ -31,10 +31,10 @@ from explore_seg.core.detector import Detector, DetectorParams
 from explore_seg.core.grid import GridMap, quaternion_from_yaw
 from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D, ObjectMap,
                                       ObjectParams, load_priors, parse_class_ids,
-                                      process_frame, wall_mask)
+                                      process_frame, WallMask, wall_mask)
 from explore_seg.node_util import WarnThrottle, run
 from explore_seg.params import ParamBinding
-from explore_seg.qos import MAP_QOS, POSE_QOS, RELIABLE_QOS, SENSOR_QOS, map_qos
+from explore_seg.qos import MAP_QOS, POSE_QOS, SENSOR_QOS, map_qos
 
 #: Colour/depth/semantic messages kept for stamp pairing (older ones are dropped).
 _PAIR_BUFFER = 4
@@ -80,6 +80,7 @@ class ObjectCostmapNode(Node):
         self._depths: collections.deque = collections.deque(maxlen=_PAIR_BUFFER)
         self._semantics: collections.deque = collections.deque(maxlen=_PAIR_BUFFER)
         self._poses: collections.deque = collections.deque(maxlen=_POSE_BUFFER)
+        self._walls: WallMask | None = None     # wall_mask of self._grid
         self._scan: LaserScan | None = None
         self._grid: GridMap | None = None
         self._grid_published: GridMap | None = None
@@ -109,7 +110,7 @@ class ObjectCostmapNode(Node):
         # stamp are lost and that frame is dropped).
         poses_group = MutuallyExclusiveCallbackGroup()
         if p.pose_topic_type == "odom":
-            self.create_subscription(Odometry, "odom", self._on_odom, RELIABLE_QOS,
+            self.create_subscription(Odometry, "odom", self._on_odom, POSE_QOS,
                                      callback_group=poses_group)
         else:
             self.create_subscription(PoseWithCovarianceStamped, "pose", self._on_pose,
@@ -144,6 +145,7 @@ class ObjectCostmapNode(Node):
 
     def _params_changed(self, old: ObjectParams, new: ObjectParams) -> None:
         self._objects.params = new
+        self._walls = None                      # wall_min_length_m / wall_margin_m
         if new.rate_hz != old.rate_hz:
             self._timer.cancel()
             self.destroy_timer(self._timer)
@@ -175,6 +177,7 @@ class ObjectCostmapNode(Node):
     def _on_map(self, msg: OccupancyGrid) -> None:
         try:
             self._grid = convert.grid_from_msg(msg)
+            self._walls = None                  # recomputed once per map, not per frame
         except ValueError as err:
             self._drop("map", str(err))
 
@@ -295,7 +298,9 @@ class ObjectCostmapNode(Node):
             p.camera_yaw_rad)
         frame = DepthFrame(depth, self._info, transform)
         scan_xy = self._scan_points(t_ns, pose)
-        walls = wall_mask(self._grid, p) if self._grid is not None else None
+        if self._walls is None and self._grid is not None:
+            self._walls = wall_mask(self._grid, p)
+        walls = self._walls
         result = process_frame(frame, detections, self._priors, p, scan_xy, walls)
         for reason in result.dropped:
             self._drop("box", reason)
