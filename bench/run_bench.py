@@ -50,6 +50,7 @@ import numpy as np  # noqa: E402
 from sim_bridge import worlds as sim_worlds  # noqa: E402
 from sim_bridge.coverage_tour import TourParams, coverage_tour  # noqa: E402
 from sim_bridge.engine import SimParams, load_world  # noqa: E402
+from sim_bridge.observable import with_observable  # noqa: E402
 from sim_bridge.lockstep import STRATEGIES, LockstepParams, LockstepState, RunResult, \
     run_exploration  # noqa: E402
 
@@ -100,10 +101,13 @@ def world_path(spec: str) -> str:
 
 @functools.lru_cache(maxsize=4)
 def load(spec: str):
-    """(World, GroundTruth) of a spec, cached per process (a few worlds per worker)."""
+    """(World, GroundTruth with its observable cells) of a spec, cached per process (a few
+    worlds per worker)."""
     world = load_world(world_path(spec))
     world.name = spec
-    return world, sim_worlds.ground_truth(world)
+    sp = SimParams()
+    return world, with_observable(world, sim_worlds.ground_truth(world), sp.lidar_params(),
+                                  sp.robot_radius_m)
 
 
 def sim_time_limit(area_m2: float, override: float | None) -> float:
@@ -168,7 +172,7 @@ def _tour_task(spec: str) -> dict[str, Any]:
     return {"world": spec, "tour_m": round(tour.length_m, 2),
             "viewpoints": int(len(tour.viewpoints_xy)),
             "coverable_fraction": round(tour.coverable_fraction, 4),
-            "explorable_area_m2": round(gt.free_area_m2, 2),
+            "explorable_area_m2": round(gt.explorable_area_m2, 2),
             "wall_s": round(time.perf_counter() - t0, 1)}
 
 
@@ -334,7 +338,7 @@ def main(argv: list[str] | None = None) -> int:
     ctx = mp.get_context("fork")
     with ctx.Pool(a.jobs, maxtasksperchild=20) as pool:
         # Explorable areas (time limits) first: cheap rasters.
-        areas = {s: float(load(s)[1].free_area_m2) for s in specs}
+        areas = {s: float(load(s)[1].explorable_area_m2) for s in specs}
         tours: list[dict[str, Any]] = []
         if not a.no_tour:
             prog = Progress(len(specs), "tours")

@@ -233,7 +233,7 @@ def coverage_tour(world: World, start_xy: tuple[float, float] | None = None,
     st = p.target_stride_cells
     tmask = np.zeros(geom.shape, dtype=bool)
     tmask[::st, ::st] = True
-    tmask &= gt.inside
+    tmask &= gt.explorable
     tid = np.full(geom.shape[0] * geom.shape[1], -1, dtype=np.int64)
     tflat = np.flatnonzero(tmask.ravel())
     tid[tflat] = np.arange(tflat.size)

@@ -35,6 +35,7 @@ from sim_bridge import worlds
 from sim_bridge.mapping import MappingParams, ScanMapper
 from sim_bridge.metrics import CollisionEvent, SimMetrics
 from sim_bridge.navigation import NavParams, NavState, NavStatus, Navigator
+from sim_bridge.observable import with_observable
 from sim_bridge.sensors import CameraParams, DepthCamera, Lidar, LidarParams
 from sim_bridge.world import World
 
@@ -168,6 +169,10 @@ class SimParams:
         "how often coverage is evaluated (sim time)", "s"))
     compute_coverage: bool = field(default=True, metadata=_doc(
         "rasterise the ground truth and track coverage", read_only=True))
+    coverage_observable: bool = field(default=True, metadata=_doc(
+        "measure coverage over the free cells a robot can observe from poses it can reach "
+        "(false: over every free cell connected to the start, gaps narrower than the robot "
+        "included)", read_only=True))
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.startup_real_time_factor)
@@ -369,6 +374,7 @@ class SimEngine:
     ground_truth : object, optional
         A ``worlds.GroundTruth`` (``inside`` mask aligned with its ``lidar`` GridMap) for
         coverage; computed from the world when ``params.compute_coverage`` and not given.
+        With ``params.coverage_observable`` its ``observable`` mask is added when missing.
     scan_geometry : ScanGeometry, optional
         Angles/limits of the lidar's ranges; default from ``params``.
     event_queue_len : int
@@ -403,6 +409,8 @@ class SimEngine:
         self._lidar_mount = lp.mount_xy_m
         if ground_truth is None and p.compute_coverage:
             ground_truth = worlds.ground_truth(world, resolution_m=p.map_resolution_m)
+        if p.coverage_observable and isinstance(ground_truth, worlds.GroundTruth):
+            ground_truth = with_observable(world, ground_truth, lp, p.robot_radius_m)
         self.ground_truth = ground_truth
         self.collider = Collider(world, p.robot_radius_m, p.robot_height_m)
         x, y, yaw = (float(v) for v in world.start_pose)

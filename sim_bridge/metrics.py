@@ -1,7 +1,8 @@
 """Run metrics of the simulator: coverage, path length, collisions, goals.
 
-Coverage is the share of the ground-truth explorable area (``GroundTruth.inside``: free
-cells reachable from the start in the lidar raster) whose cell centre falls on a cell
+Coverage is the share of the ground-truth explorable area (``GroundTruth.explorable``:
+free cells reachable from the start in the lidar raster that a robot can observe from
+some pose it can reach, see :mod:`sim_bridge.observable`) whose cell centre falls on a cell
 the map knows (free or occupied): what the robot has observed. ``coverage_free_pct``
 counts only map cells known free; it is lower by the inside cells the mapper marks
 occupied (next to walls and thin legs the lidar's hit cells smear over the ground-truth
@@ -124,7 +125,8 @@ class SimMetrics:
     Parameters
     ----------
     ground_truth : object with ``inside`` and ``lidar`` (GridMap), optional
-        Without it coverage stays NaN.
+        Coverage is measured over its ``explorable`` cells when it has them (see
+        :mod:`sim_bridge.observable`), else over ``inside``. Without it coverage stays NaN.
     history_max : int
         Coverage history length bound: when full, every other sample is dropped and the
         sampling interval doubles (memory stays bounded for any run length).
@@ -133,8 +135,12 @@ class SimMetrics:
     def __init__(self, ground_truth: Any = None, history_max: int = 2048) -> None:
         if history_max < 4:
             raise ValueError(f"history_max must be >= 4, got {history_max}")
-        self.reference = (CoverageReference(ground_truth.inside, ground_truth.lidar)
-                          if ground_truth is not None else None)
+        if ground_truth is not None:
+            ref = getattr(ground_truth, "explorable", None)
+            ref = ground_truth.inside if ref is None else ref
+            self.reference: CoverageReference | None = CoverageReference(ref, ground_truth.lidar)
+        else:
+            self.reference = None
         self.path_length_m = 0.0
         self.collisions: list[CollisionEvent] = []
         self.goals_received = 0

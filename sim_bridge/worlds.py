@@ -74,9 +74,12 @@ class GroundTruth:
         Explorable region: 4-connected flood fill from the start cell over cells that
         are free in ``lidar`` (the free cells of the shipped PGMs).
     free_area_m2 : float
-        ``inside.sum() * resolution**2`` (coverage denominator).
+        ``inside.sum() * resolution**2``.
     start_cell : tuple of int
         (row, col) of the start pose.
+    observable : ndarray of bool, shape (H, W), or None
+        Inside cells a robot can observe (:func:`sim_bridge.observable.observable_region`);
+        None when not computed.
     """
 
     lidar: GridMap
@@ -85,6 +88,18 @@ class GroundTruth:
     inside: npt.NDArray[np.bool_]
     free_area_m2: float
     start_cell: tuple[int, int]
+    observable: npt.NDArray[np.bool_] | None = None
+
+    @property
+    def explorable(self) -> npt.NDArray[np.bool_]:
+        """The coverage denominator: ``inside & observable`` (``inside`` when
+        ``observable`` is None)."""
+        return self.inside if self.observable is None else self.inside & self.observable
+
+    @property
+    def explorable_area_m2(self) -> float:
+        """Area of :attr:`explorable` in square metres."""
+        return float(self.explorable.sum()) * self.lidar.resolution_m ** 2
 
     @property
     def resolution_m(self) -> float:
