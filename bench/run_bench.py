@@ -36,6 +36,7 @@ import math
 import multiprocessing as mp
 import os
 import shlex
+import signal
 import sys
 import time
 from pathlib import Path
@@ -281,6 +282,10 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                          "HEIGHT_M,PITCH_RAD")
     ap.add_argument("--report-only", action="store_true",
                     help="only redo plots and BENCHMARKS.md from --out")
+    ap.add_argument("--resume", action="store_true",
+                    help="keep the runs and tours already in --out that this command asks "
+                         "for (same world, strategy, seed) and run only the missing ones; "
+                         "runs of other worlds/strategies/seeds are dropped")
     a = ap.parse_args(argv)
     if a.runs < 1 or a.jobs < 1:
         ap.error("--runs and --jobs must be >= 1")
@@ -335,14 +340,21 @@ def main(argv: list[str] | None = None) -> int:
                              [SimParams().camera_mount_z_m, SimParams().camera_pitch_rad]),
             "started": time.strftime("%Y-%m-%d %H:%M:%S")}
     t_start = time.monotonic()
+    old_meta = _read_json(out / "meta.json") if a.resume else {}
     ctx = mp.get_context("fork")
-    with ctx.Pool(a.jobs, maxtasksperchild=20) as pool:
+    interrupted = False
+    old_term = signal.signal(signal.SIGTERM, _raise_interrupt)
+    with ctx.Pool(a.jobs, initializer=_worker_init, maxtasksperchild=20) as pool:
         # Explorable areas (time limits) first: cheap rasters.
         areas = {s: float(load(s)[1].explorable_area_m2) for s in specs}
         tours: list[dict[str, Any]] = []
         if not a.no_tour:
-            prog = Progress(len(specs), "tours")
-            for row in pool.imap_unordered(_tour_task, specs):
+            if a.resume:
+                tours = [dict(r, tour_m=float(r["tour_m"]))
+                         for r in _read_csv(out / "tours.csv") if r["world"] in specs]
+            todo = [s for s in specs if s not in {r["world"] for r in tours}]
+            prog = Progress(len(todo), "tours")
+            for row in pool.imap_unordered(_tour_task, todo):
                 tours.append(row)
                 prog.update(f"{row['world']}: {row['tour_m']} m")
             _write_csv(out / "tours.csv", sorted(tours, key=lambda r: specs.index(r["world"])))
@@ -354,18 +366,43 @@ def main(argv: list[str] | None = None) -> int:
                 for k in range(a.runs):
                     pic = (str(out / "maps" / f"{_slug(s)}_{strat}.png") if k == 0 else None)
                     tasks.append((s, strat, a.seed0 + k, limit, pic, a.mount))
-        # Long worlds first so the pool does not end on one slow run.
-        tasks.sort(key=lambda t: -areas[t[0]])
+        results: list[dict[str, Any]] = []
+        if a.resume:
+            wanted = {t[:3] for t in tasks}
+            for d in _read_jsonl(out / "runs.jsonl"):
+                key = (d["world"], d["strategy"], d["seed"])
+                if key in wanted:
+                    wanted.discard(key)  # a duplicate line counts once
+                    results.append(d)
+            done = {(d["world"], d["strategy"], d["seed"]) for d in results}
+            tasks = [t for t in tasks if t[:3] not in done]
+            print(f"[bench] resume: {len(results)} runs kept, {len(tasks)} to run",
+                  file=sys.stderr)
+        # Seed by seed (an interrupted benchmark has as many runs of every world x
+        # strategy, +-1), long worlds first within a seed so the pool does not end on one
+        # slow run.
+        tasks.sort(key=lambda t: (t[2], -areas[t[0]]))
         prog = Progress(len(tasks), "runs")
-        results = []
+        ran = 0
         with open(out / "runs.jsonl", "w") as jl:
-            for d in pool.imap_unordered(_run_task, tasks):
-                results.append(d)
+            for d in results:
                 jl.write(json.dumps(d) + "\n")
-                jl.flush()
-                prog.update(f"{d['world']}/{d['strategy']}/{d['seed']}: "
-                            f"{d['coverage_pct'] or 0:.1f} % {d['stop_reason']} "
-                            f"({d['wall_time_s']:.0f} s)")
+            jl.flush()
+            try:
+                for d in pool.imap_unordered(_run_task, tasks):
+                    results.append(d)
+                    ran += 1
+                    jl.write(json.dumps(d) + "\n")
+                    jl.flush()
+                    prog.update(f"{d['world']}/{d['strategy']}/{d['seed']}: "
+                                f"{d['coverage_pct'] or 0:.1f} % {d['stop_reason']} "
+                                f"({d['wall_time_s']:.0f} s)")
+            except KeyboardInterrupt:
+                interrupted = True
+                pool.terminate()
+                print(f"\n[bench] interrupted after {ran} of {len(tasks)} runs: reporting "
+                      "those (continue with --resume)", file=sys.stderr)
+    signal.signal(signal.SIGTERM, old_term)
     tour_by_world = {t["world"]: t["tour_m"] for t in tours}
     rows = []
     order = {(s, st): i for i, (s, st) in enumerate((s, st) for s in specs for st in strategies)}
@@ -377,21 +414,38 @@ def main(argv: list[str] | None = None) -> int:
                                  if tour and d["completed"] else "")
         rows.append(row)
     _write_csv(out / "runs.csv", rows)
-    if a.yolo_frames > 0:
+    if a.yolo_frames > 0 and not interrupted:
         yolo = time_yolo(a.yolo_frames)
         (out / "yolo.json").write_text(json.dumps(yolo, indent=1))
         print(f"[bench] real detector: {yolo}", file=sys.stderr)
-    if a.ros > 0:
+    if a.ros > 0 and not interrupted:
         ros = compare_with_ros(specs[0], a.ros_strategy, [a.seed0 + k for k in range(a.ros)],
                                out / "ros", a.ros_rtf,
                                sim_time_limit(areas[specs[0]], a.max_sim_time), a.mount)
         (out / "ros.json").write_text(json.dumps(ros, indent=1))
-    meta["wall_s"] = round(time.monotonic() - t_start, 1)
+    part = {"command": command, "started": meta["started"], "runs_run": ran,
+            "wall_s": round(time.monotonic() - t_start, 1)}
+    if interrupted:
+        part["interrupted"] = True
+    parts = (old_meta.get("parts") or ([_part_of(old_meta)] if old_meta else [])) + [part]
+    meta["parts"] = parts
+    meta["wall_s"] = round(sum(float(p.get("wall_s") or 0.0) for p in parts), 1)
     (out / "meta.json").write_text(json.dumps(meta, indent=1))
     report.write_all(out, Path(a.md) if a.md else None, command=command)
     print(f"[bench] {len(results)} runs in {_hms(meta['wall_s'])}; results in {out}"
           + (f", summary in {a.md}" if a.md else ""), file=sys.stderr)
-    return 0
+    return 130 if interrupted else 0
+
+
+def _raise_interrupt(signum: int, frame: Any) -> None:
+    """SIGTERM in the main process: stop like Ctrl-C (report what has run)."""
+    raise KeyboardInterrupt
+
+
+def _worker_init() -> None:
+    """Workers leave interrupts to the main process (which terminates them)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf: float,
@@ -439,6 +493,44 @@ def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf
             f"`sim_bridge` + `explorer` processes at real-time factor {rtf} "
             "(`scripts/demo.py`). Both stop at 99 % coverage.")
     return {"note": note, "rows": rows}
+
+
+def _read_json(path: Path) -> dict[str, Any]:
+    """A JSON object file, {} when absent or unreadable."""
+    try:
+        d = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return {}
+    return d if isinstance(d, dict) else {}
+
+
+def _read_jsonl(path: Path) -> list[dict[str, Any]]:
+    """The run records of a ``runs.jsonl`` (unreadable lines, e.g. a cut last line, skipped)."""
+    out: list[dict[str, Any]] = []
+    if not path.is_file():
+        return out
+    with open(path) as f:
+        for line in f:
+            try:
+                d = json.loads(line)
+            except ValueError:
+                continue
+            if isinstance(d, dict) and {"world", "strategy", "seed"} <= d.keys():
+                out.append(d)
+    return out
+
+
+def _read_csv(path: Path) -> list[dict[str, Any]]:
+    if not path.is_file():
+        return []
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def _part_of(meta: dict[str, Any]) -> dict[str, Any]:
+    """A pre-``parts`` meta.json as one part."""
+    return {"command": meta.get("command"), "started": meta.get("started"),
+            "runs_run": None, "wall_s": meta.get("wall_s")}
 
 
 def _row_from_dict(d: dict[str, Any]) -> dict[str, Any]:

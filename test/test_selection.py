@@ -403,3 +403,47 @@ def test_frontier_params_mirror_selection_params():
     p = SelectionParams(min_group_size_cells=7, robot_radius_m=0.3)
     fp = p.frontier_params()
     assert (fp.min_group_size_cells, fp.robot_radius_m) == (7, 0.3)
+
+
+@pytest.mark.parametrize("count,explored", [(3, False), (0, False), (3, True)])
+def test_frontier_that_keeps_vanishing_and_coming_back_is_blacklisted(count, explored):
+    # The near frontier (fr[0]) vanishes whenever the robot heads for it and comes back
+    # when it heads for the far one (a wall edge flickering next to unknown space). With
+    # ``explored`` its cells are known when it vanishes (cleared by sensing): not flicker.
+    g, fr = manager_world()
+    data = g.data.copy()
+    data[fr[0].cells[:, 0], fr[0].cells[:, 1]] = -1
+    g = g.with_data(data)
+    gone = g.with_data(np.zeros_like(data)) if explored else g
+    m = GoalManager(SelectionParams(strategy="nearest", flicker_vanish_count=count,
+                                    hysteresis_margin=0.1))
+    t, reasons = 0.0, []
+    for _ in range(5):
+        res = m.step(t, (1.0, 1.0), g, fr, [1.0, 3.0])
+        reasons.append(res.reason)
+        t += 1.0
+        if res.goal is None or res.goal.xy_m != fr[0].point_xy_m:
+            break
+        res = m.step(t, (1.0, 1.0), gone, [fr[1]], [3.0])   # fr[0] gone
+        reasons.append(res.reason)
+        t += 1.0
+        assert res.action is Action.NEW_GOAL and res.goal.xy_m == fr[1].point_xy_m
+    if count and not explored:
+        assert sum("vanished" in r for r in reasons) == 1, reasons
+        assert fr[0].point_xy_m in m.blacklist
+        res = m.step(t, (1.0, 1.0), g, fr, [1.0, 3.0])   # back again: not chosen
+        assert res.goal.xy_m == fr[1].point_xy_m
+    else:
+        assert m.blacklist == () and not any("vanished" in r for r in reasons)
+
+
+def test_frontier_that_vanishes_once_is_not_blacklisted():
+    g, fr = manager_world()
+    m = GoalManager(SelectionParams(strategy="nearest"))
+    assert m.step(0.0, (1.0, 1.0), g, fr, [1.0, 3.0]).goal.xy_m == fr[0].point_xy_m
+    res = m.step(1.0, (1.0, 1.0), g, [fr[1]], [3.0])
+    assert res.reason == "goal frontier gone or unreachable" and m.blacklist == ()
+    assert m.step(2.0, (1.0, 1.0), g, fr, [1.0, 3.0]).goal.xy_m == fr[0].point_xy_m
+    m.reset(clear_blacklist=True)
+    with pytest.raises(ValueError, match="flicker_vanish_count"):
+        SelectionParams(flicker_vanish_count=-1)

@@ -56,6 +56,9 @@ from explore_seg.core.paths import MAX_BLOCK_CELLS, BlockGraph, nearest_true
 STRATEGIES = ("paper", "nearest", "explore_lite")
 POSE_TOPIC_TYPES = ("odom", "pose")
 _FP = FrontierParams  # defaults of the detection fields are FrontierParams' own
+#: Goal points kept per vanished-frontier area, and areas kept (oldest dropped).
+_FLICKER_POINTS = 20
+_FLICKER_AREAS = 100
 
 
 @dataclass(frozen=True)
@@ -111,6 +114,14 @@ class SelectionParams:
                "unknown cells are used, multiplied by this factor (>= 1)"})
     blacklist_retries: int = field(default=1, metadata={
         "doc": "times the blacklist is cleared to retry its frontiers before DONE"})
+    flicker_vanish_count: int = field(default=3, metadata={
+        "doc": "blacklist a goal area once its frontier vanished this many times before the "
+               "robot got there with its cells still unknown (it came back in between: a "
+               "wall edge flickering between occupied and free next to unknown space pulls "
+               "the robot back and forth otherwise); 0 = never"})
+    flicker_radius_m: float = field(default=1.0, metadata={
+        "doc": "goals within this distance of the first vanished goal of an area count as "
+               "that area for flicker_vanish_count", "unit": "m"})
     done_confirmations: int = field(default=3, metadata={
         "doc": "consecutive decisions without a reachable frontier before DONE"})
     return_to_start: bool = field(default=False, metadata={
@@ -160,7 +171,7 @@ class SelectionParams:
                      "region_search_radius_m", "start_search_radius_m", "hysteresis_margin",
                      "progress_min_m", "goal_reached_tolerance_m", "frontier_match_radius_m",
                      "blacklist_radius_m", "goal_republish_s", "arrival_wait_s",
-                     "goal_change_min_m"):
+                     "goal_change_min_m", "flicker_radius_m"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {v}")
@@ -177,6 +188,9 @@ class SelectionParams:
             raise ValueError(f"unknown_path_factor must be >= 1, got {self.unknown_path_factor}")
         if self.blacklist_retries < 0:
             raise ValueError(f"blacklist_retries must be >= 0, got {self.blacklist_retries}")
+        if self.flicker_vanish_count < 0:
+            raise ValueError(f"flicker_vanish_count must be >= 0, got "
+                             f"{self.flicker_vanish_count}")
         if self.done_confirmations < 1:
             raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
         self.frontier_params()  # validates the detection fields
@@ -513,11 +527,20 @@ class GoalManager:
        there after a newer map (or ``arrival_wait_s``) blacklists it too; reaching a
        return-to-start goal ends exploration (DONE).
     2. Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted goal
-       are excluded. When no reachable frontier remains for ``done_confirmations``
-       consecutive ticks: DONE (or first a return-to-start goal).
+       are excluded. When no reachable frontier is detected but the current goal's
+       frontier cells are still unknown (a thin frontier seen at a grazing angle comes and
+       goes), the goal is kept. When no reachable frontier remains for
+       ``done_confirmations`` consecutive ticks: the blacklist is cleared and its
+       frontiers retried (``blacklist_retries`` times), then DONE (or first a
+       return-to-start goal).
     3. The current goal is kept unless its frontier vanished or another frontier is
        cheaper than the current goal's frontier by ``hysteresis_margin * |cost|``; a
-       new goal within ``goal_change_min_m`` of the current one is not sent.
+       new goal within ``goal_change_min_m`` of the current one is not sent. Observed
+       cells do not become unknown again, so a frontier that vanishes before the robot
+       arrives with its cells still unknown (so not cleared by sensing: its free
+       neighbours turned occupied or were covered by an object) and keeps coming back at
+       the same place (within ``flicker_radius_m`` of where it first vanished) is map
+       flicker: after ``flicker_vanish_count`` such vanishings its goals are blacklisted.
 
     DONE is final until :meth:`reset`. The blacklist keeps the newest ``blacklist_max``
     goals.
@@ -526,6 +549,8 @@ class GoalManager:
     def __init__(self, params: SelectionParams = SelectionParams()) -> None:
         self.params = params
         self._blacklist: deque[tuple[float, float]] = deque(maxlen=params.blacklist_max)
+        # Areas where a goal's frontier vanished before arrival: [count, goal points].
+        self._vanished: list[tuple[list[int], list[tuple[float, float]]]] = []
         self.reset()
 
     def reset(self, clear_blacklist: bool = False) -> None:
@@ -538,11 +563,13 @@ class GoalManager:
         self._arrived_s: float | None = None
         self._arrived_stamp_ns = 0
         self._empty_ticks = 0
+        self._goal_cells_xy: npt.NDArray[np.float64] | None = None
         self._retries_left = self.params.blacklist_retries
         self.start_xy_m: tuple[float, float] | None = None
         self._start_yaw = 0.0
         if clear_blacklist:
             self._blacklist.clear()
+            self._vanished.clear()
 
     def set_params(self, params: SelectionParams) -> None:
         """Apply new parameters (the blacklist keeps its newest entries)."""
@@ -569,6 +596,29 @@ class GoalManager:
         self.start_xy_m = (float(xy_m[0]), float(xy_m[1]))
         self._start_yaw = float(yaw_rad)
 
+    def _note_vanished(self, xy_m: tuple[float, float]) -> bool:
+        """Count a goal whose frontier vanished before arrival; True when its area reached
+        ``flicker_vanish_count`` (its goal points are then blacklisted)."""
+        p = self.params
+        if p.flicker_vanish_count < 1:
+            return False
+        x, y = float(xy_m[0]), float(xy_m[1])
+        for count, pts in self._vanished:
+            if math.hypot(x - pts[0][0], y - pts[0][1]) <= p.flicker_radius_m:
+                count[0] += 1
+                pts.append((x, y))
+                del pts[1:-_FLICKER_POINTS]
+                break
+        else:
+            count, pts = [1], [(x, y)]
+            self._vanished.append((count, pts))
+            del self._vanished[:-_FLICKER_AREAS]
+        if count[0] < p.flicker_vanish_count:
+            return False
+        for pt in pts:
+            self.add_to_blacklist(pt)
+        return True
+
     def _blacklisted(self, frontiers: Sequence[Frontier]) -> np.ndarray:
         if not self._blacklist or not frontiers:
             return np.zeros(len(frontiers), dtype=bool)
@@ -590,6 +640,23 @@ class GoalManager:
                 best, best_d = i, d
         radius = self.params.frontier_match_radius_m + self.goal.frontier_gap_m
         return best if best_d <= radius else None
+
+    def _remember_cells(self, grid: GridMap, f: Frontier) -> None:
+        """Keep the (world) positions of the current goal's frontier cells."""
+        x, y = grid.cells_to_world(f.cells[:, 0], f.cells[:, 1])
+        self._goal_cells_xy = np.column_stack([x, y])
+
+    def _still_unknown(self, grid: GridMap) -> float:
+        """Share of the goal frontier's last cells that are still unknown in ``grid``
+        (a frontier that vanished with its cells unexplored was not cleared by sensing)."""
+        xy = self._goal_cells_xy
+        if xy is None or len(xy) == 0:
+            return 0.0
+        r, c = grid.world_to_cells(xy[:, 0], xy[:, 1])
+        inside = (r >= 0) & (r < grid.height) & (c >= 0) & (c < grid.width)
+        unknown = ~inside
+        unknown[inside] = grid.data[r[inside], c[inside]] < 0
+        return float(unknown.mean())
 
     def _new_goal(self, f: Frontier, cost: float, robot_xy_m: tuple[float, float],
                   now_s: float) -> Goal:
@@ -697,6 +764,11 @@ class GoalManager:
             self._empty_ticks += 1
             if self.goal is not None and self.goal.is_return:
                 return StepResult(Action.KEEP, self.goal, "returning to start", sel)
+            if self.goal is not None and self._still_unknown(grid) >= 0.5:
+                # A thin frontier seen at a grazing angle (a doorway from the side) comes
+                # and goes: its cells are still unknown, so drive on and look.
+                return StepResult(Action.KEEP, self.goal, reason or "no frontier detected now, "
+                                  "but the goal's cells are still unknown: keeping goal", sel)
             self.goal = None
             if self._empty_ticks < p.done_confirmations:
                 return StepResult(Action.WAIT, None, reason or "no reachable frontier", sel)
@@ -710,8 +782,7 @@ class GoalManager:
                     self._start_progress(self.goal, robot_xy_m, now_s)
                     return StepResult(Action.NEW_GOAL, self.goal,
                                       "no reachable frontier: returning to start", sel)
-            if self._retries_left > 0 and self._blacklist and \
-                    bool(self._blacklisted(frontiers).any()):
+            if self._retries_left > 0 and self._blacklist:
                 # The map changed since those goals failed (a doorway seen, a false
                 # obstacle cleared): give the blacklisted frontiers another chance.
                 self._retries_left -= 1
@@ -728,6 +799,8 @@ class GoalManager:
         # 3. keep or switch
         if self.goal is not None and not self.goal.is_return:
             cur = self._matching(grid, frontiers)
+            if cur is not None:
+                self._remember_cells(grid, frontiers[cur])
             if cur is not None and not excluded[cur] and np.isfinite(sel.costs[cur]):
                 cur_cost = float(sel.costs[cur])
                 if best == cur or best_cost >= cur_cost - p.hysteresis_margin * abs(cur_cost):
@@ -738,7 +811,12 @@ class GoalManager:
                                   sel)
             if cur is not None and not excluded[cur] and np.isfinite(sel.costs[cur]):
                 reason = reason or "a better frontier appeared"
+            elif (cur is None and self._still_unknown(grid) >= 0.5
+                  and self._note_vanished(self.goal.xy_m)):
+                reason = (f"goal frontier vanished {p.flicker_vanish_count} times here before "
+                          "arrival (flickering): area blacklisted")
             else:
                 reason = reason or "goal frontier gone or unreachable"
         goal = self._new_goal(frontiers[best], best_cost, robot_xy_m, now_s)
+        self._remember_cells(grid, frontiers[best])
         return StepResult(Action.NEW_GOAL, goal, reason or "new goal", sel)

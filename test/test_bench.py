@@ -1,0 +1,108 @@
+"""bench/run_bench.py end to end on a tiny budget: outputs, reproducibility, --resume."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from bench import run_bench  # noqa: E402
+
+ARGS = ["--worlds", "small_house", "--strategies", "nearest", "--jobs", "1",
+        "--max-sim-time", "20", "--no-tour", "--yolo-frames", "0"]
+
+
+def _runs(out: Path) -> list[dict]:
+    return [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
+
+
+@pytest.fixture(scope="module")
+def first(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench")
+    md = out / "B.md"
+    assert run_bench.main(ARGS + ["--runs", "1", "--out", str(out), "--md", str(md)]) == 0
+    return out, md
+
+
+def test_outputs(first):
+    out, md = first
+    runs = _runs(out)
+    assert [(r["world"], r["strategy"], r["seed"]) for r in runs] == [
+        ("small_house", "nearest", 0)]
+    assert runs[0]["sim_time_s"] <= 20.5
+    assert (out / "runs.csv").is_file() and (out / "maps" / "small_house_nearest.png").is_file()
+    meta = json.loads((out / "meta.json").read_text())
+    assert len(meta["parts"]) == 1 and meta["parts"][0]["runs_run"] == 1
+    text = md.read_text()
+    assert "| small_house | nearest | 1 |" in text
+    assert "parts" not in text
+
+
+def test_resume_runs_only_the_missing_seeds(first, tmp_path):
+    out, _ = first
+    res = tmp_path / "res"
+    res.mkdir()
+    for name in ("runs.jsonl", "meta.json"):
+        (res / name).write_text((out / name).read_text())
+    kept = _runs(res)[0]
+    md = res / "B.md"
+    assert run_bench.main(ARGS + ["--runs", "2", "--out", str(res), "--md", str(md),
+                                  "--resume"]) == 0
+    runs = _runs(res)
+    assert [r["seed"] for r in runs] == [0, 1]
+    assert runs[0] == kept                              # seed 0 was not run again
+    meta = json.loads((res / "meta.json").read_text())
+    assert [p["runs_run"] for p in meta["parts"]] == [1, 1]
+    assert meta["wall_s"] == pytest.approx(sum(p["wall_s"] for p in meta["parts"]), abs=0.2)
+    text = md.read_text()
+    assert "Run in 2 parts" in text and "--resume" in text
+    assert "| small_house | nearest | 2 |" in text
+
+
+def test_same_seed_same_run(first, tmp_path):
+    out, _ = first
+    again = tmp_path / "again"
+    assert run_bench.main(ARGS + ["--runs", "1", "--out", str(again), "--md", ""]) == 0
+    a, b = _runs(out)[0], _runs(again)[0]
+    for k in ("coverage_pct", "sim_time_s", "path_length_m", "goals_sent", "collisions"):
+        assert a[k] == b[k], k
+
+
+def test_sigterm_reports_what_ran_and_resume_finishes(tmp_path):
+    import os
+    import signal
+    import subprocess
+    import time
+
+    out = tmp_path / "int"
+    cmd = [sys.executable, str(ROOT / "bench" / "run_bench.py"), *ARGS, "--runs", "4",
+           "--out", str(out), "--md", str(out / "B.md")]
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    jl = out / "runs.jsonl"
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 120:
+        if jl.is_file() and jl.read_text().count("\n") >= 1:
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    if proc.returncode == 0:  # all four runs finished before the signal: nothing to test
+        pytest.skip("the benchmark finished before it could be interrupted")
+    assert proc.returncode == 130, err
+    meta = json.loads((out / "meta.json").read_text())
+    done = len(_runs(out))
+    assert 1 <= done < 4 and meta["parts"][0]["interrupted"] is True
+    assert meta["parts"][0]["runs_run"] == done
+    assert "(interrupted)" not in (out / "B.md").read_text()   # one part: no parts list
+    assert run_bench.main(ARGS + ["--runs", "4", "--out", str(out), "--md",
+                                  str(out / "B.md"), "--resume"]) == 0
+    assert sorted(r["seed"] for r in _runs(out)) == [0, 1, 2, 3]
+    text = (out / "B.md").read_text()
+    assert "Run in 2 parts" in text and "(interrupted)" in text
