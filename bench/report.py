@@ -273,14 +273,19 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
               f"{meta.get('jobs')} worker processes on {meta.get('cpus')} CPUs, "
               f"{meta.get('wall_s', '?')} s wall in total.", ""]
         if len(parts) > 1:
-            L += [f"Run in {len(parts)} parts on the same code, each later part with "
-                  "`--resume` (runs already in the output folder that the command asks for "
-                  "are kept, the rest are run):", ""]
+            codes = {part.get("code") for part in parts}
+            same = (f"on the same code ({next(iter(codes))})" if len(codes) == 1 and None not in codes
+                    else "(code version of each part given where recorded)")
+            L += [f"Run in {len(parts)} parts {same}, each later part with `--resume` "
+                  "(runs already in the output folder that the command asks for are kept, "
+                  "the rest are run):", ""]
             for i, part in enumerate(parts, 1):
                 ran = part.get("runs_run")
                 L.append(f"{i}. started {part.get('started', '?')}, "
                          + (f"{ran} runs, " if ran is not None else "")
                          + f"{part.get('wall_s', '?')} s wall"
+                         + (f", code {part['code']}" if part.get("code") and len(codes) != 1
+                            else "")
                          + (" (interrupted)" if part.get("interrupted") else "")
                          + f": `{part.get('command')}`")
             L.append("")

@@ -36,7 +36,9 @@ import math
 import multiprocessing as mp
 import os
 import shlex
+import shutil
 import signal
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -100,10 +102,10 @@ def world_path(spec: str) -> str:
     return spec
 
 
-@functools.lru_cache(maxsize=4)
+@functools.lru_cache(maxsize=64)
 def load(spec: str):
-    """(World, GroundTruth with its observable cells) of a spec, cached per process (a few
-    worlds per worker)."""
+    """(World, GroundTruth with its observable cells) of a spec, cached per process (the
+    main process fills it before the workers fork)."""
     world = load_world(world_path(spec))
     world.name = spec
     sp = SimParams()
@@ -335,74 +337,48 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     meta = {"command": command, "runs": a.runs, "seed0": a.seed0, "worlds": specs,
             "strategies": strategies, "jobs": a.jobs, "cpus": os.cpu_count(),
+            "settings": _settings(a), "code": _code_version(),
             "lockstep_params": {k: v for k, v in vars(LockstepParams()).items()},
             "camera_mount": (list(a.mount) if a.mount is not None else
                              [SimParams().camera_mount_z_m, SimParams().camera_pitch_rad]),
             "started": time.strftime("%Y-%m-%d %H:%M:%S")}
     t_start = time.monotonic()
     old_meta = _read_json(out / "meta.json") if a.resume else {}
-    ctx = mp.get_context("fork")
-    interrupted = False
-    old_term = signal.signal(signal.SIGTERM, _raise_interrupt)
-    with ctx.Pool(a.jobs, initializer=_worker_init, maxtasksperchild=20) as pool:
-        # Explorable areas (time limits) first: cheap rasters.
-        areas = {s: float(load(s)[1].explorable_area_m2) for s in specs}
-        tours: list[dict[str, Any]] = []
-        if not a.no_tour:
-            if a.resume:
-                tours = [dict(r, tour_m=float(r["tour_m"]))
-                         for r in _read_csv(out / "tours.csv") if r["world"] in specs]
-            todo = [s for s in specs if s not in {r["world"] for r in tours}]
-            prog = Progress(len(todo), "tours")
-            for row in pool.imap_unordered(_tour_task, todo):
-                tours.append(row)
-                prog.update(f"{row['world']}: {row['tour_m']} m")
-            _write_csv(out / "tours.csv", sorted(tours, key=lambda r: specs.index(r["world"])))
-        (out / "maps").mkdir(exist_ok=True)
-        tasks = []
-        for s in specs:
-            limit = sim_time_limit(areas[s], a.max_sim_time)
-            for strat in strategies:
-                for k in range(a.runs):
-                    pic = (str(out / "maps" / f"{_slug(s)}_{strat}.png") if k == 0 else None)
-                    tasks.append((s, strat, a.seed0 + k, limit, pic, a.mount))
-        results: list[dict[str, Any]] = []
-        if a.resume:
-            wanted = {t[:3] for t in tasks}
-            for d in _read_jsonl(out / "runs.jsonl"):
-                key = (d["world"], d["strategy"], d["seed"])
-                if key in wanted:
-                    wanted.discard(key)  # a duplicate line counts once
-                    results.append(d)
-            done = {(d["world"], d["strategy"], d["seed"]) for d in results}
-            tasks = [t for t in tasks if t[:3] not in done]
-            print(f"[bench] resume: {len(results)} runs kept, {len(tasks)} to run",
+    if old_meta:
+        old_settings = old_meta.get("settings")
+        if old_settings is not None and old_settings != meta["settings"]:
+            print(f"[bench] --resume: the runs in {out} were made with other settings "
+                  f"({old_settings}, now {meta['settings']}); use another --out",
                   file=sys.stderr)
-        # Seed by seed (an interrupted benchmark has as many runs of every world x
-        # strategy, +-1), long worlds first within a seed so the pool does not end on one
-        # slow run.
-        tasks.sort(key=lambda t: (t[2], -areas[t[0]]))
-        prog = Progress(len(tasks), "runs")
-        ran = 0
-        with open(out / "runs.jsonl", "w") as jl:
-            for d in results:
-                jl.write(json.dumps(d) + "\n")
-            jl.flush()
+            return 2
+        old_codes = {p.get("code") for p in old_meta.get("parts") or [old_meta]}
+        if old_codes != {meta["code"]}:
+            print(f"[bench] --resume: warning: earlier parts ran on code {sorted(map(str, old_codes))}, "
+                  f"this one on {meta['code']} (listed in the report)", file=sys.stderr)
+    interrupted: int = 0          # the signal that stopped the runs, 0 = none
+    counter = [0]                 # runs run so far
+    tours: list[dict[str, Any]] = []
+    results: list[dict[str, Any]] = []
+    areas: dict[str, float] = {}
+    old_term = signal.signal(signal.SIGTERM, _raise_interrupt)
+    try:
+        # Worlds, ground truths and explorable areas before the workers fork (they
+        # inherit the cache).
+        areas = {s: float(load(s)[1].explorable_area_m2) for s in specs}
+        ctx = mp.get_context("fork")
+        with ctx.Pool(a.jobs, initializer=_worker_init, maxtasksperchild=20) as pool:
             try:
-                for d in pool.imap_unordered(_run_task, tasks):
-                    results.append(d)
-                    ran += 1
-                    jl.write(json.dumps(d) + "\n")
-                    jl.flush()
-                    prog.update(f"{d['world']}/{d['strategy']}/{d['seed']}: "
-                                f"{d['coverage_pct'] or 0:.1f} % {d['stop_reason']} "
-                                f"({d['wall_time_s']:.0f} s)")
-            except KeyboardInterrupt:
-                interrupted = True
+                _run_all(a, out, specs, strategies, areas, pool, tours, results, counter)
+            except KeyboardInterrupt as err:
+                interrupted = int(err.args[0]) if err.args else int(signal.SIGINT)
                 pool.terminate()
-                print(f"\n[bench] interrupted after {ran} of {len(tasks)} runs: reporting "
-                      "those (continue with --resume)", file=sys.stderr)
-    signal.signal(signal.SIGTERM, old_term)
+                print(f"\n[bench] interrupted after {counter[0]} runs: reporting what ran "
+                      "(continue with --resume)", file=sys.stderr)
+    except KeyboardInterrupt as err:      # before the pool existed
+        interrupted = int(err.args[0]) if err.args else int(signal.SIGINT)
+        print("\n[bench] interrupted before any run", file=sys.stderr)
+    finally:
+        signal.signal(signal.SIGTERM, old_term)
     tour_by_world = {t["world"]: t["tour_m"] for t in tours}
     rows = []
     order = {(s, st): i for i, (s, st) in enumerate((s, st) for s in specs for st in strategies)}
@@ -423,8 +399,8 @@ def main(argv: list[str] | None = None) -> int:
                                out / "ros", a.ros_rtf,
                                sim_time_limit(areas[specs[0]], a.max_sim_time), a.mount)
         (out / "ros.json").write_text(json.dumps(ros, indent=1))
-    part = {"command": command, "started": meta["started"], "runs_run": ran,
-            "wall_s": round(time.monotonic() - t_start, 1)}
+    part = {"command": command, "started": meta["started"], "code": meta["code"],
+            "runs_run": counter[0], "wall_s": round(time.monotonic() - t_start, 1)}
     if interrupted:
         part["interrupted"] = True
     parts = (old_meta.get("parts") or ([_part_of(old_meta)] if old_meta else [])) + [part]
@@ -434,12 +410,91 @@ def main(argv: list[str] | None = None) -> int:
     report.write_all(out, Path(a.md) if a.md else None, command=command)
     print(f"[bench] {len(results)} runs in {_hms(meta['wall_s'])}; results in {out}"
           + (f", summary in {a.md}" if a.md else ""), file=sys.stderr)
-    return 130 if interrupted else 0
+    return 128 + interrupted if interrupted else 0
+
+
+def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: list[str],
+             areas: dict[str, float], pool: Any, tours: list[dict[str, Any]],
+             results: list[dict[str, Any]], counter: list[int]) -> None:
+    """Tours and runs, filling ``tours`` and ``results``; ``counter[0]`` counts the runs
+    run (read it after an interrupt)."""
+    if not a.no_tour:
+        if a.resume:
+            tours += [dict(r, tour_m=float(r["tour_m"]))
+                      for r in _read_csv(out / "tours.csv") if r["world"] in specs]
+        todo = [s for s in specs if s not in {r["world"] for r in tours}]
+        prog = Progress(len(todo), "tours")
+        for row in pool.imap_unordered(_tour_task, todo):
+            tours.append(row)
+            prog.update(f"{row['world']}: {row['tour_m']} m")
+        _write_csv(out / "tours.csv", sorted(tours, key=lambda r: specs.index(r["world"])))
+    (out / "maps").mkdir(exist_ok=True)
+    tasks = []
+    for s in specs:
+        limit = sim_time_limit(areas[s], a.max_sim_time)
+        for strat in strategies:
+            for k in range(a.runs):
+                pic = (str(out / "maps" / f"{_slug(s)}_{strat}.png") if k == 0 else None)
+                tasks.append((s, strat, a.seed0 + k, limit, pic, a.mount))
+    if a.resume:
+        wanted = {t[:3] for t in tasks}
+        old = _read_jsonl(out / "runs.jsonl")
+        for d in old:
+            key = (d["world"], d["strategy"], d["seed"])
+            if key in wanted:
+                wanted.discard(key)  # a duplicate line counts once
+                results.append(d)
+        if len(results) < len(old):  # runs this command does not ask for: keep a copy
+            shutil.copyfile(out / "runs.jsonl", out / "runs.jsonl.bak")
+            print(f"[bench] resume: {len(old) - len(results)} runs not asked for are left "
+                  f"out (copy in {out / 'runs.jsonl.bak'})", file=sys.stderr)
+        done = {(d["world"], d["strategy"], d["seed"]) for d in results}
+        tasks = [t for t in tasks if t[:3] not in done]
+        print(f"[bench] resume: {len(results)} runs kept, {len(tasks)} to run",
+              file=sys.stderr)
+    # Seed by seed (an interrupted benchmark has as many runs of every world x strategy,
+    # +-1), long worlds first within a seed so the pool does not end on one slow run.
+    tasks.sort(key=lambda t: (t[2], -areas[t[0]]))
+    prog = Progress(len(tasks), "runs")
+    with open(out / "runs.jsonl", "w") as jl:
+        for d in results:
+            jl.write(json.dumps(d) + "\n")
+        jl.flush()
+        for d in pool.imap_unordered(_run_task, tasks):
+            jl.write(json.dumps(d) + "\n")
+            jl.flush()
+            results.append(d)
+            counter[0] += 1
+            prog.update(f"{d['world']}/{d['strategy']}/{d['seed']}: "
+                        f"{d['coverage_pct'] or 0:.1f} % {d['stop_reason']} "
+                        f"({d['wall_time_s']:.0f} s)")
+
+
+def _settings(a: argparse.Namespace) -> dict[str, Any]:
+    """What must match for runs of two parts to be comparable (``--resume``), as it reads
+    back from meta.json."""
+    return json.loads(json.dumps({
+        "max_sim_time": a.max_sim_time,
+        "camera_mount": list(a.mount) if a.mount is not None else None,
+        "lockstep_params": {k: v for k, v in vars(LockstepParams()).items()}}))
+
+
+def _code_version() -> str:
+    """Git commit of the repository, ``+modified`` when the code differs from it."""
+    try:
+        rev = subprocess.run(["git", "rev-parse", "--short=12", "HEAD"], cwd=ROOT,
+                             capture_output=True, text=True, timeout=10).stdout.strip()
+        dirty = subprocess.run(["git", "diff", "--quiet", "HEAD", "--", "explore_seg",
+                                "sim_bridge", "bench", "config", ":(exclude)bench/results"],
+                               cwd=ROOT, timeout=10).returncode != 0
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return (rev or "unknown") + ("+modified" if dirty and rev else "")
 
 
 def _raise_interrupt(signum: int, frame: Any) -> None:
     """SIGTERM in the main process: stop like Ctrl-C (report what has run)."""
-    raise KeyboardInterrupt
+    raise KeyboardInterrupt(signum)
 
 
 def _worker_init() -> None:

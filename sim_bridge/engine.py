@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any, Callable
 
@@ -409,8 +409,10 @@ class SimEngine:
         self._lidar_mount = lp.mount_xy_m
         if ground_truth is None and p.compute_coverage:
             ground_truth = worlds.ground_truth(world, resolution_m=p.map_resolution_m)
-        if p.coverage_observable and isinstance(ground_truth, worlds.GroundTruth):
-            ground_truth = with_observable(world, ground_truth, lp, p.robot_radius_m)
+        if isinstance(ground_truth, worlds.GroundTruth):
+            ground_truth = (with_observable(world, ground_truth, lp, p.robot_radius_m)
+                            if p.coverage_observable
+                            else replace(ground_truth, observable=None))
         self.ground_truth = ground_truth
         self.collider = Collider(world, p.robot_radius_m, p.robot_height_m)
         x, y, yaw = (float(v) for v in world.start_pose)

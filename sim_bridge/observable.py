@@ -67,6 +67,27 @@ def reachable_centres(gt, robot_radius_m: float) -> npt.NDArray[np.bool_]:
     return lab == k
 
 
+def _sample_cells(reach: npt.NDArray[np.bool_], step: int
+                  ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """Cells of ``reach`` on a lattice of ``step`` cells, plus enough cells of the strips
+    the lattice misses (a corridor narrower than the spacing between two lattice lines)
+    that every reachable cell has a sample within ``step - 1`` cells (Chebyshev)."""
+    rows, cols = np.nonzero(reach)
+    keep = (rows % step == 0) & (cols % step == 0)
+    sr, sc = [rows[keep]], [cols[keep]]
+    if step > 1:
+        kernel = np.ones((2 * step - 1, 2 * step - 1), np.uint8)
+        seeds = np.zeros(reach.shape, np.uint8)
+        seeds[sr[0], sc[0]] = 1
+        left = reach & (cv2.dilate(seeds, kernel) == 0)
+        while left.any():   # greedy: the first uncovered cell in scan order, repeatedly
+            r, c = (int(v) for v in np.argwhere(left)[0])
+            sr.append(np.array([r]))
+            sc.append(np.array([c]))
+            left[max(0, r - step + 1):r + step, max(0, c - step + 1):c + step] = False
+    return np.concatenate(sr), np.concatenate(sc)
+
+
 def observable_region(world: World, gt, lidar_params: LidarParams | None = None,
                       robot_radius_m: float = 0.2, spacing_m: float = SAMPLE_SPACING_M
                       ) -> npt.NDArray[np.bool_]:
@@ -100,10 +121,7 @@ def observable_region(world: World, gt, lidar_params: LidarParams | None = None,
     lidar = Lidar(world, lp)
     res = gt.lidar.resolution_m
     reach = reachable_centres(gt, robot_radius_m)
-    step = max(1, int(round(spacing_m / res)))
-    rows, cols = np.nonzero(reach)
-    keep = (rows % step == 0) & (cols % step == 0)
-    rows, cols = rows[keep], cols[keep]
+    rows, cols = _sample_cells(reach, max(1, int(round(spacing_m / res))))
     xs, ys = gt.lidar.cells_to_world(rows.astype(np.float64), cols.astype(np.float64))
     x0, y0 = (float(v) for v in world.start_pose[:2])
     xs, ys = np.append(xs, x0), np.append(ys, y0)

@@ -95,7 +95,7 @@ def test_sigterm_reports_what_ran_and_resume_finishes(tmp_path):
     _, err = proc.communicate(timeout=60)
     if proc.returncode == 0:  # all four runs finished before the signal: nothing to test
         pytest.skip("the benchmark finished before it could be interrupted")
-    assert proc.returncode == 130, err
+    assert proc.returncode == 128 + signal.SIGTERM, err
     meta = json.loads((out / "meta.json").read_text())
     done = len(_runs(out))
     assert 1 <= done < 4 and meta["parts"][0]["interrupted"] is True
@@ -106,3 +106,18 @@ def test_sigterm_reports_what_ran_and_resume_finishes(tmp_path):
     assert sorted(r["seed"] for r in _runs(out)) == [0, 1, 2, 3]
     text = (out / "B.md").read_text()
     assert "Run in 2 parts" in text and "(interrupted)" in text
+
+
+def test_resume_refuses_other_settings_and_keeps_a_copy_of_dropped_runs(first, tmp_path):
+    out, _ = first
+    res = tmp_path / "res2"
+    res.mkdir()
+    for name in ("runs.jsonl", "meta.json"):
+        (res / name).write_text((out / name).read_text())
+    args = [x if x != "20" else "25" for x in ARGS]          # another --max-sim-time
+    assert run_bench.main(args + ["--runs", "1", "--out", str(res), "--md", "", "--resume"]) == 2
+    # same settings, another strategy: the nearest run is dropped from the report, kept aside
+    assert run_bench.main([x if x != "nearest" else "explore_lite" for x in ARGS]
+                          + ["--runs", "1", "--out", str(res), "--md", "", "--resume"]) == 0
+    assert [r["strategy"] for r in _runs(res)] == ["explore_lite"]
+    assert "nearest" in (res / "runs.jsonl.bak").read_text()

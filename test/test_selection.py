@@ -447,3 +447,35 @@ def test_frontier_that_vanishes_once_is_not_blacklisted():
     m.reset(clear_blacklist=True)
     with pytest.raises(ValueError, match="flicker_vanish_count"):
         SelectionParams(flicker_vanish_count=-1)
+
+
+def test_goal_kept_while_its_frontier_is_undetected_but_unexplored():
+    # A thin frontier seen at a grazing angle drops out of detection: drive on while its
+    # cells are unknown; the progress timeout still bounds the wait.
+    g, fr = manager_world()
+    data = g.data.copy()
+    data[fr[0].cells[:, 0], fr[0].cells[:, 1]] = -1
+    g = g.with_data(data)
+    m = GoalManager(SelectionParams(strategy="nearest", progress_timeout_s=30.0))
+    goal = m.step(0.0, (1.0, 1.0), g, [fr[0]], [1.0]).goal
+    res = m.step(1.0, (1.0, 1.0), g, [], [])
+    assert res.action is Action.KEEP and res.goal is goal and "still unknown" in res.reason
+    res = m.step(2.0, (1.0, 1.0), g.with_data(np.zeros_like(data)), [], [])  # now seen
+    assert res.action is Action.WAIT and m.goal is None
+    m2 = GoalManager(SelectionParams(strategy="nearest", progress_timeout_s=30.0))
+    m2.step(0.0, (1.0, 1.0), g, [fr[0]], [1.0])
+    for t in range(1, 31):
+        assert m2.step(float(t), (1.0, 1.0), g, [], []).action is Action.KEEP
+    res = m2.step(31.0, (1.0, 1.0), g, [], [])
+    assert res.action is not Action.KEEP and m2.goal is None
+
+
+def test_blacklist_retried_once_before_done():
+    g, fr = manager_world()
+    m = GoalManager(SelectionParams(strategy="nearest", done_confirmations=2,
+                                    blacklist_retries=1))
+    m.add_to_blacklist((9.0, 9.0))           # nothing there now
+    actions = [m.step(float(t), (1.0, 1.0), g, [], []) for t in range(6)]
+    assert [a.action for a in actions[:2]] == [Action.WAIT, Action.WAIT]
+    assert "blacklist cleared" in actions[1].reason and m.blacklist == ()
+    assert actions[3].action is Action.DONE and m.done

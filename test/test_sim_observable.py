@@ -80,6 +80,9 @@ def test_ground_truth_explorable_and_engine_reference():
     assert eng.metrics.reference.total_cells == int(gt2.explorable.sum())
     eng_all = SimEngine(w, SimParams(enable_camera=False, coverage_observable=False))
     assert eng_all.metrics.reference.total_cells == int(gt.inside.sum())
+    eng_all = SimEngine(w, SimParams(enable_camera=False, coverage_observable=False),
+                        ground_truth=gt2)
+    assert eng_all.metrics.reference.total_cells == int(gt.inside.sum())
 
 
 def test_bad_arguments():
@@ -89,3 +92,15 @@ def test_bad_arguments():
         observable_region(w, gt, LIDAR, spacing_m=0.0)
     with pytest.raises(ValueError, match="robot_radius_m"):
         reachable_centres(gt, -1.0)
+
+
+def test_samples_cover_strips_between_lattice_lines():
+    from sim_bridge.observable import _sample_cells
+
+    reach = np.zeros((40, 40), bool)
+    reach[5:35, 12:14] = True            # a 2-cell strip between lattice columns 10 and 15
+    reach[20, 0:40] = True               # and a 1-cell row across
+    rows, cols = _sample_cells(reach, 5)
+    assert reach[rows, cols].all()
+    for r, c in np.argwhere(reach):
+        assert (np.maximum(abs(rows - r), abs(cols - c)) <= 4).any(), (r, c)

@@ -788,9 +788,8 @@ class GoalManager:
                 self._retries_left -= 1
                 self._blacklist.clear()
                 self._empty_ticks = 0
-                return StepResult(Action.WAIT, None,
-                                  "only blacklisted frontiers left: blacklist cleared, retrying",
-                                  sel)
+                return StepResult(Action.WAIT, None, "no reachable frontier: blacklist "
+                                  "cleared, retrying its frontiers", sel)
             self.done = True
             return StepResult(Action.DONE, None, "no reachable frontier", sel)
         self._empty_ticks = 0
