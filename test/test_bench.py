@@ -21,6 +21,14 @@ def _runs(out: Path) -> list[dict]:
     return [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
 
 
+def _copy_results(src: Path, dst: Path) -> Path:
+    """A new output folder holding ``src``'s runs and meta (what --resume reads)."""
+    dst.mkdir()
+    for name in ("runs.jsonl", "meta.json"):
+        (dst / name).write_text((src / name).read_text())
+    return dst
+
+
 @pytest.fixture(scope="module")
 def first(tmp_path_factory):
     out = tmp_path_factory.mktemp("bench")
@@ -45,10 +53,7 @@ def test_outputs(first):
 
 def test_resume_runs_only_the_missing_seeds(first, tmp_path):
     out, _ = first
-    res = tmp_path / "res"
-    res.mkdir()
-    for name in ("runs.jsonl", "meta.json"):
-        (res / name).write_text((out / name).read_text())
+    res = _copy_results(out, tmp_path / "res")
     kept = _runs(res)[0]
     md = res / "B.md"
     assert run_bench.main(ARGS + ["--runs", "2", "--out", str(res), "--md", str(md),
@@ -110,10 +115,7 @@ def test_sigterm_reports_what_ran_and_resume_finishes(tmp_path):
 
 def test_resume_refuses_other_settings_and_keeps_a_copy_of_dropped_runs(first, tmp_path):
     out, _ = first
-    res = tmp_path / "res2"
-    res.mkdir()
-    for name in ("runs.jsonl", "meta.json"):
-        (res / name).write_text((out / name).read_text())
+    res = _copy_results(out, tmp_path / "res2")
     args = [x if x != "20" else "25" for x in ARGS]          # another --max-sim-time
     assert run_bench.main(args + ["--runs", "1", "--out", str(res), "--md", "", "--resume"]) == 2
     # same settings, another strategy: the nearest run is dropped from the report, kept aside
