@@ -235,7 +235,8 @@ def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None) -> lis
     return lines
 
 
-def _read_csv(path: Path) -> list[dict[str, str]]:
+def read_csv(path: Path) -> list[dict[str, str]]:
+    """Rows of a CSV file as dicts ([] when absent or empty)."""
     if not path.is_file() or not path.read_text().strip():
         return []
     with open(path, newline="") as f:
@@ -256,7 +257,7 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
     if md is None:
         return None
     cmd = command or meta.get("command", "bench/run_bench.py")
-    tours_rows = _read_csv(out / "tours.csv")
+    tours_rows = read_csv(out / "tours.csv")
     tours = {r["world"]: float(r["tour_m"]) for r in tours_rows}
     yolo_path = out / "yolo.json"
     yolo = json.loads(yolo_path.read_text()) if yolo_path.is_file() else None

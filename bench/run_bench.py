@@ -418,10 +418,12 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
              results: list[dict[str, Any]], counter: list[int]) -> None:
     """Tours and runs, filling ``tours`` and ``results``; ``counter[0]`` counts the runs
     run (read it after an interrupt)."""
+    from bench import report
+
     if not a.no_tour:
         if a.resume:
             tours += [dict(r, tour_m=float(r["tour_m"]))
-                      for r in _read_csv(out / "tours.csv") if r["world"] in specs]
+                      for r in report.read_csv(out / "tours.csv") if r["world"] in specs]
         todo = [s for s in specs if s not in {r["world"] for r in tours}]
         prog = Progress(len(todo), "tours")
         for row in pool.imap_unordered(_tour_task, todo):
@@ -573,13 +575,6 @@ def _read_jsonl(path: Path) -> list[dict[str, Any]]:
             if isinstance(d, dict) and {"world", "strategy", "seed"} <= d.keys():
                 out.append(d)
     return out
-
-
-def _read_csv(path: Path) -> list[dict[str, Any]]:
-    if not path.is_file():
-        return []
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
 
 
 def _part_of(meta: dict[str, Any]) -> dict[str, Any]:
