@@ -288,6 +288,10 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                     help="keep the runs and tours already in --out that this command asks "
                          "for (same world, strategy, seed) and run only the missing ones; "
                          "runs of other worlds/strategies/seeds are dropped")
+    ap.add_argument("--redo", default="",
+                    help="with --resume: comma-separated STRATEGY or WORLD:STRATEGY whose "
+                         "kept runs are run again (after a change that affects them; the "
+                         "old runs are copied to runs.jsonl.bak)")
     a = ap.parse_args(argv)
     if a.runs < 1 or a.jobs < 1:
         ap.error("--runs and --jobs must be >= 1")
@@ -298,6 +302,14 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     bad = [s for s in a.strategies.split(",") if s not in STRATEGIES]
     if bad:
         ap.error(f"unknown strategies {bad}; choose from {list(STRATEGIES)}")
+    a.redo_keys = []
+    for item in (x for x in a.redo.split(",") if x):
+        world, _, strat = item.rpartition(":")
+        if strat not in STRATEGIES:
+            ap.error(f"--redo {item!r}: unknown strategy {strat!r}")
+        a.redo_keys.append((world or None, strat))
+    if a.redo_keys and not a.resume:
+        ap.error("--redo needs --resume")
     return a
 
 
@@ -439,7 +451,8 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
                 pic = (str(out / "maps" / f"{_slug(s)}_{strat}.png") if k == 0 else None)
                 tasks.append((s, strat, a.seed0 + k, limit, pic, a.mount))
     if a.resume:
-        wanted = {t[:3] for t in tasks}
+        wanted = {t[:3] for t in tasks
+                  if not any(st == t[1] and w in (None, t[0]) for w, st in a.redo_keys)}
         old = _read_jsonl(out / "runs.jsonl")
         for d in old:
             key = (d["world"], d["strategy"], d["seed"])
@@ -448,8 +461,8 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
                 results.append(d)
         if len(results) < len(old):  # runs this command does not ask for: keep a copy
             shutil.copyfile(out / "runs.jsonl", out / "runs.jsonl.bak")
-            print(f"[bench] resume: {len(old) - len(results)} runs not asked for are left "
-                  f"out (copy in {out / 'runs.jsonl.bak'})", file=sys.stderr)
+            print(f"[bench] resume: {len(old) - len(results)} runs not asked for or to "
+                  f"redo are left out (copy in {out / 'runs.jsonl.bak'})", file=sys.stderr)
         done = {(d["world"], d["strategy"], d["seed"]) for d in results}
         tasks = [t for t in tasks if t[:3] not in done]
         print(f"[bench] resume: {len(results)} runs kept, {len(tasks)} to run",

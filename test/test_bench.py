@@ -123,3 +123,27 @@ def test_resume_refuses_other_settings_and_keeps_a_copy_of_dropped_runs(first, t
                           + ["--runs", "1", "--out", str(res), "--md", "", "--resume"]) == 0
     assert [r["strategy"] for r in _runs(res)] == ["explore_lite"]
     assert "nearest" in (res / "runs.jsonl.bak").read_text()
+
+
+def test_redo_runs_the_named_strategy_again_and_keeps_the_old_runs_aside(first, tmp_path):
+    out, _ = first
+    res = _copy_results(out, tmp_path / "res3")
+    runs = _runs(res)
+    runs[0]["coverage_pct"] = -1.0        # marks the old run: a redone run cannot have it
+    (res / "runs.jsonl").write_text("".join(json.dumps(r) + "\n" for r in runs))
+    with pytest.raises(SystemExit):       # --redo without --resume, unknown strategy
+        run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--redo", "nearest"])
+    with pytest.raises(SystemExit):
+        run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--resume", "--redo", "x"])
+    # another world's runs are not redone
+    assert run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
+                                  "--redo", "small_cluttered:nearest"]) == 0
+    assert [r["coverage_pct"] for r in _runs(res)] == [-1.0]
+    assert run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
+                                  "--redo", "small_house:nearest"]) == 0
+    redone = _runs(res)
+    assert len(redone) == 1 and redone[0]["coverage_pct"] >= 0
+    assert redone[0]["coverage_pct"] == _runs(out)[0]["coverage_pct"]   # same seed, same run
+    assert '"coverage_pct": -1.0' in (res / "runs.jsonl.bak").read_text()
+    meta = json.loads((res / "meta.json").read_text())
+    assert [p["runs_run"] for p in meta["parts"]] == [1, 0, 1]

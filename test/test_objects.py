@@ -22,7 +22,7 @@ from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D, Objec
                                       euclidean_clusters, fit_box, footprint_iou,
                                       footprint_orientation, group_legs, load_priors,
                                       object_from_detection, points_in_rect, process_frame,
-                                      scan_legs,
+                                      scan_legs, scan_posts,
                                       segment_detection, statistical_outlier_mask,
                                       unknown_objects, voxel_downsample, wall_mask)
 
@@ -565,6 +565,57 @@ def test_unknown_objects_need_depth_above_the_legs_and_skip_known_objects():
     assert unknown_objects(full, scan, ObjectParams(), known) == []
 
 
+def face_scan(x_m, y0_m, y1_m, n=12):
+    """Scan points on the near face (x = x_m) of a box, as a lidar at the origin sees it."""
+    return np.stack([np.full(n, x_m), np.linspace(y0_m, y1_m, n)], axis=1)
+
+
+def bin_parts(center_xy, body_m=0.4, rim_m=0.6, rim_z=(0.5, 0.74)):
+    """A bin whose rim overhangs its body (the body is all a lidar at 0.17 m sees)."""
+    return [box_parts(center_xy, (body_m, body_m, rim_z[0])),
+            box_parts(center_xy, (rim_m, rim_m, rim_z[1] - rim_z[0]), z0=rim_z[0])]
+
+
+def test_scan_posts_are_isolated_clusters_wider_than_a_leg():
+    params = ObjectParams()
+    post = face_scan(1.8, -0.2, 0.2)
+    wall = np.stack([np.full(100, 3.5), np.linspace(-1, 1, 100)], axis=1)
+    touching = face_scan(3.4, 0.5, 0.9)                 # 0.1 m from the wall: not isolated
+    posts, others = scan_posts(np.vstack([post, wall, touching, leg_scan([(2.0, -1.0)])]),
+                               params, robot_xy=(0.0, 0.0))
+    assert len(posts) == 1
+    np.testing.assert_allclose(posts[0], post)
+    assert len(others) == len(wall) + len(touching) + 5
+    assert scan_posts(post, replace(params, post_max_width_m=0.0))[0] == []
+    assert scan_posts(post, replace(params, post_max_width_m=0.3))[0] == []   # too wide
+
+
+def test_rim_overhanging_a_post_makes_an_unknown_object():
+    """A bin: the lidar sees its 0.4 m body, the camera its 0.6 m rim: the box must
+    cover the rim (the robot would hit it), and a post with nothing overhanging it (the
+    lidar already sees all of it) or nothing above it gives no object."""
+    pose = camera_pose()
+    scan = face_scan(1.8, -0.2, 0.2)
+    frame = DepthFrame(render_depth(bin_parts((2.0, 0.0)), pose), K, pose)
+    objs = unknown_objects(frame, scan, ObjectParams(), (), PRIORS[UNKNOWN_CLASS])
+    assert len(objs) == 1
+    obj = objs[0]
+    assert obj.cls == UNKNOWN_CLASS
+    lo, hi = obj.footprint().min(axis=0), obj.footprint().max(axis=0)
+    assert lo[0] == pytest.approx(1.7, abs=0.04)            # the rim's near edge
+    assert lo[1] == pytest.approx(-0.3, abs=0.04) and hi[1] == pytest.approx(0.3, abs=0.04)
+    assert hi[0] >= 2.0
+    assert obj.size_xyz[2] == pytest.approx(0.74, abs=0.05)
+    # a thin panel: the lidar sees all of it, nothing overhangs
+    panel = DepthFrame(render_depth([box_parts((2.0, 0.0), (0.02, 0.4, 1.0))], pose), K, pose)
+    assert unknown_objects(panel, face_scan(1.99, -0.2, 0.2), ObjectParams()) == []
+    low = DepthFrame(render_depth([box_parts((2.0, 0.0), (0.4, 0.4, 0.15))], pose), K, pose)
+    assert unknown_objects(low, scan, ObjectParams()) == []
+    assert unknown_objects(frame, scan, replace(ObjectParams(), post_max_width_m=0.0)) == []
+    known = [Object3D("chair", 0.9, (2.0, 0.0, 0.37), (0.6, 0.6, 0.74), 0.0, 100)]
+    assert unknown_objects(frame, scan, ObjectParams(), known) == []
+
+
 # ------------------------------------------------------------------------- fusion
 
 
@@ -737,6 +788,28 @@ def test_object_map_is_bounded():
     for i in range(12):
         omap.update([_obj(2.0 * i, 0.0)])
     assert len(omap) == 5
+
+
+@pytest.mark.parametrize("robot_xy, fraction, kept", [
+    ((0.0, -0.52), 0.5, True),      # disk (R 0.22) touches the chair's side: kept
+    ((0.36, -0.45), 0.5, True),     # touches a corner diagonally (0.22 away): kept
+    ((0.0, -0.40), 0.5, False),     # 0.12 m into the disk (> 0.5 R): a wrong box
+    ((0.0, -0.45), 0.5, True),      # 0.07 m into it: within the estimate's error
+    ((0.0, -0.45), 1.0, True),      # 1 = only boxes over the robot's centre
+    ((0.0, -0.25), 1.0, False),
+    ((0.0, 0.0), 0.0, True),        # 0 = never
+])
+def test_boxes_on_the_robot_are_dropped_by_how_deep_they_reach(robot_xy, fraction, kept):
+    """A box the robot merely touches (it bumped into the chair) must stay, else the
+    planner drives into the seat again; one that reaches deep into the robot's body
+    cannot be right (a chair of 0.6 m at the origin, robot radius 0.22 m)."""
+    omap = ObjectMap(ObjectParams(robot_clear_fraction=fraction), PRIORS)
+    omap.update([_obj(0.0, 0.0)])
+    omap.update([], robot_xy=robot_xy)
+    assert (len(omap) == 1) == kept
+    fresh = ObjectMap(ObjectParams(robot_clear_fraction=fraction), PRIORS)
+    fresh.update([_obj(0.0, 0.0)], robot_xy=robot_xy)     # observations alike
+    assert (len(fresh) == 1) == kept
 
 
 def test_footprint_iou():

@@ -176,9 +176,10 @@ class ObjectParams:
         "Growth of the map's wall cells for drop_wall_points", "m"))
     robot_radius_m: float = field(default=0.22, metadata=_doc(
         "Robot radius: object boxes reaching into the robot's disk are wrong", "m"))
-    robot_clear_fraction: float = field(default=1.0, metadata=_doc(
+    robot_clear_fraction: float = field(default=0.5, metadata=_doc(
         "Drop boxes that reach this fraction of robot_radius_m into the robot's disk "
-        "(0 = never)", "0..1"))
+        "(1 = only boxes over the robot's centre; a box that merely touches the robot, "
+        "as an object does the robot bumps into, is kept; 0 = never)", "0..1"))
     swept_clear_radius_m: float = field(default=0.22, metadata=_doc(
         "The layer and the virtual cloud are cleared within this distance of the path the "
         "robot has driven (its body proved the floor free there), so boxes grown from "
@@ -257,6 +258,13 @@ class ObjectParams:
         "unknown_cover_cell_m); legs of two objects grouped across open floor fail", "0..1"))
     unknown_cover_cell_m: float = field(default=0.1, metadata=_doc(
         "Cell size for unknown_min_top_cover", "m"))
+    post_max_width_m: float = field(default=0.7, metadata=_doc(
+        "Isolated laser clusters wider than leg_max_width_m and up to this wide are posts "
+        "(a bin, a pedestal, a plant pot): depth points above one that reach more than "
+        "post_overhang_m beyond its laser points (a rim, a top) make an unclassified "
+        "object, since the lidar sees only the post (0 = off)", "m"))
+    post_overhang_m: float = field(default=0.04, metadata=_doc(
+        "Depth points farther than this from every laser point of a post overhang it", "m"))
     unknown_pixel_stride: int = field(default=4, metadata=_doc(
         "Use every n-th depth pixel (rows and columns) for unclassified objects", "px"))
 
@@ -272,7 +280,8 @@ class ObjectParams:
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
         non_negative = ("sync_tolerance_s", "pose_tolerance_s", "voxel_size_m",
-                        "miss_depth_margin_m", "leg_min_width_m", "unknown_radius_m")
+                        "miss_depth_margin_m", "leg_min_width_m", "unknown_radius_m",
+                        "post_max_width_m", "post_overhang_m")
         for name in non_negative:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
@@ -1445,8 +1454,14 @@ def object_from_detection(frame: DepthFrame, box_xyxy: Sequence[float], cls: str
     return None if seg is None else seg[0]
 
 
+#: Scan points, their cluster labels, and per cluster the point count and extent.
+_ScanClusters = tuple[npt.NDArray[np.float64], npt.NDArray[np.intp], npt.NDArray[np.intp],
+                      npt.NDArray[np.float64]]
+
+
 def scan_legs(scan_xy: npt.NDArray[np.floating], params: ObjectParams,
-              robot_xy: Sequence[float] | None = None) -> npt.NDArray[np.float64]:
+              robot_xy: Sequence[float] | None = None,
+              _clusters: _ScanClusters | None = None) -> npt.NDArray[np.float64]:
     """Centres of leg-like clusters in a 2D scan.
 
     A leg is a cluster (link distance ``leg_cluster_gap_m``) of ``leg_min_points`` or
@@ -1471,22 +1486,9 @@ def scan_legs(scan_xy: npt.NDArray[np.floating], params: ObjectParams,
     ValueError
         If ``scan_xy`` is not (N, 2).
     """
-    pts = np.asarray(scan_xy, dtype=np.float64)
-    if pts.ndim != 2 or pts.shape[1] != 2:
-        raise ValueError(f"scan_xy must have shape (N, 2), got {pts.shape}")
-    pts = pts[np.all(np.isfinite(pts), axis=1)]
-    if robot_xy is not None and len(pts):
-        near = np.hypot(pts[:, 0] - robot_xy[0], pts[:, 1] - robot_xy[1]) <= params.leg_max_range_m
-        pts = pts[near]
+    pts, labels, counts, widths = _clusters or _scan_clusters(scan_xy, params, robot_xy)
     if len(pts) == 0:
         return np.zeros((0, 2))
-    labels = euclidean_clusters(pts, params.leg_cluster_gap_m, 1)
-    # Size and width of every cluster at once (walls give many clusters, few are legs).
-    order = np.argsort(labels, kind="stable")
-    counts = np.bincount(labels)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    ptp = np.maximum.reduceat(pts[order], starts) - np.minimum.reduceat(pts[order], starts)
-    widths = np.hypot(ptp[:, 0], ptp[:, 1])
     candidates = np.flatnonzero((counts >= params.leg_min_points)
                                 & (widths >= params.leg_min_width_m)
                                 & (widths <= params.leg_max_width_m))
@@ -1501,6 +1503,72 @@ def scan_legs(scan_xy: npt.NDArray[np.floating], params: ObjectParams,
             continue
         centres.append(centre)
     return np.array(centres, dtype=np.float64).reshape(-1, 2)
+
+
+def _scan_clusters(scan_xy: npt.ArrayLike, params: ObjectParams,
+                   robot_xy: Sequence[float] | None) -> _ScanClusters:
+    """Finite scan points within ``leg_max_range_m`` of ``robot_xy``, their cluster labels
+    (link ``leg_cluster_gap_m``), and each cluster's point count and extent (diagonal of
+    its bounding box)."""
+    pts = np.asarray(scan_xy, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 2:
+        raise ValueError(f"scan_xy must have shape (N, 2), got {pts.shape}")
+    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    if robot_xy is not None and len(pts):
+        near = np.hypot(pts[:, 0] - robot_xy[0], pts[:, 1] - robot_xy[1]) <= params.leg_max_range_m
+        pts = pts[near]
+    if len(pts) == 0:
+        empty = np.zeros(0, dtype=np.intp)
+        return pts.reshape(0, 2), empty, empty, np.zeros(0)
+    labels = euclidean_clusters(pts, params.leg_cluster_gap_m, 1)
+    # Size and width of every cluster at once (walls give many clusters, few are legs).
+    order = np.argsort(labels, kind="stable")
+    counts = np.bincount(labels)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    ptp = np.maximum.reduceat(pts[order], starts) - np.minimum.reduceat(pts[order], starts)
+    return pts, labels, counts, np.hypot(ptp[:, 0], ptp[:, 1])
+
+
+def scan_posts(scan_xy: npt.NDArray[np.floating], params: ObjectParams,
+               robot_xy: Sequence[float] | None = None,
+               _clusters: _ScanClusters | None = None
+               ) -> tuple[list[npt.NDArray[np.float64]], npt.NDArray[np.float64]]:
+    """Isolated compact clusters of a 2D scan wider than a leg: posts.
+
+    A post is a cluster (as in :func:`scan_legs`) of ``leg_min_points`` or more points
+    whose extent lies in (``leg_max_width_m``, ``post_max_width_m``] with no other scan
+    point within ``leg_isolation_m`` of its points.
+
+    Returns
+    -------
+    posts : list of ndarray, shape (K, 2)
+        The points of every post.
+    others : ndarray, shape (M, 2)
+        The remaining scan points (within ``leg_max_range_m``).
+
+    Raises
+    ------
+    ValueError
+        If ``scan_xy`` is not (N, 2).
+    """
+    pts, labels, counts, widths = _clusters or _scan_clusters(scan_xy, params, robot_xy)
+    if len(pts) == 0 or params.post_max_width_m <= params.leg_max_width_m:
+        return [], pts
+    candidates = np.flatnonzero((counts >= params.leg_min_points)
+                                & (widths > params.leg_max_width_m)
+                                & (widths <= params.post_max_width_m))
+    if candidates.size == 0:
+        return [], pts
+    tree = cKDTree(pts)
+    posts, used = [], np.zeros(len(pts), dtype=bool)
+    for lab in candidates:
+        mine = labels == lab
+        near = tree.query_ball_point(pts[mine], params.leg_isolation_m)
+        if any(not mine[j] for idx in near for j in idx):
+            continue
+        posts.append(pts[mine])
+        used |= mine
+    return posts, pts[~used]
 
 
 def group_legs(legs_xy: npt.NDArray[np.floating], max_distance_m: float, min_legs: int
@@ -1619,7 +1687,9 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
         With ``cls == UNKNOWN_CLASS`` and score 1.0.
     """
     cam_xy = frame.camera_xyz[:2]
-    legs = scan_legs(scan_xy_map, params, cam_xy)
+    known = list(known)
+    clusters = _scan_clusters(scan_xy_map, params, cam_xy)
+    legs = scan_legs(scan_xy_map, params, cam_xy, clusters)
     # Legs of objects already found are no evidence of another object (and would join
     # two neighbouring desks into one group spanning the floor between them).
     for obj in known:
@@ -1628,7 +1698,13 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
         legs = legs[~points_in_rect(legs, obj.center_xyz[:2], obj.size_xyz[:2], obj.yaw,
                                     params.unknown_radius_m)]
     kept = group_legs(legs, params.leg_group_distance_m, params.min_legs)
-    if not kept:
+    posts, others = (scan_posts(scan_xy_map, params, cam_xy, clusters)
+                     if params.post_max_width_m > 0
+                     else ([], np.zeros((0, 2))))
+    posts = [g for g in posts
+             if not any(points_in_rect(g.mean(axis=0, keepdims=True), o.center_xyz[:2],
+                                       o.size_xyz[:2], o.yaw, 0.0)[0] for o in known)]
+    if not kept and not posts:
         return []
     stride = params.unknown_pixel_stride
     mask = np.zeros(frame.depth_m.shape, dtype=bool)
@@ -1636,7 +1712,8 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
     pts, _, _ = frame_points(frame, mask, params.max_depth_m)
     band = (pts[:, 2] >= params.unknown_min_height_m) & (pts[:, 2] <= params.unknown_max_height_m)
     pts = pts[band]
-    out = []
+    out = [o for g in posts
+           if (o := _post_object(g, pts, others, params, prior, cam_xy)) is not None]
     for g in kept:
         if len(g) >= 3:
             (rcx, rcy), (w, h), ang = cv2.minAreaRect(g.astype(np.float32))
@@ -1663,6 +1740,34 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
         obj = fit_box(np.vstack([sel, legs3d]), UNKNOWN_CLASS, 1.0, prior, params, cam_xy)
         out.append(replace(obj, n_points=int(len(sel))))
     return out
+
+
+def _post_object(post: npt.NDArray[np.float64], pts: npt.NDArray[np.float64],
+                 others: npt.NDArray[np.float64], params: ObjectParams,
+                 prior: SizePrior | None, cam_xy: Sequence[float]) -> Object3D | None:
+    """An unclassified object over a post (see :func:`scan_posts`) when depth points
+    above it (``pts``, already in the height band) overhang its laser points by more than
+    ``post_overhang_m`` (a bin's rim, a pedestal table's top); None otherwise.
+
+    Depth points within ``leg_isolation_m`` of other scan points belong to what the lidar
+    sees there and are left out."""
+    lo, hi = post.min(axis=0), post.max(axis=0)
+    r = params.unknown_radius_m
+    near = np.all((pts[:, :2] >= lo - r) & (pts[:, :2] <= hi + r), axis=1)
+    sel = pts[near]
+    if len(sel) and len(others):
+        d_other = cKDTree(others).query(sel[:, :2], distance_upper_bound=params.leg_isolation_m)[0]
+        sel = sel[~np.isfinite(d_other)]
+    if len(sel) < params.unknown_min_points:
+        return None
+    d_post = cKDTree(post).query(sel[:, :2])[0]
+    if np.count_nonzero(d_post > params.post_overhang_m) < params.unknown_min_points:
+        return None
+    # No outlier filter: the top seen at a grazing angle is sparse next to the dense
+    # faces and would be cut off; the selection is bounded by the post's grown box.
+    base = np.column_stack([post, np.full(len(post), float(sel[:, 2].min()))])
+    obj = fit_box(np.vstack([sel, base]), UNKNOWN_CLASS, 1.0, prior, params, cam_xy)
+    return replace(obj, n_points=int(len(sel)))
 
 
 # ------------------------------------------------------------------------- fusion
@@ -1946,9 +2051,14 @@ class ObjectMap:
 
     def _on_robot(self, obj: Object3D, robot_xy: Sequence[float]) -> bool:
         """True when ``obj``'s footprint overlaps the robot's disk (see :meth:`update`)."""
-        reach = self.params.robot_radius_m * self.params.robot_clear_fraction
-        return bool(points_in_rect(np.asarray([robot_xy], dtype=np.float64), obj.center_xyz[:2],
-                                   obj.size_xyz[:2], obj.yaw, reach)[0])
+        # Reaching depth f * R into the disk = the centre within (1 - f) * R of the box
+        # (Euclidean distance to the rectangle, 0 inside it).
+        margin = self.params.robot_radius_m * (1.0 - self.params.robot_clear_fraction)
+        c, s = math.cos(obj.yaw), math.sin(obj.yaw)
+        dx, dy = robot_xy[0] - obj.center_xyz[0], robot_xy[1] - obj.center_xyz[1]
+        out_u = max(abs(dx * c + dy * s) - 0.5 * obj.size_xyz[0], 0.0)
+        out_v = max(abs(-dx * s + dy * c) - 0.5 * obj.size_xyz[1], 0.0)
+        return math.hypot(out_u, out_v) <= margin
 
     @staticmethod
     def _compatible(a: str, b: str) -> bool:
