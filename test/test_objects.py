@@ -576,8 +576,11 @@ def bin_parts(center_xy, body_m=0.4, rim_m=0.6, rim_z=(0.5, 0.74)):
             box_parts(center_xy, (rim_m, rim_m, rim_z[1] - rim_z[0]), z0=rim_z[0])]
 
 
+POSTS_ON = ObjectParams(post_max_width_m=0.7)    # the default
+
+
 def test_scan_posts_are_isolated_clusters_wider_than_a_leg():
-    params = ObjectParams()
+    params = POSTS_ON
     post = face_scan(1.8, -0.2, 0.2)
     wall = np.stack([np.full(100, 3.5), np.linspace(-1, 1, 100)], axis=1)
     touching = face_scan(3.4, 0.5, 0.9)                 # 0.1 m from the wall: not isolated
@@ -597,7 +600,9 @@ def test_rim_overhanging_a_post_makes_an_unknown_object():
     pose = camera_pose()
     scan = face_scan(1.8, -0.2, 0.2)
     frame = DepthFrame(render_depth(bin_parts((2.0, 0.0)), pose), K, pose)
-    objs = unknown_objects(frame, scan, ObjectParams(), (), PRIORS[UNKNOWN_CLASS])
+    off = replace(POSTS_ON, post_max_width_m=0.0)
+    assert unknown_objects(frame, scan, off, (), PRIORS[UNKNOWN_CLASS]) == []
+    objs = unknown_objects(frame, scan, POSTS_ON, (), PRIORS[UNKNOWN_CLASS])
     assert len(objs) == 1
     obj = objs[0]
     assert obj.cls == UNKNOWN_CLASS
@@ -608,12 +613,34 @@ def test_rim_overhanging_a_post_makes_an_unknown_object():
     assert obj.size_xyz[2] == pytest.approx(0.74, abs=0.05)
     # a thin panel: the lidar sees all of it, nothing overhangs
     panel = DepthFrame(render_depth([box_parts((2.0, 0.0), (0.02, 0.4, 1.0))], pose), K, pose)
-    assert unknown_objects(panel, face_scan(1.99, -0.2, 0.2), ObjectParams()) == []
+    assert unknown_objects(panel, face_scan(1.99, -0.2, 0.2), POSTS_ON) == []
     low = DepthFrame(render_depth([box_parts((2.0, 0.0), (0.4, 0.4, 0.15))], pose), K, pose)
-    assert unknown_objects(low, scan, ObjectParams()) == []
-    assert unknown_objects(frame, scan, replace(ObjectParams(), post_max_width_m=0.0)) == []
+    assert unknown_objects(low, scan, POSTS_ON) == []
     known = [Object3D("chair", 0.9, (2.0, 0.0, 0.37), (0.6, 0.6, 0.74), 0.0, 100)]
-    assert unknown_objects(frame, scan, ObjectParams(), known) == []
+    assert unknown_objects(frame, scan, POSTS_ON, known) == []
+
+
+def test_post_overhang_must_lie_over_free_map_cells():
+    """With the 2D map, only depth points over cells the lidar saw through count as
+    overhang: around a pillar whose hidden faces the camera sees, the map is occupied or
+    unknown, not free, so the pillar alone gives no object."""
+    pose = camera_pose()
+    scan = face_scan(1.8, -0.2, 0.2)
+    frame = DepthFrame(render_depth(bin_parts((2.0, 0.0)), pose), K, pose)
+    data = np.zeros((40, 60), dtype=np.int8)            # 3 x 2 m from (0, -1), all free
+    grid = GridMap(data, 0.05, (0.0, -1.0))
+    body = grid.world_to_cells(np.array([1.8, 2.2]), np.array([-0.2, 0.2]))
+    data[body[0][0]:body[0][1], body[1][0]:body[1][1]] = 100
+    params = POSTS_ON
+    free_around = wall_mask(grid.with_data(data), params)
+    objs = unknown_objects(frame, scan, params, (), PRIORS[UNKNOWN_CLASS], free_around)
+    assert len(objs) == 1
+    assert objs[0].footprint()[:, 1].max() == pytest.approx(0.3, abs=0.04)
+    unknown_around = data.copy()
+    unknown_around[:, body[1][0] - 3:] = np.where(unknown_around[:, body[1][0] - 3:] == 100,
+                                                  100, -1)
+    assert unknown_objects(frame, scan, params, (), PRIORS[UNKNOWN_CLASS],
+                           wall_mask(grid.with_data(unknown_around), params)) == []
 
 
 # ------------------------------------------------------------------------- fusion

@@ -50,7 +50,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from explore_seg.core.camera import CameraIntrinsics, apply_transform, invert_transform
-from explore_seg.core.grid import GridMap
+from explore_seg.core.grid import FREE_THRESHOLD, GridMap
 from explore_seg.core.swept import SweptPath
 from explore_seg.core.fields import param_meta as _doc
 
@@ -265,6 +265,10 @@ class ObjectParams:
         "object, since the lidar sees only the post (0 = off)", "m"))
     post_overhang_m: float = field(default=0.04, metadata=_doc(
         "Depth points farther than this from every laser point of a post overhang it", "m"))
+    post_band_m: float = field(default=0.3, metadata=_doc(
+        "unknown_top_fraction of a post's overhanging depth points must lie in a height "
+        "band this tall (a rim or a top; a face over all heights is a wall)", "m"))
+
     unknown_pixel_stride: int = field(default=4, metadata=_doc(
         "Use every n-th depth pixel (rows and columns) for unclassified objects", "px"))
 
@@ -281,7 +285,7 @@ class ObjectParams:
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
         non_negative = ("sync_tolerance_s", "pose_tolerance_s", "voxel_size_m",
                         "miss_depth_margin_m", "leg_min_width_m", "unknown_radius_m",
-                        "post_max_width_m", "post_overhang_m")
+                        "post_max_width_m", "post_overhang_m", "post_band_m")
         for name in non_negative:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
@@ -1184,6 +1188,19 @@ class WallMask:
     grid: GridMap
     mask: npt.NDArray[np.bool_]
 
+    def free(self, points_xy: npt.NDArray[np.floating]) -> npt.NDArray[np.bool_]:
+        """True for the points (map frame, shape (N, 2)) over cells the 2D map knows as
+        free (the lidar saw through them); points outside the map are not."""
+        pts = np.asarray(points_xy, dtype=np.float64).reshape(-1, 2)
+        out = np.zeros(len(pts), dtype=bool)
+        if len(pts) == 0:
+            return out
+        r, c = self.grid.world_to_cells(pts[:, 0], pts[:, 1])
+        ok = (r >= 0) & (r < self.grid.height) & (c >= 0) & (c < self.grid.width)
+        v = self.grid.data[r[ok], c[ok]]
+        out[ok] = (v >= 0) & (v < FREE_THRESHOLD)
+        return out
+
     def on(self, points_xy: npt.NDArray[np.floating]) -> npt.NDArray[np.bool_]:
         """True for the points (map frame, shape (N, 2)) lying on a wall cell; points
         outside the map are not. Returns shape (N,) bool."""
@@ -1661,8 +1678,10 @@ def top_cover(points_xy: npt.NDArray[np.floating], center_xy: Sequence[float],
 
 def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
                     params: ObjectParams, known: Iterable[Object3D] = (),
-                    prior: SizePrior | None = None) -> list[Object3D]:
-    """Unclassified objects: leg groups in the scan with depth points above them.
+                    prior: SizePrior | None = None,
+                    walls: WallMask | None = None) -> list[Object3D]:
+    """Unclassified objects: leg groups in the scan with depth points above them, and
+    posts (:func:`scan_posts`) with depth points overhanging them.
 
     Depth points (every ``unknown_pixel_stride``-th pixel) between
     ``unknown_min_height_m`` and ``unknown_max_height_m`` inside the legs' minimum-area
@@ -1680,6 +1699,10 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
         Objects already found; leg groups lying inside one of them are skipped.
     prior : SizePrior, optional
         Prior of the ``unknown`` class (clamps the boxes).
+    walls : WallMask, optional
+        Of the current 2D map: a post's depth points overhang it only over cells the map
+        knows as free (see :func:`scan_posts`); without it, those farther than
+        ``post_overhang_m`` from the post's laser points do.
 
     Returns
     -------
@@ -1713,7 +1736,7 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
     band = (pts[:, 2] >= params.unknown_min_height_m) & (pts[:, 2] <= params.unknown_max_height_m)
     pts = pts[band]
     out = [o for g in posts
-           if (o := _post_object(g, pts, others, params, prior, cam_xy)) is not None]
+           if (o := _post_object(g, pts, others, params, prior, cam_xy, walls)) is not None]
     for g in kept:
         if len(g) >= 3:
             (rcx, rcy), (w, h), ang = cv2.minAreaRect(g.astype(np.float32))
@@ -1744,11 +1767,18 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
 
 def _post_object(post: npt.NDArray[np.float64], pts: npt.NDArray[np.float64],
                  others: npt.NDArray[np.float64], params: ObjectParams,
-                 prior: SizePrior | None, cam_xy: Sequence[float]) -> Object3D | None:
-    """An unclassified object over a post (see :func:`scan_posts`) when depth points
-    above it (``pts``, already in the height band) overhang its laser points by more than
-    ``post_overhang_m`` (a bin's rim, a pedestal table's top); None otherwise.
+                 prior: SizePrior | None, cam_xy: Sequence[float],
+                 walls: WallMask | None = None) -> Object3D | None:
+    """An unclassified object over a post (see :func:`scan_posts`) when at least
+    ``unknown_min_points`` depth points above it (``pts``, already in the height band)
+    overhang its laser points (a bin's rim, a pedestal table's top); None otherwise.
 
+    Overhanging: farther than ``post_overhang_m`` from every laser point of the post and,
+    with the map (``walls``), over a cell the map knows as free, i.e. where the lidar sees
+    through under it (the faces of a pillar that this scan does not see are no overhang).
+    Like a table top over legs, the overhanging points must be mostly at one height
+    (``unknown_top_fraction`` of them within ``post_band_m``): a face spread over all
+    heights is a wall or pillar side, whichever map cell it falls into.
     Depth points within ``leg_isolation_m`` of other scan points belong to what the lidar
     sees there and are left out."""
     lo, hi = post.min(axis=0), post.max(axis=0)
@@ -1760,9 +1790,13 @@ def _post_object(post: npt.NDArray[np.float64], pts: npt.NDArray[np.float64],
         sel = sel[~np.isfinite(d_other)]
     if len(sel) < params.unknown_min_points:
         return None
-    d_post = cKDTree(post).query(sel[:, :2])[0]
-    if np.count_nonzero(d_post > params.post_overhang_m) < params.unknown_min_points:
+    over = cKDTree(post).query(sel[:, :2])[0] > params.post_overhang_m
+    if walls is not None:
+        over &= walls.free(sel[:, :2])
+    if np.count_nonzero(over) < params.unknown_min_points:
         return None
+    if top_fraction(sel[over, 2], params.post_band_m) < params.unknown_top_fraction:
+        return None  # a face spread over all heights (a pillar side the scan missed)
     # No outlier filter: the top seen at a grazing angle is sparse next to the dense
     # faces and would be cut off; the selection is bounded by the post's grown box.
     base = np.column_stack([post, np.full(len(post), float(sel[:, 2].min()))])
@@ -2276,7 +2310,8 @@ def process_frame(frame: DepthFrame, detections: Iterable[BoxDetection],
     walls : WallMask, optional
         From :func:`wall_mask` of the current 2D map: depth points on walls are dropped
         before clustering (``drop_wall_points``), so a desk against a wall is not merged
-        with it and a chair seen through a doorway is not the jamb.
+        with it and a chair seen through a doorway is not the jamb; a post's overhang
+        must lie over free map cells (:func:`unknown_objects`).
 
     Returns
     -------
@@ -2309,5 +2344,5 @@ def process_frame(frame: DepthFrame, detections: Iterable[BoxDetection],
     unknown: list[Object3D] = []
     if params.unknown_enabled and scan_xy_map is not None and len(scan_xy_map):
         unknown = unknown_objects(frame, scan_xy_map, params, objects,
-                                  priors.get(UNKNOWN_CLASS))
+                                  priors.get(UNKNOWN_CLASS), walls)
     return FrameResult(objects, unknown, dropped)
