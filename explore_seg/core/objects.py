@@ -268,7 +268,6 @@ class ObjectParams:
     post_band_m: float = field(default=0.3, metadata=_doc(
         "unknown_top_fraction of a post's overhanging depth points must lie in a height "
         "band this tall (a rim or a top; a face over all heights is a wall)", "m"))
-
     unknown_pixel_stride: int = field(default=4, metadata=_doc(
         "Use every n-th depth pixel (rows and columns) for unclassified objects", "px"))
 
@@ -1701,8 +1700,9 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
         Prior of the ``unknown`` class (clamps the boxes).
     walls : WallMask, optional
         Of the current 2D map: a post's depth points overhang it only over cells the map
-        knows as free (see :func:`scan_posts`); without it, those farther than
-        ``post_overhang_m`` from the post's laser points do.
+        knows as free; without it, every one farther than ``post_overhang_m`` from the
+        post's laser points does (and either way they must lie mostly within
+        ``post_band_m`` of height).
 
     Returns
     -------
