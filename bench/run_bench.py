@@ -54,8 +54,8 @@ from sim_bridge import worlds as sim_worlds  # noqa: E402
 from sim_bridge.coverage_tour import TourParams, coverage_tour  # noqa: E402
 from sim_bridge.engine import SimParams, load_world  # noqa: E402
 from sim_bridge.observable import with_observable  # noqa: E402
-from sim_bridge.lockstep import STRATEGIES, LockstepParams, LockstepState, RunResult, \
-    run_exploration  # noqa: E402
+from sim_bridge.lockstep import STRATEGIES, ExplorerParams, LockstepParams, LockstepState, \
+    RunResult, load_explorer_params, run_exploration  # noqa: E402
 
 GENERATED_WORLDS = ("house", "maze", "house_cluttered")
 SHARED_WORLDS = ("house", "house_cluttered", "house_cluttered_plus", "maze")
@@ -135,6 +135,11 @@ def sim_params_for(camera_mount: tuple[float, float] | None) -> SimParams:
     return SimParams(camera_mount_z_m=camera_mount[0], camera_pitch_rad=camera_mount[1])
 
 
+#: The nodes' parameters of this benchmark, read once before the workers fork (an edit
+#: of config/explorer.yaml during a long benchmark must not change its later runs).
+_EXPLORER_PARAMS: ExplorerParams | None = None
+
+
 def _run_task(task: tuple[str, str, int, float, str | None, tuple[float, float] | None]
               ) -> dict[str, Any]:
     spec, strategy, seed, max_t, picture, mount = task
@@ -145,7 +150,7 @@ def _run_task(task: tuple[str, str, int, float, str | None, tuple[float, float] 
         last["state"] = st
 
     res = run_exploration(world, strategy, seed, max_sim_time_s=max_t, ground_truth=gt,
-                          sim_params=sim_params_for(mount),
+                          sim_params=sim_params_for(mount), explorer_params=_EXPLORER_PARAMS,
                           observer=keep_last if picture else None)
     if picture and "state" in last:
         _save_picture(last["state"], picture)
@@ -329,6 +334,7 @@ def _camera_mount(text: str) -> tuple[float, float] | None:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark (see the module docstring); returns the exit status."""
+    global _EXPLORER_PARAMS
     a = _parse(argv)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -377,6 +383,7 @@ def main(argv: list[str] | None = None) -> int:
         # Worlds, ground truths and explorable areas before the workers fork (they
         # inherit the cache).
         areas = {s: float(load(s)[1].explorable_area_m2) for s in specs}
+        _EXPLORER_PARAMS = load_explorer_params()
         ctx = mp.get_context("fork")
         with ctx.Pool(a.jobs, initializer=_worker_init, maxtasksperchild=20) as pool:
             try:
