@@ -296,7 +296,8 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     ap.add_argument("--redo", default="",
                     help="with --resume: comma-separated STRATEGY or WORLD:STRATEGY whose "
                          "kept runs are run again (after a change that affects them; the "
-                         "old runs are copied to runs.jsonl.bak)")
+                         "old runs are copied to runs.jsonl.bak*). An interrupted redo is "
+                         "continued with --resume alone (with --redo it starts over)")
     a = ap.parse_args(argv)
     if a.runs < 1 or a.jobs < 1:
         ap.error("--runs and --jobs must be >= 1")
@@ -308,10 +309,14 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     if bad:
         ap.error(f"unknown strategies {bad}; choose from {list(STRATEGIES)}")
     a.redo_keys = []
-    for item in (x for x in a.redo.split(",") if x):
+    strategies = [s for s in a.strategies.split(",") if s]
+    worlds = [w for w in a.worlds.split(",") if w] if a.worlds else None
+    for item in (x.strip() for x in a.redo.split(",") if x.strip()):
         world, _, strat = item.rpartition(":")
-        if strat not in STRATEGIES:
-            ap.error(f"--redo {item!r}: unknown strategy {strat!r}")
+        if strat not in strategies:
+            ap.error(f"--redo {item!r}: strategy {strat!r} is not among --strategies")
+        if world and worlds is not None and world not in worlds:
+            ap.error(f"--redo {item!r}: world {world!r} is not among --worlds")
         a.redo_keys.append((world or None, strat))
     if a.redo_keys and not a.resume:
         ap.error("--redo needs --resume")
@@ -467,9 +472,13 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
                 wanted.discard(key)  # a duplicate line counts once
                 results.append(d)
         if len(results) < len(old):  # runs this command does not ask for: keep a copy
-            shutil.copyfile(out / "runs.jsonl", out / "runs.jsonl.bak")
+            bak = out / "runs.jsonl.bak"
+            k = 1
+            while bak.exists():          # never overwrite an earlier copy
+                bak, k = out / f"runs.jsonl.bak{k}", k + 1
+            shutil.copyfile(out / "runs.jsonl", bak)
             print(f"[bench] resume: {len(old) - len(results)} runs not asked for or to "
-                  f"redo are left out (copy in {out / 'runs.jsonl.bak'})", file=sys.stderr)
+                  f"redo are left out (copy in {bak})", file=sys.stderr)
         done = {(d["world"], d["strategy"], d["seed"]) for d in results}
         tasks = [t for t in tasks if t[:3] not in done]
         print(f"[bench] resume: {len(results)} runs kept, {len(tasks)} to run",

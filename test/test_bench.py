@@ -133,17 +133,21 @@ def test_redo_runs_the_named_strategy_again_and_keeps_the_old_runs_aside(first, 
     (res / "runs.jsonl").write_text("".join(json.dumps(r) + "\n" for r in runs))
     with pytest.raises(SystemExit):       # --redo without --resume, unknown strategy
         run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--redo", "nearest"])
-    with pytest.raises(SystemExit):
-        run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--resume", "--redo", "x"])
-    # another world's runs are not redone
-    assert run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
-                                  "--redo", "small_cluttered:nearest"]) == 0
+    for bad in ("x", "explore_lite", "small_cluttered:nearest"):  # not asked for: an error
+        with pytest.raises(SystemExit):
+            run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--resume", "--redo", bad])
     assert [r["coverage_pct"] for r in _runs(res)] == [-1.0]
+    (res / "runs.jsonl.bak").write_text("an earlier copy\n")
     assert run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
                                   "--redo", "small_house:nearest"]) == 0
     redone = _runs(res)
     assert len(redone) == 1 and redone[0]["coverage_pct"] >= 0
     assert redone[0]["coverage_pct"] == _runs(out)[0]["coverage_pct"]   # same seed, same run
-    assert '"coverage_pct": -1.0' in (res / "runs.jsonl.bak").read_text()
+    assert (res / "runs.jsonl.bak").read_text() == "an earlier copy\n"   # not overwritten
+    assert '"coverage_pct": -1.0' in (res / "runs.jsonl.bak1").read_text()
+    assert run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
+                                  "--redo", "nearest"]) == 0                # every world
+    assert _runs(res)[0]["coverage_pct"] == redone[0]["coverage_pct"]
+    assert (res / "runs.jsonl.bak2").is_file()
     meta = json.loads((res / "meta.json").read_text())
-    assert [p["runs_run"] for p in meta["parts"]] == [1, 0, 1]
+    assert [p["runs_run"] for p in meta["parts"]] == [1, 1, 1]

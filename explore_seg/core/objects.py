@@ -262,9 +262,12 @@ class ObjectParams:
         "Isolated laser clusters wider than leg_max_width_m and up to this wide are posts "
         "(a bin, a pedestal, a plant pot): depth points above one that reach more than "
         "post_overhang_m beyond its laser points (a rim, a top) make an unclassified "
-        "object, since the lidar sees only the post (0 = off)", "m"))
+        "object, since the lidar sees only the post (0 or <= leg_max_width_m = off)", "m"))
     post_overhang_m: float = field(default=0.04, metadata=_doc(
         "Depth points farther than this from every laser point of a post overhang it", "m"))
+    post_link_m: float = field(default=0.15, metadata=_doc(
+        "Depth points (in plan view) closer than this to a post or to its overhang belong "
+        "to it; others near it (a table top beside a bin) do not", "m"))
     post_band_m: float = field(default=0.3, metadata=_doc(
         "unknown_top_fraction of a post's overhanging depth points must lie in a height "
         "band this tall (a rim or a top; a face over all heights is a wall)", "m"))
@@ -276,7 +279,7 @@ class ObjectParams:
                     "merge_distance_m", "miss_sample_spacing_m", "cloud_spacing_m",
                     "leg_cluster_gap_m", "leg_max_width_m", "leg_isolation_m",
                     "leg_group_distance_m", "leg_max_range_m", "unknown_max_height_m",
-                    "unknown_cover_cell_m",
+                    "unknown_cover_cell_m", "post_link_m",
                     "sor_std")
         for name in positive:
             v = getattr(self, name)
@@ -1695,7 +1698,9 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
         Laser points in the map frame.
     params : ObjectParams
     known : iterable of Object3D
-        Objects already found; leg groups lying inside one of them are skipped.
+        Objects already found; leg groups lying inside one of them (grown by
+        ``unknown_radius_m``) and posts whose centre lies inside one (grown by
+        ``leg_isolation_m``) are skipped.
     prior : SizePrior, optional
         Prior of the ``unknown`` class (clamps the boxes).
     walls : WallMask, optional
@@ -1724,9 +1729,11 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
     posts, others = (scan_posts(scan_xy_map, params, cam_xy, clusters)
                      if params.post_max_width_m > 0
                      else ([], np.zeros((0, 2))))
+    # Posts of objects already found (their face lies on the box's edge) are skipped.
     posts = [g for g in posts
              if not any(points_in_rect(g.mean(axis=0, keepdims=True), o.center_xyz[:2],
-                                       o.size_xyz[:2], o.yaw, 0.0)[0] for o in known)]
+                                       o.size_xyz[:2], o.yaw, params.leg_isolation_m)[0]
+                        for o in known)]
     if not kept and not posts:
         return []
     stride = params.unknown_pixel_stride
@@ -1735,8 +1742,12 @@ def unknown_objects(frame: DepthFrame, scan_xy_map: npt.NDArray[np.floating],
     pts, _, _ = frame_points(frame, mask, params.max_depth_m)
     band = (pts[:, 2] >= params.unknown_min_height_m) & (pts[:, 2] <= params.unknown_max_height_m)
     pts = pts[band]
-    out = [o for g in posts
-           if (o := _post_object(g, pts, others, params, prior, cam_xy, walls)) is not None]
+    out = []
+    for i, g in enumerate(posts):
+        rest = np.vstack([others] + [h for j, h in enumerate(posts) if j != i])
+        obj = _post_object(g, pts, rest, params, prior, cam_xy, walls)
+        if obj is not None:
+            out.append(obj)
     for g in kept:
         if len(g) >= 3:
             (rcx, rcy), (w, h), ang = cv2.minAreaRect(g.astype(np.float32))
@@ -1788,6 +1799,13 @@ def _post_object(post: npt.NDArray[np.float64], pts: npt.NDArray[np.float64],
     if len(sel) and len(others):
         d_other = cKDTree(others).query(sel[:, :2], distance_upper_bound=params.leg_isolation_m)[0]
         sel = sel[~np.isfinite(d_other)]
+    if len(sel) < params.unknown_min_points:
+        return None
+    # Only what hangs together with the post (in plan view) is its overhang: a table top
+    # beside a bin is not the bin's rim.
+    both = np.vstack([post, sel[:, :2]])
+    labels = euclidean_clusters(both, params.post_link_m, 1)
+    sel = sel[np.isin(labels[len(post):], labels[:len(post)])]
     if len(sel) < params.unknown_min_points:
         return None
     over = cKDTree(post).query(sel[:, :2])[0] > params.post_overhang_m
@@ -2049,7 +2067,7 @@ class ObjectMap:
             Frame time.
         robot_xy : sequence of 2 float, optional
             Robot position (map frame). The robot's own body proves that no object stands
-            there: observations and tracked objects whose footprint reaches more than
+            there: observations and tracked objects whose footprint reaches at least
             ``robot_clear_fraction`` of ``robot_radius_m`` into the robot's disk are
             dropped (else a misplaced box can enclose the robot and end exploration).
         """
@@ -2084,7 +2102,8 @@ class ObjectMap:
             self._objects.sort(key=lambda t: t.id)
 
     def _on_robot(self, obj: Object3D, robot_xy: Sequence[float]) -> bool:
-        """True when ``obj``'s footprint overlaps the robot's disk (see :meth:`update`)."""
+        """True when ``obj``'s footprint reaches ``robot_clear_fraction`` of the radius
+        into the robot's disk (see :meth:`update`)."""
         # Reaching depth f * R into the disk = the centre within (1 - f) * R of the box
         # (Euclidean distance to the rectangle, 0 inside it).
         margin = self.params.robot_radius_m * (1.0 - self.params.robot_clear_fraction)
