@@ -305,11 +305,11 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
         a.mount = _camera_mount(a.camera_mount)
     except ValueError as err:
         ap.error(str(err))
-    bad = [s for s in a.strategies.split(",") if s not in STRATEGIES]
-    if bad:
+    strategies = [s for s in a.strategies.split(",") if s]
+    bad = [s for s in strategies if s not in STRATEGIES]
+    if bad or not strategies:
         ap.error(f"unknown strategies {bad}; choose from {list(STRATEGIES)}")
     a.redo_keys = []
-    strategies = [s for s in a.strategies.split(",") if s]
     worlds = [w for w in a.worlds.split(",") if w] if a.worlds else None
     for item in (x.strip() for x in a.redo.split(",") if x.strip()):
         world, _, strat = item.rpartition(":")

@@ -40,7 +40,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Iterable, Protocol, Sequence
+from typing import Callable, Iterable, Protocol, Sequence
 
 import cv2
 import numpy as np
@@ -1193,27 +1193,27 @@ class WallMask:
     def free(self, points_xy: npt.NDArray[np.floating]) -> npt.NDArray[np.bool_]:
         """True for the points (map frame, shape (N, 2)) over cells the 2D map knows as
         free (the lidar saw through them); points outside the map are not."""
+        return self._lookup(points_xy, lambda r, c: (self.grid.data[r, c] >= 0)
+                            & (self.grid.data[r, c] < FREE_THRESHOLD))
+
+    def on(self, points_xy: npt.NDArray[np.floating]) -> npt.NDArray[np.bool_]:
+        """True for the points (map frame, shape (N, 2)) lying on a wall cell; points
+        outside the map are not. Returns shape (N,) bool."""
+        return self._lookup(points_xy, lambda r, c: self.mask[r, c])
+
+    def _lookup(self, points_xy: npt.NDArray[np.floating],
+                cell_test: Callable[[npt.NDArray[np.intp], npt.NDArray[np.intp]],
+                                    npt.NDArray[np.bool_]]) -> npt.NDArray[np.bool_]:
+        """``cell_test(rows, cols)`` at the cells of the points inside the map, False
+        for the others; shape (N,) bool."""
         pts = np.asarray(points_xy, dtype=np.float64).reshape(-1, 2)
         out = np.zeros(len(pts), dtype=bool)
         if len(pts) == 0:
             return out
         r, c = self.grid.world_to_cells(pts[:, 0], pts[:, 1])
         ok = (r >= 0) & (r < self.grid.height) & (c >= 0) & (c < self.grid.width)
-        v = self.grid.data[r[ok], c[ok]]
-        out[ok] = (v >= 0) & (v < FREE_THRESHOLD)
+        out[ok] = cell_test(r[ok], c[ok])
         return out
-
-    def on(self, points_xy: npt.NDArray[np.floating]) -> npt.NDArray[np.bool_]:
-        """True for the points (map frame, shape (N, 2)) lying on a wall cell; points
-        outside the map are not. Returns shape (N,) bool."""
-        pts = np.asarray(points_xy, dtype=np.float64).reshape(-1, 2)
-        hits = np.zeros(len(pts), dtype=bool)
-        if len(pts) == 0:
-            return hits
-        r, c = self.grid.world_to_cells(pts[:, 0], pts[:, 1])
-        ok = (r >= 0) & (r < self.grid.height) & (c >= 0) & (c < self.grid.width)
-        hits[ok] = self.mask[r[ok], c[ok]]
-        return hits
 
 
 def wall_mask(grid: GridMap, params: ObjectParams, occupied_threshold: int = 65) -> WallMask:
@@ -1505,7 +1505,8 @@ def scan_legs(scan_xy: npt.NDArray[np.floating], params: ObjectParams,
     ValueError
         If ``scan_xy`` is not (N, 2).
     """
-    pts, labels, counts, widths = _clusters or _scan_clusters(scan_xy, params, robot_xy)
+    pts, labels, counts, widths = (_clusters if _clusters is not None
+                                   else _scan_clusters(scan_xy, params, robot_xy))
     if len(pts) == 0:
         return np.zeros((0, 2))
     candidates = np.flatnonzero((counts >= params.leg_min_points)
@@ -1570,7 +1571,8 @@ def scan_posts(scan_xy: npt.NDArray[np.floating], params: ObjectParams,
     ValueError
         If ``scan_xy`` is not (N, 2).
     """
-    pts, labels, counts, widths = _clusters or _scan_clusters(scan_xy, params, robot_xy)
+    pts, labels, counts, widths = (_clusters if _clusters is not None
+                                   else _scan_clusters(scan_xy, params, robot_xy))
     if len(pts) == 0 or params.post_max_width_m <= params.leg_max_width_m:
         return [], pts
     candidates = np.flatnonzero((counts >= params.leg_min_points)
