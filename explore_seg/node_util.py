@@ -36,6 +36,12 @@ def run(node_cls: Callable[..., Node] | Sequence[Callable[..., Node]],
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except RuntimeError:
+        # SIGINT shuts the context down from rclpy's signal handler; when that lands while
+        # the executor builds its wait set, rclpy raises RCLError (a RuntimeError, "context
+        # is not valid") instead of ExternalShutdownException: the same clean stop.
+        if rclpy.ok():
+            raise
     finally:
         # Stop the executor (and its worker threads) before the nodes go away, so no
         # callback runs on a destroyed node.

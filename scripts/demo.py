@@ -15,7 +15,8 @@ collisions, objects, regions), collects animation frames and stops at
 
 Outputs in the output folder: ``final_map.png`` (map, path, regions, object boxes, goals,
 collisions), ``coverage.png`` (coverage vs sim time), ``exploration.gif``,
-``metrics.json``, ``sim/`` (the simulator's own metrics and map) and ``logs/``.
+``metrics.json`` (with the collision events, the final object footprints and their
+history: ``[sim time, footprints]`` each time the set changed), ``sim/`` (the simulator's own metrics and map) and ``logs/``.
 
 The environment should hold ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and a private
 ``ROS_DOMAIN_ID``; :func:`main` sets both when absent, and ``scripts/run_demo.sh`` also
@@ -267,6 +268,9 @@ class Monitor:
         self._regions_img = None
         self._regions_info = None
         self.boxes: list[np.ndarray] = []
+        # (sim time, footprints) each time the set of boxes changed: what the object
+        # costmap believed when, e.g. at a collision (metrics.json "object_history").
+        self.box_history: list[tuple[float, list[np.ndarray]]] = []
         self.pose: tuple[float, float, float] | None = None
         self.trail: list[tuple[float, float]] = []
         self.trail_spacing_m = 0.05
@@ -357,7 +361,12 @@ class Monitor:
             self.labels = labels
 
     def _on_markers(self, msg) -> None:
-        self.boxes = boxes_from_markers(msg)
+        boxes = boxes_from_markers(msg)
+        changed = len(boxes) != len(self.boxes) or any(
+            not np.allclose(a, b, atol=1e-3) for a, b in zip(boxes, self.boxes))
+        self.boxes = boxes
+        if changed:
+            self.box_history.append((self.sim_time_s, boxes))
 
     @property
     def sim_time_s(self) -> float:
@@ -588,6 +597,9 @@ def _write_outputs(cfg: DemoConfig, out: Path, mon: Monitor, gif, sim_json: dict
         "goals_reached": _num(m.get("goals_reached")),
         "goals_aborted": _num(m.get("goals_aborted")), "n_objects": len(mon.boxes),
         "n_regions": mon.n_regions(), "dropped_inputs": mon.dropped,
+        "objects": [np.round(b, 3).tolist() for b in mon.boxes],
+        "object_history": [[round(t, 2), [np.round(b, 3).tolist() for b in bs]]
+                           for t, bs in mon.box_history],
         "collision_events": sim_json.get("collision_events", []),
         "coverage_history": samples, "files": files,
     }
