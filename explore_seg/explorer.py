@@ -1,7 +1,11 @@
 """``explorer``: the whole exploration pipeline in one process.
 
 Runs the frontier detector, DuDe segmentation, target selector and object costmap nodes
-in one executor. Each node reads its parameters from ``config/explorer.yaml`` (installed to
+in one executor, single-threaded by default: rclpy's MultiThreadedExecutor busy-waits
+while a callback of a mutually exclusive group runs (its entity stays ready), and that
+loop, holding the GIL, starved the object costmap in this process (measured in the
+simulator demo at 4x real time: 25 of 801 camera frames processed, explorer at 100 % of a
+core, against about half of the frames and a third of a core single-threaded). Each node reads its parameters from ``config/explorer.yaml`` (installed to
 ``share/explore_seg/config``) unless ``--ros-args --params-file FILE`` is given, and each is
 also runnable alone (``frontier_detector``, ``segmentation``, ``target_selector``,
 ``object_costmap``).
@@ -73,8 +77,9 @@ def build_args(argv: list[str]) -> tuple[argparse.Namespace, list[str]]:
     ap = argparse.ArgumentParser(prog="explorer", description=__doc__.split("\n\n")[0])
     ap.add_argument("--without", action="append", default=[],
                     help="leave out a component (object_costmap, segmentation, frontier_detector)")
-    ap.add_argument("--threads", type=int, default=4,
-                    help="executor threads (1 = single-threaded)")
+    ap.add_argument("--threads", type=int, default=1,
+                    help="executor threads (1 = single-threaded, the default; more use "
+                         "rclpy's MultiThreadedExecutor, see the module docstring)")
     opts = ap.parse_args(ours)
     if "--params-file" not in ros:
         pf = default_params_file()

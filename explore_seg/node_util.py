@@ -19,7 +19,8 @@ def run(node_cls: Callable[..., Node] | Sequence[Callable[..., Node]],
     SIGINT (Ctrl-C) and external shutdown end the spin; the nodes are destroyed and the
     context shut down. ``num_threads > 1`` spins with a MultiThreadedExecutor (each node
     keeps its default mutually exclusive callback group, so one node's callbacks never
-    overlap, while a slow detector does not hold up target selection). Returns 0.
+    overlap); beware that rclpy's MultiThreadedExecutor busy-waits while such a callback
+    runs (see :mod:`explore_seg.explorer`). Returns 0.
     """
     classes = list(node_cls) if isinstance(node_cls, (list, tuple)) else [node_cls]
     rclpy.init(args=args)

@@ -1,11 +1,16 @@
 """``object_costmap`` node: furniture boxes from YOLO + depth (+ laser legs) as a map layer.
 
-Callbacks only store the newest inputs. A timer on the ROS clock (``rate_hz``) takes the
-newest colour/depth pair whose stamps match (``sync_tolerance_s``), the robot pose nearest
-to it, runs the detector and :func:`explore_seg.core.objects.process_frame`, fuses the
+Callbacks only store the newest inputs. A timer on the ROS clock (``_POLLS_PER_PERIOD``
+times per ``1 / rate_hz``) takes the newest colour/depth pair whose stamps match
+(``sync_tolerance_s``) and lie at least ``_MIN_GAP_PERIODS / rate_hz`` after the last one
+processed (so a camera at ``rate_hz`` has every frame processed, a faster one about
+``rate_hz`` of them), the robot pose nearest to it, runs the detector and :func:`explore_seg.core.objects.process_frame`, fuses the
 boxes into an :class:`~explore_seg.core.objects.ObjectMap` and publishes the layer
-(aligned with the latest ``map``), the virtual cloud, markers and timings. Frames that
-arrive while a frame is processed are dropped (only the newest few are kept for pairing).
+(aligned with the latest ``map``), the virtual cloud, markers and timings (cloud and
+markers only while they have subscribers). Frames that arrive while a frame is processed
+are dropped (only the newest few are kept for pairing); when the node processes less than
+half of the frames it could (``rate_hz`` or the camera's rate, whichever is lower) over
+``_LAG_WINDOW_S`` of ROS time, it warns: the layer then lags behind the robot.
 """
 
 from __future__ import annotations
@@ -42,6 +47,15 @@ _PAIR_BUFFER = 4
 _POSE_BUFFER = 200
 #: Seconds between repeated warnings of one kind.
 _WARN_PERIOD_S = 5.0
+#: Timer ticks per 1 / rate_hz (a frame is taken soon after it arrives).
+_POLLS_PER_PERIOD = 4
+#: Least stamp gap between two processed frames, in periods 1 / rate_hz (below 1: the
+#: camera's own jitter does not make a camera at rate_hz lose every other frame).
+_MIN_GAP_PERIODS = 0.9
+#: ROS-clock seconds over which the processed share of the camera frames is checked.
+_LAG_WINDOW_S = 20.0
+#: Wall seconds between repeated lag warnings.
+_LAG_WARN_PERIOD_S = 30.0
 #: Marker colours (r, g, b) per class; others use the last entry.
 _CLASS_RGB = {"chair": (0.9, 0.3, 0.2), "dining table": (0.6, 0.4, 0.2),
               "couch": (0.5, 0.3, 0.6), "bed": (0.3, 0.5, 0.8), UNKNOWN_CLASS: (0.9, 0.8, 0.1),
@@ -91,7 +105,12 @@ class ObjectCostmapNode(Node):
         #: Last message per drop reason.
         self.last_drop: dict[str, str] = {}
         self.frames_processed = 0
+        #: Depth images received (each one a camera frame).
+        self.frames_received = 0
+        #: (ROS time ns, frames_received, frames_processed) at the start of the lag window.
+        self._lag_mark: tuple[int, int, int] | None = None
         self._warn = WarnThrottle(self, _WARN_PERIOD_S)
+        self._warn_lag = WarnThrottle(self, _LAG_WARN_PERIOD_S)
 
         self._pub_grid = self.create_publisher(OccupancyGrid, "object_costmap", MAP_QOS)
         self._pub_cloud = self.create_publisher(PointCloud2, "object_costmap/cloud", 1)
@@ -118,7 +137,7 @@ class ObjectCostmapNode(Node):
         # Used (and required for pairing) only by the oracle detector backend.
         self.create_subscription(Image, "camera/semantic/image_raw", self._on_semantic,
                                  SENSOR_QOS)
-        self._timer = self.create_timer(1.0 / p.rate_hz, self._tick)
+        self._timer = self.create_timer(1.0 / (p.rate_hz * _POLLS_PER_PERIOD), self._tick)
         self._p.on_change(self._params_changed)
         self._dp.on_change(self._detector_params_changed)
 
@@ -149,7 +168,8 @@ class ObjectCostmapNode(Node):
         if new.rate_hz != old.rate_hz:
             self._timer.cancel()
             self.destroy_timer(self._timer)
-            self._timer = self.create_timer(1.0 / new.rate_hz, self._tick)
+            self._timer = self.create_timer(1.0 / (new.rate_hz * _POLLS_PER_PERIOD),
+                                            self._tick)
 
     def _detector_params_changed(self, old: DetectorParams, new: DetectorParams) -> None:
         self._detector = None
@@ -161,6 +181,7 @@ class ObjectCostmapNode(Node):
 
     def _on_depth(self, msg: Image) -> None:
         self._depths.append(msg)
+        self.frames_received += 1
 
     def _on_semantic(self, msg: Image) -> None:
         self._semantics.append(msg)
@@ -213,6 +234,28 @@ class ObjectCostmapNode(Node):
             return
         self._state = State.RUNNING
         self._process(*pair)
+        self._check_lag()
+
+    def _check_lag(self) -> None:
+        """Warn when fewer than half of the frames that could be processed were."""
+        now = self.get_clock().now().nanoseconds
+        mark = self._lag_mark
+        if mark is None or now < mark[0]:          # first frame, or the clock jumped back
+            self._lag_mark = (now, self.frames_received, self.frames_processed)
+            return
+        span_s = (now - mark[0]) / 1e9
+        if span_s < _LAG_WINDOW_S:
+            return
+        received = self.frames_received - mark[1]
+        processed = self.frames_processed - mark[2]
+        possible = min(received, span_s * self.params.rate_hz)
+        self._lag_mark = (now, self.frames_received, self.frames_processed)
+        if processed < 0.5 * possible:
+            self._warn_lag("lag", (
+                f"processed {processed} of {received} camera frames in the last {span_s:.0f} s "
+                f"(rate_hz {self.params.rate_hz:g}): the object layer lags behind the robot; "
+                "lower the camera rate or the simulation's real-time factor, or run "
+                "object_costmap in a process of its own"))
 
     def _newest_pair(self) -> tuple[Image, Image, Image | None] | None:
         """Newest unprocessed depth with a colour (and semantic) image close in time."""
@@ -222,10 +265,11 @@ class ObjectCostmapNode(Node):
         # behind the images while this node is busy); they are taken on a later tick.
         newest_pose = self._poses[-1][0] if self._poses else None
         pose_tol_ns = int(self.params.pose_tolerance_s * 1e9)
+        min_gap_ns = int(_MIN_GAP_PERIODS / self.params.rate_hz * 1e9)
         for depth in sorted(self._depths, key=_stamp_ns, reverse=True):
             t = _stamp_ns(depth)
-            if self._last_depth_ns is not None and t <= self._last_depth_ns:
-                return None
+            if self._last_depth_ns is not None and t < self._last_depth_ns + min_gap_ns:
+                return None     # processed, or too soon after the last one: wait for a newer
             if newest_pose is not None and t > newest_pose + pose_tol_ns:
                 continue
             color = _closest(self._colors, t, tol_ns)
@@ -342,9 +386,13 @@ class ObjectCostmapNode(Node):
         p = self.params
         self._publish_grid()
         header = convert.make_header(p.map_frame, t_ns)
-        cloud = self._objects.virtual_cloud()
-        self._pub_cloud.publish(convert.cloud_to_msg(convert.xyz_cloud(cloud), header))
-        self._pub_markers.publish(_markers(self._objects.boxes(), header))
+        # The cloud (for a Nav2 voxel layer) and the markers (RViz) cost a share of every
+        # frame's time: only for subscribers.
+        if self._pub_cloud.get_subscription_count() > 0:
+            cloud = self._objects.virtual_cloud()
+            self._pub_cloud.publish(convert.cloud_to_msg(convert.xyz_cloud(cloud), header))
+        if self._pub_markers.get_subscription_count() > 0:
+            self._pub_markers.publish(_markers(self._objects.boxes(), header))
 
 
 def interpolate_pose(poses: list[tuple[int, tuple[float, float, float]]], t_ns: int,

@@ -10,7 +10,8 @@ published per map update. Each result is published as
 * ``regions/info`` (nav_msgs/MapMetaData): the map geometry, ``map_load_time`` = the map
   stamp (pairs the two);
 * ``regions/color`` (nav_msgs/OccupancyGrid): a visualisation for RViz (``costmap``
-  colour scheme): every region id hashed to 1..99, -1 where there is no region;
+  colour scheme): every region id hashed to 1..99, -1 where there is no region; only
+  while it has a subscriber;
 * ``~/timing`` (std_msgs/Float64): wall time of the update in milliseconds.
 
 Ids of regions that did not change stay the same between updates (DuDe spec shared/docs/dude.md §12).
@@ -140,8 +141,11 @@ class SegmentationNode(Node):
         img, info = convert.labels_to_msgs(labels, grid, msg.header.stamp)
         self._pub_regions.publish(img)
         self._pub_info.publish(info)
-        self._pub_color.publish(convert.grid_to_msg(color_grid(labels, grid),
-                                                    msg.header.stamp))
+        if self._pub_color.get_subscription_count() > 0:
+            # Only for display (RViz); colouring every update costs the other nodes
+            # sharing this process their time.
+            self._pub_color.publish(convert.grid_to_msg(color_grid(labels, grid),
+                                                        msg.header.stamp))
         self._pub_timing.publish(Float64(data=elapsed_ms))
 
 

@@ -74,6 +74,8 @@ class DemoConfig:
     camera_scale: float = 0.5
     camera_rate_hz: float = 2.0
     explorer: bool = True
+    #: Executor threads of the explorer process (its --threads).
+    explorer_threads: int = 1
     params_file: str = ""
     stop_coverage_pct: float = 0.0
     sim_args: tuple[str, ...] = field(default_factory=tuple)
@@ -91,6 +93,8 @@ class DemoConfig:
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
         if self.camera_scale > 1:
             raise ValueError(f"camera_scale must be <= 1, got {self.camera_scale}")
+        if self.explorer_threads < 1:
+            raise ValueError(f"explorer_threads must be >= 1, got {self.explorer_threads}")
         if self.gif_max_frames < 2:
             raise ValueError(f"gif_max_frames must be >= 2, got {self.gif_max_frames}")
 
@@ -128,7 +132,7 @@ def sim_command(cfg: DemoConfig) -> list[str]:
 def explorer_command(cfg: DemoConfig) -> list[str]:
     """Command line of the explorer process (strategy mapped onto its parameters)."""
     spec = STRATEGY_SPECS[cfg.strategy]
-    cmd = [sys.executable, "-m", "explore_seg.explorer"]
+    cmd = [sys.executable, "-m", "explore_seg.explorer", "--threads", str(cfg.explorer_threads)]
     if not spec.use_objects:
         cmd += ["--without", "object_costmap"]
     if not spec.use_regions:
@@ -251,7 +255,7 @@ class Monitor:
         from nav_msgs.msg import MapMetaData, OccupancyGrid, Odometry
         from rclpy.node import Node
         from sensor_msgs.msg import Image
-        from std_msgs.msg import Bool
+        from std_msgs.msg import Bool, Float64MultiArray
         from visualization_msgs.msg import MarkerArray
 
         from explore_seg.qos import MAP_QOS, RELIABLE_QOS
@@ -285,6 +289,10 @@ class Monitor:
         n.create_subscription(MapMetaData, "regions/info", self._on_regions_info, MAP_QOS)
         n.create_subscription(MarkerArray, "object_costmap/markers", self._on_markers,
                               RELIABLE_QOS)
+        # One timing message per camera frame the object costmap processed.
+        self.object_frames = 0
+        n.create_subscription(Float64MultiArray, "object_costmap/timing",
+                              self._on_object_timing, 10)
 
     def _drop(self, what: str, err: Exception) -> None:
         self.dropped[what] = str(err)
@@ -360,6 +368,9 @@ class Monitor:
         if geom.shape == self.grid.shape and geom.same_geometry(self.grid):
             self.labels = labels
 
+    def _on_object_timing(self, msg) -> None:
+        self.object_frames += 1
+
     def _on_markers(self, msg) -> None:
         boxes = boxes_from_markers(msg)
         changed = len(boxes) != len(self.boxes) or any(
@@ -394,7 +405,8 @@ def _progress_line(mon: Monitor, wall_s: float) -> str:
     m = mon.metrics
     return (f"[demo] wall {wall_s:6.1f} s | sim {mon.sim_time_s:7.1f} s | coverage "
             f"{mon.coverage_pct:5.1f} % | goals {len(mon.goals):3d} | collisions "
-            f"{int(m.get('collisions', 0) or 0)} | objects {len(mon.boxes)} | regions "
+            f"{int(m.get('collisions', 0) or 0)} | objects {len(mon.boxes)} "
+            f"({mon.object_frames} frames) | regions "
             f"{mon.n_regions()} | nav {m.get('nav_state', '-')}")
 
 
@@ -416,6 +428,7 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
     import rclpy
     from rclpy.context import Context
     from rclpy.executors import SingleThreadedExecutor
+    from rclpy.signals import SignalHandlerOptions
 
     from sim_bridge.render import GifWriter
 
@@ -425,7 +438,9 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
     env.setdefault("ROS_LOG_DIR", str(out / "logs" / "ros"))
     ctx = Context()
-    rclpy.init(context=ctx)
+    # Python's own SIGINT handling (KeyboardInterrupt): rclpy's handler would only shut
+    # the monitor's context down, and Ctrl-C would not stop the demo and its children.
+    rclpy.init(context=ctx, signal_handler_options=SignalHandlerOptions.NO)
     ex = SingleThreadedExecutor(context=ctx)
     mon = Monitor(ctx)
     ex.add_node(mon.node)
@@ -597,6 +612,11 @@ def _write_outputs(cfg: DemoConfig, out: Path, mon: Monitor, gif, sim_json: dict
         "goals_reached": _num(m.get("goals_reached")),
         "goals_aborted": _num(m.get("goals_aborted")), "n_objects": len(mon.boxes),
         "n_regions": mon.n_regions(), "dropped_inputs": mon.dropped,
+        # Camera frames the object costmap processed, of those rendered (sim time x rate):
+        # below the rendered count the layer lags (CPU too slow for the real-time factor).
+        "object_frames_processed": mon.object_frames,
+        "camera_frames_rendered": (int(mon.sim_time_s * cfg.camera_rate_hz)
+                                   if STRATEGY_SPECS[cfg.strategy].use_objects else 0),
         "objects": [np.round(b, 3).tolist() for b in mon.boxes],
         "object_history": [[round(t, 2), [np.round(b, 3).tolist() for b in bs]]
                            for t, bs in mon.box_history],
@@ -648,6 +668,8 @@ def _parse(argv: list[str] | None) -> DemoConfig:
                     help="fail when coverage does not grow for this many sim seconds")
     ap.add_argument("--stop-coverage", type=float, default=0.0,
                     help="also stop at this coverage %% (0 = only at exploration_done)")
+    ap.add_argument("--explorer-threads", type=int, default=d.explorer_threads,
+                    help="executor threads of the explorer (1 = single-threaded)")
     ap.add_argument("--params-file", default="", help="explorer parameter file")
     ap.add_argument("--no-explorer", action="store_true",
                     help="run the simulator and the monitor only")
@@ -660,7 +682,8 @@ def _parse(argv: list[str] | None) -> DemoConfig:
                       real_time_factor=a.rtf, max_sim_time_s=a.max_sim_time,
                       wall_timeout_s=a.wall_timeout, stall_sim_s=a.stall_sim,
                       stop_coverage_pct=a.stop_coverage, params_file=a.params_file,
-                      explorer=not a.no_explorer, sim_args=tuple(a.sim_arg),
+                      explorer=not a.no_explorer, explorer_threads=a.explorer_threads,
+                      sim_args=tuple(a.sim_arg),
                       explorer_args=tuple(a.explorer_arg))
 
 

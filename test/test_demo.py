@@ -64,6 +64,33 @@ def test_demo_explores_small_house_through_ros(tmp_path):
         assert "Traceback" not in (out / "logs" / log).read_text(), log
 
 
+def test_ctrl_c_stops_the_demo_and_its_children(tmp_path):
+    import signal
+    import time
+
+    out = tmp_path / "int"
+    env = dict(os.environ)
+    env["ROS_DOMAIN_ID"] = str((DOMAIN_ID + 51) % 100 + 1)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    proc = subprocess.Popen([sys.executable, str(DEMO), str(out), "--world", "small_house",
+                             "--rtf", "2", "--max-sim-time", "600"], cwd=str(ROOT), env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        end = time.monotonic() + 60
+        while time.monotonic() < end and "[demo] wall" not in proc.stdout.readline():
+            pass
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=40)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    m = json.loads((out / "metrics.json").read_text())
+    assert m["stop_reason"] == "interrupted"
+    assert m["sim_time_s"] < 590.0
+    for log in ("sim_bridge.log", "explorer.log"):
+        assert "Traceback" not in (out / "logs" / log).read_text(), log
+
+
 def test_demo_fails_clearly_when_a_child_dies(tmp_path):
     proc = _demo(tmp_path / "bad", "--world", "small_house", "--no-explorer",
                  "--sim-arg=-p", "--sim-arg=world:=no_such_world", timeout_s=60.0)

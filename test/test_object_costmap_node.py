@@ -117,6 +117,68 @@ def test_chair_becomes_occupied_cells_in_the_object_layer(ros):
     assert node.state is State.RUNNING
 
 
+def test_cloud_and_markers_go_to_their_subscribers(ros):
+    from sensor_msgs.msg import PointCloud2
+    from visualization_msgs.msg import Marker, MarkerArray
+
+    node = _node(ros)
+    feed = Feeder(ros)
+    clouds, markers = [], []
+    feed.node.create_subscription(PointCloud2, "object_costmap/cloud", clouds.append, 1)
+    feed.node.create_subscription(MarkerArray, "object_costmap/markers", markers.append, 1)
+    chair = box_parts((2.5, 0.2), (0.5, 0.5, 0.9))
+    depth, sem = _scene([(chair, CHAIR_ID)])
+    feed.map.publish(convert.grid_to_msg(_map_grid()))
+    feed.frame = _good(depth, sem)
+    ros.spin_until(lambda: node.objects() and any(c.width > 0 for c in clouds)
+                   and any(len(m.markers) > 1 for m in markers), timeout_s=20,
+                   what="a virtual cloud and markers of the chair")
+    cloud = next(c for c in clouds if c.width > 0)
+    xyz = np.frombuffer(bytes(cloud.data), np.float32).reshape(-1, cloud.point_step // 4)[:, :3]
+    assert np.all(np.abs(xyz[:, :2] - (2.5, 0.2)) < 0.6)
+    cubes = [m for m in next(m for m in markers if len(m.markers) > 1).markers
+             if m.type == Marker.CUBE]
+    assert len(cubes) == 1 and abs(cubes[0].pose.position.x - 2.5) < 0.2
+
+
+def test_a_frame_is_taken_at_most_every_0_9_periods(ros):
+    node = _node(ros, rate_hz=2.0)
+    s = 1_000_000_000
+
+    def frame(t_ns):
+        header = convert.make_header("camera_color_optical_frame", convert.ns_to_stamp(t_ns))
+        img = convert.image_to_msg(np.zeros((2, 2), np.uint8), "mono8", header)
+        node._depths.append(img)
+        node._colors.append(img)
+        node._semantics.append(img)
+
+    node._last_depth_ns = 10 * s
+    frame(10 * s + s // 10 * 3)                   # 0.3 s after the last one: too soon
+    assert node._newest_pair() is None
+    frame(10 * s + s // 2)                        # 0.5 s = one period of a 2 Hz camera
+    assert convert.stamp_to_ns(node._newest_pair()[0].header.stamp) == 10 * s + s // 2
+    node._last_depth_ns = 10 * s + s // 2         # ... processed
+    assert node._newest_pair() is None
+
+
+def test_lag_warning_when_most_frames_go_unprocessed(ros):
+    node = _node(ros)
+    warned = []
+    node._warn_lag = lambda key, msg: warned.append(msg)
+    now = node.get_clock().now().nanoseconds
+    node._lag_mark = (now - int(25e9), 0, 0)
+    node.frames_received, node.frames_processed = 50, 40      # 40 of min(50, 25 s * 2 Hz)
+    node._check_lag()
+    assert warned == []
+    node._lag_mark = (now - int(25e9), 50, 40)
+    node.frames_received, node.frames_processed = 100, 50     # 10 of 50 possible
+    node._check_lag()
+    assert len(warned) == 1 and "processed 10 of 50 camera frames" in warned[0]
+    node.frames_received = 110                  # the window restarted: too short to judge
+    node._check_lag()
+    assert len(warned) == 1
+
+
 def test_unclassified_table_from_scan_legs(ros):
     node = _node(ros)
     feed = Feeder(ros)

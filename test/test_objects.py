@@ -17,9 +17,10 @@ from explore_seg.core.camera import (CameraIntrinsics, apply_transform, base_fro
                                      depth_to_points, invert_transform, map_from_base,
                                      project_points)
 from explore_seg.core.grid import GridMap, grid_from_ascii
-from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D, ObjectMap,
-                                      ObjectParams, SizePrior, box_mask, clamp_to_prior,
-                                      euclidean_clusters, fit_box, footprint_iou,
+from explore_seg.core.objects import (MAX_SURFACE_POINTS, UNKNOWN_CLASS, DepthFrame, Object3D,
+                                      ObjectMap, ObjectParams, SizePrior, box_mask,
+                                      clamp_to_prior, euclidean_clusters, fit_box,
+                                      footprint_iou, fuse_boxes,
                                       footprint_orientation, group_legs, load_priors,
                                       object_from_detection, points_in_rect, process_frame,
                                       scan_legs, scan_posts,
@@ -823,6 +824,56 @@ def test_object_removed_after_misses_when_the_camera_sees_through_it():
         assert omap.tracked[0].misses == expected
     omap.update([], gone)
     assert len(omap) == 0
+
+
+def _measured_table(height_m, params):
+    """A 1.2 x 0.8 table at (2, 0) with its top at ``height_m``, fitted to points on its
+    top face and legs (as a camera measures them)."""
+    table = table_parts((2.0, 0.0), 1.2, 0.8, height_m=height_m)
+    gx, gy = np.meshgrid(np.linspace(1.42, 2.58, 12), np.linspace(-0.38, 0.38, 8))
+    top = np.column_stack([gx.ravel(), gy.ravel(), np.full(gx.size, height_m)])
+    legs = np.array([(c[0], c[1], z) for c, _, _ in table[1:]
+                     for z in np.linspace(0.05, height_m - 0.05, 6)])
+    return table, fit_box(np.vstack([top, legs]), "dining table", 0.9,
+                          PRIORS["dining table"], params)
+
+
+@pytest.mark.parametrize("robot", [(0.3, 0.0, 0.0), (2.0, -1.8, 0.5 * math.pi)])
+def test_table_seen_under_its_top_is_not_missed_but_a_removed_one_is(robot):
+    """A top above the camera's view line: the camera sees under it, through most of the
+    box. Misses are judged on the measured surface (top and legs), not the box faces
+    (which would drop the table while it stands there, undetected)."""
+    params = ObjectParams(clear_after_misses=2)
+    table, obj = _measured_table(0.95, params)
+    assert obj.surface is not None and 20 <= len(obj.surface) <= MAX_SURFACE_POINTS
+    pose = camera_pose(*robot)
+    present = DepthFrame(render_depth(table, pose), K, pose)
+    omap = ObjectMap(params, PRIORS)
+    assert omap._seen_through(replace(obj, surface=None), present)     # the box faces
+    omap.update([obj], present)
+    for _ in range(4):
+        omap.update([], present)
+    assert len(omap) == 1 and omap.tracked[0].misses == 0
+    gone = DepthFrame(render_depth([], pose), K, pose)
+    omap.update([], gone)
+    assert omap.tracked[0].misses == 1
+    omap.update([], gone)
+    assert len(omap) == 0
+
+
+def test_fused_surface_is_the_union_thinned_to_the_cap():
+    params = ObjectParams()
+    _, obj = _measured_table(0.75, params)
+    moved = replace(obj, surface=obj.surface + np.float32([0.05, 0.0, 0.0]))
+    fused = fuse_boxes(obj, moved, params, PRIORS["dining table"])
+    keys = {tuple(k) for k in np.floor(fused.surface.astype(np.float64) / 0.1).astype(int)}
+    assert len(keys) == len(fused.surface)                   # one point per voxel
+    assert len(fused.surface) >= len(obj.surface)
+    many = replace(obj, surface=np.random.default_rng(0).uniform(
+        0, 5, (3 * MAX_SURFACE_POINTS, 3)).astype(np.float32))
+    assert len(fuse_boxes(obj, many, params).surface) == MAX_SURFACE_POINTS
+    assert fuse_boxes(replace(obj, surface=None), replace(obj, surface=None),
+                      params).surface is None
 
 
 def test_object_not_missed_when_occluded_or_out_of_view():

@@ -77,8 +77,9 @@ class ObjectParams:
 
     # --- node: rate, inputs, frames
     rate_hz: float = field(default=2.0, metadata=_doc(
-        "Rate at which the newest colour/depth pair is processed; frames arriving "
-        "in between are dropped, never queued", "Hz"))
+        "Camera frames processed per second, at most (a camera at this rate has every "
+        "frame processed, a faster one the newest after each 0.9 / rate_hz); frames "
+        "arriving while one is processed are dropped, never queued", "Hz"))
     sync_tolerance_s: float = field(default=0.05, metadata=_doc(
         "Largest stamp difference for pairing colour with depth", "s"))
     pose_tolerance_s: float = field(default=0.2, metadata=_doc(
@@ -203,16 +204,19 @@ class ObjectParams:
     max_objects: int = field(default=200, metadata=_doc(
         "Most objects kept; the least confirmed are dropped first"))
     clear_after_misses: int = field(default=3, metadata=_doc(
-        "An object is removed after this many frames in which the camera sees through it"))
+        "An object is removed after this many frames in which the camera sees past where "
+        "its points were measured (its surface; not the empty space under a table top)"))
     miss_depth_margin_m: float = field(default=0.15, metadata=_doc(
-        "Depth must exceed the box surface by this to count as seeing through it", "m"))
+        "Depth must exceed an object's surface point by this to count as seeing past it",
+        "m"))
     miss_free_fraction: float = field(default=0.6, metadata=_doc(
-        "Fraction of the box's visible sample points that must be seen through for a miss",
+        "Fraction of the object's visible surface points that must be seen past for a miss",
         "0..1"))
     miss_min_samples: int = field(default=6, metadata=_doc(
-        "Fewest visible sample points of a box needed to judge a miss"))
+        "Fewest visible surface points of an object needed to judge a miss"))
     miss_sample_spacing_m: float = field(default=0.1, metadata=_doc(
-        "Spacing of the sample points on a box used to judge misses", "m"))
+        "Voxel size of an object's measured surface points (kept to judge misses; a box "
+        "without them is sampled on its faces at this spacing)", "m"))
     # --- outputs
     object_value: int = field(default=100, metadata=_doc(
         "Layer value inside object footprints", "0..100"))
@@ -507,6 +511,12 @@ class Object3D:
         Sides of ``measured_xy`` (-x, +x, -y, +y in the box frame) where the view, not the
         object, ended (image border, an occluder in front): the object reaches at least
         that far. Closed sides are the object's own.
+    surface : ndarray of float32, shape (M, 3), optional
+        Where the object's points were measured (map frame, one per voxel of
+        ``miss_sample_spacing_m``, at most :data:`MAX_SURFACE_POINTS`): what the camera
+        must see past before :class:`ObjectMap` counts a miss. A table or chair is mostly
+        empty space under its top, which the camera sees through from any side; only its
+        own surfaces tell it is gone. None: the box's faces are used instead.
     """
 
     cls: str
@@ -517,6 +527,7 @@ class Object3D:
     n_points: int
     measured_xy: tuple[float, float, float, float] | None = None
     open_sides: tuple[bool, bool, bool, bool] = (False, False, False, False)
+    surface: npt.NDArray[np.float32] | None = field(default=None, compare=False, repr=False)
 
     def footprint(self) -> npt.NDArray[np.float64]:
         """The 4 corners (x, y) of the footprint, counter-clockwise, shape (4, 2)."""
@@ -1031,6 +1042,21 @@ def clamp_to_prior(center_xyz: Sequence[float], size_xyz: Sequence[float], yaw: 
     return (float(centre[0]), float(centre[1]), cz), (sizes[0], sizes[1], sz)
 
 
+#: Most points an object keeps of its measured surface (:attr:`Object3D.surface`).
+MAX_SURFACE_POINTS = 400
+
+
+def surface_points(points: npt.NDArray[np.floating], voxel_m: float
+                   ) -> npt.NDArray[np.float32]:
+    """One point per voxel of ``voxel_m`` (the first in input order), thinned evenly to at
+    most :data:`MAX_SURFACE_POINTS`: an object's measured surface, shape (M, 3)."""
+    pts = np.asarray(points, dtype=np.float32).reshape(-1, 3)
+    pts = pts[voxel_downsample(pts, voxel_m)]
+    if len(pts) > MAX_SURFACE_POINTS:
+        pts = pts[np.linspace(0, len(pts) - 1, MAX_SURFACE_POINTS).round().astype(np.int64)]
+    return pts
+
+
 def fit_box(points_map: npt.NDArray[np.floating], cls: str, score: float,
             prior: SizePrior | None, params: ObjectParams,
             camera_xy: Sequence[float] | None = None,
@@ -1076,7 +1102,8 @@ def fit_box(points_map: npt.NDArray[np.floating], cls: str, score: float,
         open_sides = _open_sides(pts[:, :2], np.asarray(cut, dtype=bool), cxy, sxy, yaw,
                                  0.5 * params.cluster_tolerance_m)
     return Object3D(cls, float(score), tuple(center), tuple(size), yaw, int(len(pts)),
-                    (float(cxy[0]), float(cxy[1]), float(sxy[0]), float(sxy[1])), open_sides)
+                    (float(cxy[0]), float(cxy[1]), float(sxy[0]), float(sxy[1])), open_sides,
+                    surface_points(pts, params.miss_sample_spacing_m))
 
 
 def _open_sides(points_xy: npt.NDArray[np.float64], cut: npt.NDArray[np.bool_],
@@ -2002,12 +2029,16 @@ def fuse_boxes(old: Object3D, new: Object3D, params: ObjectParams,
         sz = min(sz, prior.max_z_m)
     cz = 0.5 * sz if params.boxes_on_floor else \
         (old.center_xyz[2] * w_old + new.center_xyz[2] * w_new) / (w_old + w_new)
+    surfaces = [o.surface for o in (new, old) if o.surface is not None]
+    # The newest view first: when the union is thinned, the latest points stay densest.
+    surface = (surface_points(np.vstack(surfaces), params.miss_sample_spacing_m)
+               if surfaces else None)
     return Object3D(cls, max(old.score, new.score),
                     (float(centre_xy[0]), float(centre_xy[1]), float(cz)),
                     (float(size_xy[0]), float(size_xy[1]), float(sz)), yaw,
                     int(min(old.n_points + new.n_points, 2**31 - 1)),
                     (float(meas_xy[0]), float(meas_xy[1]), meas_size[0], meas_size[1]),
-                    (open_out[0], open_out[1], open_out[2], open_out[3]))
+                    (open_out[0], open_out[1], open_out[2], open_out[3]), surface)
 
 
 class ObjectMap:
@@ -2198,9 +2229,12 @@ class ObjectMap:
         return ok
 
     def _seen_through(self, obj: Object3D, frame: DepthFrame) -> bool:
-        """True when the camera sees beyond most of the box's visible sample points."""
+        """True when the camera sees beyond most of the object's visible measured surface
+        points (:attr:`Object3D.surface`; the box's faces when it has none)."""
         p = self.params
-        samples = box_samples(obj, p.miss_sample_spacing_m, surface_only=True)
+        samples = (obj.surface.astype(np.float64) if obj.surface is not None
+                   and len(obj.surface) >= p.miss_min_samples
+                   else box_samples(obj, p.miss_sample_spacing_m, surface_only=True))
         opt = apply_transform(invert_transform(frame.map_from_optical), samples)
         z = opt[:, 2]
         k = frame.intrinsics
