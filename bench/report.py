@@ -358,12 +358,13 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
         ros = json.loads(ros_path.read_text())
         L += ["## Lock-step vs ROS", "", ros.get("note", ""), "",
               "| seed | mode | stop | coverage [%] | sim time [s] | path [m] | collisions | "
-              "goals |", "|---|---|---|---|---|---|---|---|"]
+              "goals | objects | object frames |", "|---|---|---|---|---|---|---|---|---|---|"]
         for row in ros.get("rows", []):
             L.append(f"| {row['seed']} | {row['mode']} | {row['stop']} | "
                      f"{_fmt(row.get('coverage_pct'))} | {_fmt(row.get('sim_time_s'))} | "
                      f"{_fmt(row.get('path_length_m'))} | {row.get('collisions', '-')} | "
-                     f"{row.get('goals', '-')} |")
+                     f"{row.get('goals', '-')} | {row.get('objects', '-')} | "
+                     f"{row.get('object_frames', '-')} |")
         L.append("")
     L += ["Files: `runs.csv` (one row per run), `runs.jsonl` (samples and every update's "
           "timing; tens of MB, so kept out of git: rerun to get it), `tours.csv`, "

@@ -54,8 +54,8 @@ from sim_bridge import worlds as sim_worlds  # noqa: E402
 from sim_bridge.coverage_tour import TourParams, coverage_tour  # noqa: E402
 from sim_bridge.engine import SimParams, load_world  # noqa: E402
 from sim_bridge.observable import with_observable  # noqa: E402
-from sim_bridge.lockstep import STRATEGIES, ExplorerParams, LockstepParams, LockstepState, \
-    RunResult, load_explorer_params, run_exploration  # noqa: E402
+from sim_bridge.lockstep import STRATEGIES, STRATEGY_SPECS, ExplorerParams, LockstepParams, \
+    LockstepState, RunResult, load_explorer_params, run_exploration  # noqa: E402
 
 GENERATED_WORLDS = ("house", "maze", "house_cluttered")
 SHARED_WORLDS = ("house", "house_cluttered", "house_cluttered_plus", "maze")
@@ -298,7 +298,15 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                          "kept runs are run again (after a change that affects them; the "
                          "old runs are copied to runs.jsonl.bak*). An interrupted redo is "
                          "continued with --resume alone (with --redo it starts over)")
+    ap.add_argument("--no-runs", action="store_true",
+                    help="with --resume: keep every run and tour in --out and run none; "
+                         "only the --yolo-frames timing and the --ros comparison, then the "
+                         "report (a part of its own in meta.json)")
     a = ap.parse_args(argv)
+    if a.no_runs and not a.resume:
+        ap.error("--no-runs needs --resume")
+    if a.no_runs and a.redo:
+        ap.error("--no-runs runs nothing: no --redo")
     if a.runs < 1 or a.jobs < 1:
         ap.error("--runs and --jobs must be >= 1")
     try:
@@ -389,15 +397,26 @@ def main(argv: list[str] | None = None) -> int:
         # inherit the cache).
         areas = {s: float(load(s)[1].explorable_area_m2) for s in specs}
         _EXPLORER_PARAMS = load_explorer_params()
-        ctx = mp.get_context("fork")
-        with ctx.Pool(a.jobs, initializer=_worker_init, maxtasksperchild=20) as pool:
-            try:
-                _run_all(a, out, specs, strategies, areas, pool, tours, results, counter)
-            except KeyboardInterrupt as err:
-                interrupted = int(err.args[0]) if err.args else int(signal.SIGINT)
-                pool.terminate()
-                print(f"\n[bench] interrupted after {counter[0]} runs: reporting what ran "
-                      "(continue with --resume)", file=sys.stderr)
+        if a.no_runs:
+            results += _read_jsonl(out / "runs.jsonl")
+            tours += [dict(r, tour_m=float(r["tour_m"])) for r in
+                      report.read_csv(out / "tours.csv")] if (out / "tours.csv").is_file() else []
+            stray = sorted({f"{d['world']}:{d['strategy']}" for d in results
+                            if d["world"] not in specs or d["strategy"] not in strategies})
+            if stray:
+                print(f"[bench] --no-runs: --out holds runs of worlds/strategies not among "
+                      f"--worlds/--strategies: {', '.join(stray)}", file=sys.stderr)
+                return 2
+        else:
+            ctx = mp.get_context("fork")
+            with ctx.Pool(a.jobs, initializer=_worker_init, maxtasksperchild=20) as pool:
+                try:
+                    _run_all(a, out, specs, strategies, areas, pool, tours, results, counter)
+                except KeyboardInterrupt as err:
+                    interrupted = int(err.args[0]) if err.args else int(signal.SIGINT)
+                    pool.terminate()
+                    print(f"\n[bench] interrupted after {counter[0]} runs: reporting what "
+                          "ran (continue with --resume)", file=sys.stderr)
     except KeyboardInterrupt as err:      # before the pool existed
         interrupted = int(err.args[0]) if err.args else int(signal.SIGINT)
         print("\n[bench] interrupted before any run", file=sys.stderr)
@@ -555,7 +574,9 @@ def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf
         rows.append({"seed": seed, "mode": "lock-step", "stop": r.stop_reason,
                      "coverage_pct": r.coverage_pct, "sim_time_s": r.sim_time_s,
                      "path_length_m": r.path_length_m, "collisions": r.collisions,
-                     "goals": r.goals_sent})
+                     "goals": r.goals_sent, "objects": r.n_objects,
+                     "object_frames": "every frame" if STRATEGY_SPECS[strategy].use_objects
+                     else "-"})
         d = out / f"seed{seed}"
         cmd = [sys.executable, str(ROOT / "scripts" / "demo.py"), str(d), "--world",
                world_path(world), "--strategy", strategy, "--seed", str(seed), "--rtf", str(rtf),
@@ -573,11 +594,16 @@ def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf
                      "stop": m.get("stop_reason") or f"rc={proc.returncode}",
                      "coverage_pct": m.get("coverage_pct"), "sim_time_s": m.get("sim_time_s"),
                      "path_length_m": m.get("path_length_m"),
-                     "collisions": m.get("collisions"), "goals": m.get("goals_sent")})
+                     "collisions": m.get("collisions"), "goals": m.get("goals_sent"),
+                     "objects": m.get("n_objects"),
+                     "object_frames": (f"{m['object_frames_processed']} of "
+                                       f"{m['camera_frames_rendered']}"
+                                       if m.get("camera_frames_rendered") else "-")})
         print(f"[bench] ROS seed {seed}: {rows[-1]}", file=sys.stderr)
     note = (f"World `{world}`, strategy `{strategy}`, unperturbed start; the ROS runs use "
             f"`sim_bridge` + `explorer` processes at real-time factor {rtf} "
-            "(`scripts/demo.py`). Both stop at 99 % coverage.")
+            "(`scripts/demo.py`). Both stop at 99 % coverage. Object frames: camera frames "
+            "the object costmap processed, of those rendered.")
     return {"note": note, "rows": rows}
 
 

@@ -5,7 +5,8 @@ in one executor, single-threaded by default: rclpy's MultiThreadedExecutor busy-
 while a callback of a mutually exclusive group runs (its entity stays ready), and that
 loop, holding the GIL, starved the object costmap in this process (measured in the
 simulator demo at 4x real time: 25 of 801 camera frames processed, explorer at 100 % of a
-core, against about half of the frames and a third of a core single-threaded). Each node reads its parameters from ``config/explorer.yaml`` (installed to
+core, against a third to a half of the frames and a third of a core single-threaded). Each node
+reads its parameters from ``config/explorer.yaml`` (installed to
 ``share/explore_seg/config``) unless ``--ros-args --params-file FILE`` is given, and each is
 also runnable alone (``frontier_detector``, ``segmentation``, ``target_selector``,
 ``object_costmap``).

@@ -4,7 +4,8 @@ Callbacks only store the newest inputs. A timer on the ROS clock (``_POLLS_PER_P
 times per ``1 / rate_hz``) takes the newest colour/depth pair whose stamps match
 (``sync_tolerance_s``) and lie at least ``_MIN_GAP_PERIODS / rate_hz`` after the last one
 processed (so a camera at ``rate_hz`` has every frame processed, a faster one about
-``rate_hz`` of them), the robot pose nearest to it, runs the detector and :func:`explore_seg.core.objects.process_frame`, fuses the
+``rate_hz`` of them), the robot pose nearest to it, runs the detector and
+:func:`explore_seg.core.objects.process_frame`, fuses the
 boxes into an :class:`~explore_seg.core.objects.ObjectMap` and publishes the layer
 (aligned with the latest ``map``), the virtual cloud, markers and timings (cloud and
 markers only while they have subscribers). Frames that arrive while a frame is processed

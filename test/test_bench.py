@@ -151,3 +151,39 @@ def test_redo_runs_the_named_strategy_again_and_keeps_the_old_runs_aside(first, 
     assert (res / "runs.jsonl.bak2").is_file()
     meta = json.loads((res / "meta.json").read_text())
     assert [p["runs_run"] for p in meta["parts"]] == [1, 1, 1]
+
+
+def test_report_has_the_lockstep_vs_ros_table_with_object_frames(first, tmp_path):
+    from bench import report
+
+    out = _copy_results(first[0], tmp_path / "ros")
+    (out / "runs.csv").write_text((first[0] / "runs.csv").read_text())
+    rows = [{"seed": 0, "mode": "lock-step", "stop": "coverage", "coverage_pct": 99.1,
+             "sim_time_s": 700.0, "path_length_m": 160.0, "collisions": 0, "goals": 80,
+             "objects": 84, "object_frames": "every frame"},
+            {"seed": 0, "mode": "ROS", "stop": "coverage", "coverage_pct": 99.2,
+             "sim_time_s": 650.0, "path_length_m": 150.0, "collisions": 1, "goals": 90,
+             "objects": 70, "object_frames": "500 of 1300"}]
+    (out / "ros.json").write_text(json.dumps({"note": "n", "rows": rows}))
+    md = report.write_all(out, tmp_path / "B.md", command="x")
+    text = md.read_text()
+    assert "| goals | objects | object frames |" in text
+    assert "| 0 | ROS | coverage | 99.2 | 650.0 | 150.0 | 1 | 90 | 70 | 500 of 1300 |" in text
+
+
+def test_no_runs_keeps_every_run_and_adds_a_part(first, tmp_path):
+    out = _copy_results(first[0], tmp_path / "keep")
+    before = (out / "runs.jsonl").read_text()
+    md = tmp_path / "K.md"
+    assert run_bench.main(ARGS + ["--runs", "3", "--out", str(out), "--md", str(md),
+                                  "--resume", "--no-runs"]) == 0
+    assert (out / "runs.jsonl").read_text() == before           # nothing run, nothing dropped
+    parts = json.loads((out / "meta.json").read_text())["parts"]
+    assert len(parts) == 2 and parts[-1]["runs_run"] == 0 and "--no-runs" in parts[-1]["command"]
+    assert "| small_house | nearest | 1 |" in md.read_text()
+    # runs of a world the command does not name: refused, not dropped
+    other = ARGS[:1] + ["house"] + ARGS[2:]
+    assert run_bench.main(other + ["--out", str(out), "--md", "", "--resume", "--no-runs"]) == 2
+    assert (out / "runs.jsonl").read_text() == before
+    with pytest.raises(SystemExit):
+        run_bench.main(ARGS + ["--out", str(out), "--no-runs"])      # needs --resume
