@@ -15,8 +15,9 @@ collisions, objects, regions), collects animation frames and stops at
 
 Outputs in the output folder: ``final_map.png`` (map, path, regions, object boxes, goals,
 collisions), ``coverage.png`` (coverage vs sim time), ``exploration.gif``,
-``metrics.json`` (with the collision events, the final object footprints and their
-history: ``[sim time, footprints]`` each time the set changed), ``sim/`` (the simulator's own metrics and map) and ``logs/``.
+``metrics.json`` (with the collision events and the final object footprints),
+``object_history.jsonl`` (``{"t": sim time, "boxes": footprints}`` each time the set of
+boxes changed), ``sim/`` (the simulator's own metrics and map) and ``logs/``.
 
 The environment should hold ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and a private
 ``ROS_DOMAIN_ID``; :func:`main` sets both when absent, and ``scripts/run_demo.sh`` also
@@ -273,7 +274,7 @@ class Monitor:
         self._regions_info = None
         self.boxes: list[np.ndarray] = []
         # (sim time, footprints) each time the set of boxes changed: what the object
-        # costmap believed when, e.g. at a collision (metrics.json "object_history").
+        # costmap believed when, e.g. at a collision (object_history.jsonl).
         self.box_history: list[tuple[float, list[np.ndarray]]] = []
         self.pose: tuple[float, float, float] | None = None
         self.trail: list[tuple[float, float]] = []
@@ -602,6 +603,12 @@ def _write_outputs(cfg: DemoConfig, out: Path, mon: Monitor, gif, sim_json: dict
     if samples:
         _plot_coverage(out / "coverage.png", samples, cfg)
         files.append("coverage.png")
+    if mon.box_history:
+        # One line per change of the object set (compact: it grows with the run).
+        (out / "object_history.jsonl").write_text("".join(
+            json.dumps({"t": round(t, 2), "boxes": [np.round(b, 3).tolist() for b in bs]},
+                       separators=(",", ":")) + "\n" for t, bs in mon.box_history))
+        files.append("object_history.jsonl")
     m = mon.metrics
     metrics = {
         "config": asdict(cfg), "stop_reason": stop_reason, "error": error,
@@ -618,8 +625,6 @@ def _write_outputs(cfg: DemoConfig, out: Path, mon: Monitor, gif, sim_json: dict
         "camera_frames_rendered": (int(mon.sim_time_s * cfg.camera_rate_hz)
                                    if STRATEGY_SPECS[cfg.strategy].use_objects else 0),
         "objects": [np.round(b, 3).tolist() for b in mon.boxes],
-        "object_history": [[round(t, 2), [np.round(b, 3).tolist() for b in bs]]
-                           for t, bs in mon.box_history],
         "collision_events": sim_json.get("collision_events", []),
         "coverage_history": samples, "files": files,
     }
