@@ -37,6 +37,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -463,6 +464,8 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
             f"real-time factor {cfg.real_time_factor}, sim limit {cfg.max_sim_time_s:.0f} s, "
             f"ROS_DOMAIN_ID={os.environ.get('ROS_DOMAIN_ID', '0')}; logs in {out / 'logs'}")
         stop_reason = _watch(cfg, ex, mon, children, gif, t0, log)
+        if stop_reason == "interrupted":
+            error = "interrupted"
     except DemoError as err:
         error, stop_reason = str(err), "failed"
     except KeyboardInterrupt:
@@ -487,6 +490,11 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
     return metrics
 
 
+#: Set by SIGINT / SIGTERM (see :func:`main`): the demo stops its children, writes its
+#: outputs and exits with stop reason "interrupted".
+STOP = threading.Event()
+
+
 def _wait_for_explorer(cfg: DemoConfig, ex, mon: Monitor, child: _Child, t0: float) -> None:
     """Spin until the explorer publishes ``goal_pose`` (its selector is up).
 
@@ -497,6 +505,8 @@ def _wait_for_explorer(cfg: DemoConfig, ex, mon: Monitor, child: _Child, t0: flo
     """
     while mon.node.count_publishers("goal_pose") == 0:
         ex.spin_once(timeout_sec=0.1)
+        if STOP.is_set():
+            raise KeyboardInterrupt
         if not child.alive():
             raise DemoError(f"{child.name} exited with code {child.proc.returncode}; last "
                             f"lines of {child.log_path}:\n{child.tail()}")
@@ -521,6 +531,8 @@ def _watch(cfg: DemoConfig, ex, mon: Monitor, children: list[_Child], gif, t0: f
     best_cov, best_cov_t = -1.0, 0.0
     while True:
         ex.spin_once(timeout_sec=0.05)
+        if STOP.is_set():
+            return "interrupted"
         now = time.monotonic()
         wall = now - t0
         for ch in children:
@@ -701,10 +713,13 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as err:
         print(f"[demo] {err}", file=sys.stderr)
         return EXIT_USAGE
-    def _on_term(signum, frame):  # stop the children on SIGTERM as on Ctrl-C
-        raise KeyboardInterrupt
+    def _on_signal(signum, frame):
+        # Only a flag: an exception raised wherever the signal lands (inside rclpy's wait,
+        # a subprocess call) could surface as another error; the loops check STOP.
+        STOP.set()
 
-    signal.signal(signal.SIGTERM, _on_term)
+    signal.signal(signal.SIGINT, _on_signal)
+    signal.signal(signal.SIGTERM, _on_signal)
     try:
         m = run_demo(cfg, log=lambda s: print(s, flush=True))
     except DemoError as err:
