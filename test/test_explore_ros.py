@@ -29,7 +29,9 @@ def _metrics(msg: DiagnosticArray) -> dict[str, str]:
 def test_sim_and_explorer_explore_small_house_to_completion(ros, strategy):
     ros.add(SimBridgeNode(context=ros.context, parameter_overrides=[
         Parameter("world", value="small_house"),
-        Parameter("real_time_factor", value=8.0),
+        # 4x: at 8x the simulator takes 0.16 s+ steps per tick on a loaded 2-core machine
+        # and 2 of 9 runs of this test had a contact (navigation stand-in grazing).
+        Parameter("real_time_factor", value=4.0),
         Parameter("enable_camera", value=False),
     ]))
     ros.add(SegmentationNode(context=ros.context, parameter_overrides=[SIM_TIME]))
