@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from explore_seg.core.grid import grid_from_ascii
-from explore_seg.core.paths import (BlockGraph, block_distances, distance_field,
-                                    extract_path, inflate, path_length_m)
+from explore_seg.core.paths import (BlockGraph, block_distances, cost_distance_field,
+                                    distance_field, extract_path, inflate, path_length_m)
 
 RES = 0.05
 
@@ -35,6 +35,33 @@ def reference_field(passable: np.ndarray, start: tuple[int, int]) -> np.ndarray:
                 if dr and dc and not (pas[r + dr, c] and pas[r, c + dc]):
                     continue
                 nd = d + (math.sqrt(2.0) if dr and dc else 1.0)
+                if nd < dist[rr, cc]:
+                    dist[rr, cc] = nd
+                    heapq.heappush(heap, (nd, (rr, cc)))
+    return dist
+
+
+def reference_cost_field(cost: np.ndarray, start: tuple[int, int], res: float) -> np.ndarray:
+    """Plain heapq Dijkstra on per-metre cell costs: a move costs its length times the
+    mean of its two cells' costs; inf cells impassable; no corner cutting."""
+    pas = np.isfinite(cost)
+    h, w = cost.shape
+    dist = np.full((h, w), np.inf)
+    dist[start] = 0.0
+    heap = [(0.0, start)]
+    while heap:
+        d, (r, c) = heapq.heappop(heap)
+        if d > dist[r, c]:
+            continue
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                rr, cc = r + dr, c + dc
+                if (dr == 0 and dc == 0) or not (0 <= rr < h and 0 <= cc < w) or not pas[rr, cc]:
+                    continue
+                if dr and dc and not (pas[r + dr, c] and pas[r, c + dc]):
+                    continue
+                step = (math.sqrt(2.0) if dr and dc else 1.0) * res
+                nd = d + step * 0.5 * (cost[r, c] + cost[rr, cc])
                 if nd < dist[rr, cc]:
                     dist[rr, cc] = nd
                     heapq.heappush(heap, (nd, (rr, cc)))
@@ -123,6 +150,24 @@ def test_distance_field_matches_reference_on_random_grids(seed):
     start = tuple(int(v) for v in np.argwhere(pas)[seed * 7])
     np.testing.assert_allclose(distance_field(pas, start, RES),
                                reference_field(pas, start) * RES, rtol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_cost_distance_field_matches_reference_on_random_costs(seed):
+    """Weighted field (the navigation's planner) against a plain Dijkstra, passable cells
+    touching every border of the grid included."""
+    rng = np.random.default_rng(100 + seed)
+    shape = (23 + seed, 31 - seed)
+    cost = 1.0 + 4.0 * rng.random(shape)
+    blocked = rng.random(shape) < 0.25
+    start = (shape[0] // 2, shape[1] // 2)
+    blocked[start[0] - 1:start[0] + 2, start[1] - 1:start[1] + 2] = False
+    cost[blocked] = np.inf
+    got = cost_distance_field(cost, start, RES)
+    want = reference_cost_field(cost, start, RES)
+    assert np.isfinite(want).sum() > 100
+    np.testing.assert_array_equal(np.isinf(got), np.isinf(want))
+    np.testing.assert_allclose(got[np.isfinite(want)], want[np.isfinite(want)], rtol=1e-12)
 
 
 @pytest.mark.parametrize("seed", range(4))
