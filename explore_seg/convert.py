@@ -313,6 +313,36 @@ def depth_from_msg(msg: Image) -> npt.NDArray[np.float32]:
     raise ValueError(f"depth image must be 16UC1, mono16 or 32FC1, got {msg.encoding!r}")
 
 
+def depth_to_msg(depth_m: npt.ArrayLike, encoding: str = "16UC1",
+                 header: Header | None = None) -> Image:
+    """Float metres (NaN/inf/<= 0 = no reading) -> depth Image, the inverse of
+    :func:`depth_from_msg`.
+
+    16UC1 rounds to millimetres (0 = no reading; depths beyond 65.535 m read none);
+    32FC1 keeps metres with NaN for no reading.
+
+    Raises
+    ------
+    ValueError
+        When the array is not 2-D or the encoding is neither 16UC1 nor 32FC1.
+    """
+    d = np.asarray(depth_m, dtype=np.float64)
+    if d.ndim != 2:
+        raise ValueError(f"depth image needs shape (H, W), got {d.shape}")
+    valid = np.isfinite(d) & (d > 0)
+    if encoding == "16UC1":
+        mm = np.zeros(d.shape, dtype=np.uint16)
+        v = np.rint(d[valid] * 1000.0)
+        ok = (v >= 1) & (v <= 65535)
+        idx = np.flatnonzero(valid)[ok]
+        mm.reshape(-1)[idx] = v[ok].astype(np.uint16)
+        return image_to_msg(mm, "16UC1", header)
+    if encoding == "32FC1":
+        out = np.where(valid, d, np.nan).astype(np.float32)
+        return image_to_msg(out, "32FC1", header)
+    raise ValueError(f"depth encoding must be 16UC1 or 32FC1, got {encoding!r}")
+
+
 def image_to_msg(arr: np.ndarray, encoding: str, header: Header | None = None) -> Image:
     """Array -> sensor_msgs/Image (little endian, no row padding).
 

@@ -39,6 +39,8 @@ from sim_bridge.observable import with_observable
 from sim_bridge.sensors import CameraParams, DepthCamera, Lidar, LidarParams
 from sim_bridge.world import World
 
+#: Encodings the node can publish depth images in.
+DEPTH_ENCODINGS = ("16UC1", "32FC1")
 
 
 @dataclass(frozen=True)
@@ -114,6 +116,10 @@ class SimParams:
         "camera pitch, positive looks down", "rad", read_only=True))
     camera_range_max_m: float = field(default=CameraParams.range_max_m, metadata=_doc(
         "depth beyond which pixels read NaN", "m", read_only=True))
+    camera_depth_encoding: str = field(default="16UC1", metadata=_doc(
+        "encoding of the published depth image: 16UC1 (millimetres, 0 = no reading; what "
+        "RealSense and Astra drivers publish, half the bytes) or 32FC1 (metres, NaN = no "
+        "reading)", read_only=True))
     # --- mapping
     map_resolution_m: float = field(default=MappingParams.resolution_m, metadata=_doc(
         "occupancy map cell size", "m", read_only=True))
@@ -195,6 +201,9 @@ class SimParams:
                 raise ValueError(f"{name} must be finite and >= 0, got {v}")
         if not self.world:
             raise ValueError("world must name a world or a file, got ''")
+        if self.camera_depth_encoding not in DEPTH_ENCODINGS:
+            raise ValueError(f"camera_depth_encoding must be one of {DEPTH_ENCODINGS}, got "
+                             f"{self.camera_depth_encoding!r}")
         for name in self.costmap_layers:
             if not name or any(ch.isspace() for ch in name):
                 raise ValueError(f"costmap_layers entries must be topic names, got {name!r}")

@@ -246,7 +246,8 @@ class SimBridgeNode(Node):
         header = convert.make_header(CAMERA_FRAME, _ns(sample.stamp_s))
         f = sample.frame
         self._cam_pubs["rgb"].publish(convert.image_to_msg(f.rgb, "rgb8", header))
-        self._cam_pubs["depth"].publish(convert.image_to_msg(f.depth_m, "32FC1", header))
+        self._cam_pubs["depth"].publish(
+            convert.depth_to_msg(f.depth_m, self._p.params.camera_depth_encoding, header))
         self._cam_pubs["semantic"].publish(convert.image_to_msg(f.semantic, "mono8", header))
         info = convert.intrinsics_to_msg(self._p.params.camera_params().intrinsics(), header)
         self._cam_pubs["info"].publish(info)

@@ -150,6 +150,24 @@ def test_depth_from_16uc1_mm_and_32fc1_m_mark_invalid_nan():
     assert np.isnan(d2[0]).all() and np.isnan(d2[1, 0]) and d2[1, 1] == pytest.approx(1.25)
 
 
+def test_depth_to_msg_round_trips_both_encodings():
+    d = np.array([[np.nan, 0.0, -1.0, np.inf], [0.0004, 0.0006, 1.2344, 70.0]])
+    mm = convert.depth_to_msg(d, "16UC1")
+    assert mm.encoding == "16UC1" and mm.step == 8
+    np.testing.assert_array_equal(convert.image_from_msg(mm), [[0, 0, 0, 0], [0, 1, 1234, 0]])
+    back = convert.depth_from_msg(mm)
+    assert np.isnan(back[0]).all() and np.isnan(back[1, [0, 3]]).all()
+    np.testing.assert_allclose(back[1, 1:3], [0.001, 1.234], rtol=1e-6)
+    m = convert.depth_to_msg(d, "32FC1")
+    back = convert.depth_from_msg(m)
+    assert np.isnan(back[0]).all()
+    np.testing.assert_allclose(back[1], d[1].astype(np.float32))
+    with pytest.raises(ValueError, match="16UC1 or 32FC1"):
+        convert.depth_to_msg(d, "mono8")
+    with pytest.raises(ValueError, match=r"shape \(H, W\)"):
+        convert.depth_to_msg(np.zeros(3), "16UC1")
+
+
 def test_rgb_from_bgr_swaps_channels():
     rgb = RNG.integers(0, 255, (3, 4, 3)).astype(np.uint8)
     bgr_msg = convert.image_to_msg(rgb[:, :, ::-1].copy(), "bgr8")

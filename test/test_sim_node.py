@@ -210,12 +210,14 @@ def test_parameters_change_at_run_time_and_read_only_ones_are_refused(ros, sim):
     assert sim.engine.world.name == "small_house"
 
 
-def test_camera_topics_carry_rgb_depth_semantic_and_info(ros, tmp_path):
+@pytest.mark.parametrize("encoding", [None, "32FC1"])
+def test_camera_topics_carry_rgb_depth_semantic_and_info(ros, tmp_path, encoding):
     from sensor_msgs.msg import CameraInfo, Image
 
     from sim_bridge.node import SimBridgeNode
 
-    ros.add(SimBridgeNode(context=ros.context, parameter_overrides=[
+    extra = [] if encoding is None else [Parameter("camera_depth_encoding", value=encoding)]
+    ros.add(SimBridgeNode(context=ros.context, parameter_overrides=extra + [
         Parameter("world", value="small_cluttered"), Parameter("enable_camera", value=True),
         Parameter("camera_width_px", value=160), Parameter("camera_height_px", value=120),
         Parameter("camera_fx_px", value=131.0), Parameter("camera_fy_px", value=131.0),
@@ -230,7 +232,7 @@ def test_camera_topics_carry_rgb_depth_semantic_and_info(ros, tmp_path):
                                   SENSOR_QOS)
     ros.spin_until(lambda: len(got) == 4, what="the four camera topics")
     rgb, depth, sem = (got[f"camera/{k}/image_raw"] for k in ("color", "depth", "semantic"))
-    assert (rgb.encoding, depth.encoding, sem.encoding) == ("rgb8", "32FC1", "mono8")
+    assert (rgb.encoding, depth.encoding, sem.encoding) == ("rgb8", encoding or "16UC1", "mono8")
     assert (rgb.width, rgb.height) == (160, 120)
     assert rgb.header.stamp == depth.header.stamp == sem.header.stamp
     d = convert.depth_from_msg(depth)
