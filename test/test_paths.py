@@ -16,29 +16,10 @@ RES = 0.05
 
 
 def reference_field(passable: np.ndarray, start: tuple[int, int]) -> np.ndarray:
-    """Plain heapq Dijkstra, 8 moves, no corner cutting, start forced passable (cells)."""
+    """Plain Dijkstra, 8 moves, no corner cutting, start forced passable (cells)."""
     pas = passable.copy()
     pas[start] = True
-    h, w = pas.shape
-    dist = np.full((h, w), np.inf)
-    dist[start] = 0.0
-    heap = [(0.0, start)]
-    while heap:
-        d, (r, c) = heapq.heappop(heap)
-        if d > dist[r, c]:
-            continue
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                rr, cc = r + dr, c + dc
-                if (dr == 0 and dc == 0) or not (0 <= rr < h and 0 <= cc < w) or not pas[rr, cc]:
-                    continue
-                if dr and dc and not (pas[r + dr, c] and pas[r, c + dc]):
-                    continue
-                nd = d + (math.sqrt(2.0) if dr and dc else 1.0)
-                if nd < dist[rr, cc]:
-                    dist[rr, cc] = nd
-                    heapq.heappush(heap, (nd, (rr, cc)))
-    return dist
+    return reference_cost_field(np.where(pas, 1.0, np.inf), start, 1.0)
 
 
 def reference_cost_field(cost: np.ndarray, start: tuple[int, int], res: float) -> np.ndarray:
