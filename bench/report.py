@@ -24,6 +24,12 @@ from typing import Any
 
 import numpy as np
 
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from bench import records  # noqa: E402
+
 MILESTONES = ("50", "90", "95", "99")
 TIMING_ROWS = (("frontier", "frontier detect + cluster"),
                ("selection", "path lengths + select (incl. goal manager)"),
@@ -33,11 +39,8 @@ TIMING_ROWS = (("frontier", "frontier detect + cluster"),
 
 
 def load_runs(out: Path) -> list[dict[str, Any]]:
-    """Every run of ``out/runs.jsonl``."""
-    path = out / "runs.jsonl"
-    if not path.is_file():
-        return []
-    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    """Every run of ``out`` (``runs.jsonl``, else the compact ``runs.jsonl.gz``)."""
+    return records.read(out)
 
 
 def _f(v: Any) -> float:
@@ -99,7 +102,7 @@ def plot_coverage(runs: list[dict[str, Any]], out: Path) -> list[Path]:
     for world, per in coverage_curves(runs).items():
         fig, ax = plt.subplots(figsize=(7, 4.2))
         for strat, (t, m, s) in per.items():
-            n = len(_groups(runs)[(world, strat)])
+            n = sum(1 for r in _groups(runs)[(world, strat)] if r.get("coverage_samples"))
             ax.plot(t, m, label=f"{strat} (n={n})")
             ax.fill_between(t, np.clip(m - s, 0, 100), np.clip(m + s, 0, 100), alpha=0.2)
         ax.set_xlabel("sim time [s]")
@@ -196,26 +199,40 @@ def results_table(runs: list[dict[str, Any]], tours: dict[str, float]) -> list[s
     return lines
 
 
-def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None) -> list[str]:
-    """The paper's Table I: per-module p50 / mean / p95 ms over all updates of all runs."""
+def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
+                 legacy: dict[str, dict[str, list[float]]] | None = None) -> list[str]:
+    """The paper's Table I: per-module p50 / mean / p95 ms over all updates of all runs.
+
+    Pooled from the runs' timing histograms (:mod:`bench.records`: percentiles within
+    half a 1 % bin, means exact). A world none of whose runs has timings left (records
+    rebuilt from ``runs.csv``) takes its cells from ``legacy`` (world -> key -> [p50,
+    mean, p95], pooled when those runs' full records still existed), marked with †.
+    """
     strat = "paper" if any(r["strategy"] == "paper" for r in runs) else None
     sel = [r for r in runs if strat is None or r["strategy"] == strat]
     worlds = list(dict.fromkeys(r["world"] for r in sel))
+    legacy = legacy or {}
     head = "| module | " + " | ".join(worlds) + " |"
     lines = [f"Strategy `{strat or 'all'}`; each cell p50 / mean / p95 in ms over every "
              "update of every run (frontier, selection and segmentation once per decision, "
              "detection and costmap once per processed camera frame).", "",
              head, "|" + "|".join(["---"] * (len(worlds) + 1)) + "|"]
     totals = {w: 0.0 for w in worlds}
+    marked = False
     for key, label in TIMING_ROWS:
         cells = []
         for w in worlds:
-            vals = np.concatenate([np.asarray(r["timings_ms"].get(key) or [], dtype=float)
-                                   for r in sel if r["world"] == w] or [np.zeros(0)])
-            if vals.size:
-                cells.append(f"{np.percentile(vals, 50):.1f} / {vals.mean():.1f} / "
-                             f"{np.percentile(vals, 95):.1f}")
-                totals[w] += float(vals.mean())
+            hists = [h for r in sel if r["world"] == w
+                     for h in [records.timing_hist(r, key)] if h is not None]
+            st = records.hist_stats(records.merge_histograms(hists)) if hists else None
+            if st is not None:
+                cells.append(f"{st[0]:.1f} / {st[1]:.1f} / {st[2]:.1f}")
+                totals[w] += st[1]
+            elif not hists and key in legacy.get(w, {}):
+                p50, mean, p95 = legacy[w][key]
+                cells.append(f"{p50:.1f} / {mean:.1f} / {p95:.1f} †")
+                totals[w] += mean
+                marked = True
             else:
                 cells.append("-")
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
@@ -232,6 +249,73 @@ def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None) -> lis
     elif yolo:
         lines.append("")
         lines.append(f"Real detector not timed: {yolo.get('error')}")
+    if marked:
+        lines += ["", "†: pooled over the same runs when their full records (every update's "
+                  "time) still existed; only their compact records are kept now "
+                  f"(`{records.LEGACY_TIMING}`)."]
+    return lines
+
+
+def _mean(rs: list[dict[str, Any]], m: str) -> tuple[float, int]:
+    v = [_f(r["time_to_s"].get(m)) for r in rs]
+    v = [x for x in v if math.isfinite(x)]
+    return (float(np.mean(v)) if v else math.nan), len(v)
+
+
+def targets_summary(runs: list[dict[str, Any]]) -> list[str]:
+    """The issue's questions answered from the runs: does ``paper`` complete every run,
+    its time to 95 % against ``explore_lite`` and ``nearest`` (target <= 0.75x), which
+    strategies fail to complete, and collisions with against without the object costmap."""
+    g = _groups(runs)
+    worlds = list(dict.fromkeys(r["world"] for r in runs))
+    if not any(w for w in worlds if (w, "paper") in g):
+        return []
+    lines = ["Computed from the table above. Time to 95 %: mean over the runs that reached "
+             "it (their number in brackets when not all did); ratio = `paper` / baseline, "
+             "target ≤ 0.75. Incomplete: runs below 99 % per strategy. Collisions: per run, "
+             "`paper` against `paper_noobj` (the same strategy without the object costmap; "
+             "target 0 with it).", "",
+             "| world | paper completed | paper t95 [s] | vs explore_lite | vs nearest | "
+             "incomplete runs | collisions paper / paper_noobj |",
+             "|---|---|---|---|---|---|---|"]
+    met = {"complete": 0, "lite": 0, "nearest": 0, "zero": 0, "worlds": 0}
+    for w in worlds:
+        p = g.get((w, "paper"))
+        if not p:
+            continue
+        met["worlds"] += 1
+        n, done = len(p), sum(1 for r in p if r["completed"])
+        met["complete"] += done == n
+        t_p, k_p = _mean(p, "95")
+        ratios = []
+        for base, tag in (("explore_lite", "lite"), ("nearest", "nearest")):
+            b = g.get((w, base))
+            if not b:
+                ratios.append("-")
+                continue
+            t_b, k_b = _mean(b, "95")
+            if math.isfinite(t_p) and math.isfinite(t_b):
+                r = t_p / t_b
+                met[tag] += r <= 0.75
+                ratios.append(f"{r:.2f}× ({t_b:.0f} s{f', {k_b} of {len(b)}' if k_b < len(b) else ''})")
+            elif math.isfinite(t_p):
+                ratios.append(f"baseline never reached 95 % ({len(b)} runs)")
+            else:
+                ratios.append("-")
+        fails = ", ".join(f"{st} {sum(1 for r in rs if not r['completed'])}/{len(rs)}"
+                          for (ww, st), rs in g.items()
+                          if ww == w and any(not r["completed"] for r in rs)) or "none"
+        c_p = float(np.mean([r["collisions"] for r in p]))
+        met["zero"] += c_p == 0
+        no = g.get((w, "paper_noobj"))
+        c_no = f"{np.mean([r['collisions'] for r in no]):.1f}" if no else "-"
+        t_txt = (f"{t_p:.0f}" + (f" ({k_p} of {n})" if k_p < n else "")) if math.isfinite(t_p) else "-"
+        lines.append(f"| {w} | {done}/{n} | {t_txt} | {ratios[0]} | {ratios[1]} | {fails} | "
+                     f"{c_p:.1f} / {c_no} |")
+    k = met["worlds"]
+    lines += ["", f"Targets over {k} worlds: `paper` completes every run in {met['complete']}; "
+              f"time to 95 % ≤ 0.75× `explore_lite` in {met['lite']} and ≤ 0.75× `nearest` in "
+              f"{met['nearest']}; zero collisions with the object costmap in {met['zero']}."]
     return lines
 
 
@@ -288,6 +372,8 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
                          + (f", code {part['code']}" if part.get("code") and len(codes) != 1
                             else "")
                          + (" (interrupted)" if part.get("interrupted") else "")
+                         + (f" (run in `{part['merged_from']}`, added with `--merge`)"
+                            if part.get("merged_from") else "")
                          + f": `{part.get('command')}`")
             L.append("")
     mount = meta.get("camera_mount") if meta else None
@@ -333,10 +419,23 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
           "Goals: goals sent to navigation; switches: goals replaced by a cheaper frontier "
           "while the old goal's frontier was still there and reachable.", ""]
     L += results_table(runs, tours) + [""]
-    if cov or box:
+    summary = targets_summary(runs)
+    if summary:
+        L += ["## Against the targets", ""] + summary + [""]
+    drawn = {p.name for p in cov}
+    kept = [out / f"coverage_{_slug(w)}.png" for w in dict.fromkeys(r["world"] for r in runs)
+            if f"coverage_{_slug(w)}.png" not in drawn
+            and not any(r.get("coverage_samples") for r in runs if r["world"] == w)
+            and (out / f"coverage_{_slug(w)}.png").is_file()]
+    if cov or box or kept:
         L += ["## Figures", ""]
         for p in cov:
             L.append(f"![{p.stem}]({(rel / p.name).as_posix()})")
+        if kept:
+            L += ["", "Drawn when the full records of these worlds' runs still existed (their "
+                  "coverage samples are not in the records kept now, so they are not redrawn):", ""]
+            L += [f"![{p.stem}]({(rel / p.name).as_posix()})" for p in kept]
+            L.append("")
         if box:
             L.append(f"![time to 95 %]({(rel / box.name).as_posix()})")
         maps = sorted((out / "maps").glob("*.png")) if (out / "maps").is_dir() else []
@@ -346,7 +445,11 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
                   + ", ".join(f"[{p.stem}]({(rel / 'maps' / p.name).as_posix()})"
                               for p in maps)]
         L.append("")
-    L += ["## Per-module timing (paper's Table I)", ""] + timing_table(runs, yolo) + [""]
+    legacy_path = out / records.LEGACY_TIMING
+    legacy = (json.loads(legacy_path.read_text()).get("worlds")
+              if legacy_path.is_file() else None)
+    L += (["## Per-module timing (paper's Table I)", ""] + timing_table(runs, yolo, legacy)
+          + [""])
     if tours_rows:
         L += ["## Coverage tours", "", "| world | explorable area [m²] | tour [m] | viewpoints "
               "| coverable | compute [s] |", "|---|---|---|---|---|---|"]
@@ -366,9 +469,16 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
                      f"{row.get('goals', '-')} | {row.get('objects', '-')} | "
                      f"{row.get('object_frames', '-')} |")
         L.append("")
-    L += ["Files: `runs.csv` (one row per run), `runs.jsonl` (samples and every update's "
-          "timing; tens of MB, so kept out of git: rerun to get it), `tours.csv`, "
-          f"`yolo.json`, `meta.json` in `{rel.as_posix()}/`.", ""]
+    n_csv = sum(1 for r in runs if r.get("record") == "csv")
+    L += ["Files: `runs.csv` (one row per run), `runs.jsonl.gz` (every run's record without "
+          "its per-update timings, which are pooled into histograms: what `--resume` reads "
+          "on a new checkout; `bench/records.py`), `runs.jsonl` (the full records: samples "
+          "and every update's time; tens of MB, so kept out of git), `tours.csv`, "
+          f"`yolo.json`, `meta.json` in `{rel.as_posix()}/`."
+          + (f" {n_csv} of the {len(runs)} runs were rebuilt from `runs.csv` after their "
+             "full records were lost with a checkout: their table rows are exact, their "
+             "coverage curves and pooled timings are the ones drawn and computed before "
+             "(figures kept, timing cells marked †)." if n_csv else ""), ""]
     md.write_text("\n".join(L))
     return md
 

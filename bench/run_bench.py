@@ -7,7 +7,9 @@ run ``k`` of every (world, strategy) uses seed ``--seed0 + k``. Runs are spread 
 (:mod:`sim_bridge.coverage_tour`) is computed once from the unperturbed start.
 
 Outputs in ``--out``: ``runs.csv`` (one row per run), ``runs.jsonl`` (everything,
-coverage samples and per-update timings included), ``tours.csv``, ``yolo.json`` (the
+coverage samples and per-update timings included; tens of MB), ``runs.jsonl.gz`` (the same
+runs without the per-update timings, a few hundred bytes each, kept in git so that a new
+checkout can ``--resume``; :mod:`bench.records`), ``tours.csv``, ``yolo.json`` (the
 real detector timed on rendered frames), ``maps/`` (final map of the first run of every
 world x strategy), the figures of :mod:`bench.report`, and ``BENCHMARKS.md`` at ``--md``
 (default: the repository root).
@@ -50,6 +52,7 @@ if str(ROOT) not in sys.path:
 
 import numpy as np  # noqa: E402
 
+from bench import records  # noqa: E402
 from sim_bridge import worlds as sim_worlds  # noqa: E402
 from sim_bridge.coverage_tour import TourParams, coverage_tour  # noqa: E402
 from sim_bridge.engine import SimParams, load_world  # noqa: E402
@@ -302,7 +305,13 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                     help="with --resume: keep every run and tour in --out and run none; "
                          "only the --yolo-frames timing and the --ros comparison, then the "
                          "report (a part of its own in meta.json)")
+    ap.add_argument("--merge", default="", metavar="DIR",
+                    help="with --resume: first add the runs of another output folder made "
+                         "with the same settings (e.g. a part run on another machine) to "
+                         "--out; its parts are listed with --out's")
     a = ap.parse_args(argv)
+    if a.merge and not a.resume:
+        ap.error("--merge needs --resume")
     if a.no_runs and not a.resume:
         ap.error("--no-runs needs --resume")
     if a.no_runs and a.redo:
@@ -383,6 +392,12 @@ def main(argv: list[str] | None = None) -> int:
                   file=sys.stderr)
             return 2
         old_codes = {p.get("code") for p in old_meta.get("parts") or [old_meta]}
+        if a.merge:
+            err = _merge(out, Path(a.merge), meta, old_meta)
+            if err:
+                print(f"[bench] --merge: {err}", file=sys.stderr)
+                return 2
+            old_codes = {p.get("code") for p in old_meta.get("parts") or [old_meta]}
         if old_codes != {meta["code"]}:
             print(f"[bench] --resume: warning: earlier parts ran on code {sorted(map(str, old_codes))}, "
                   f"this one on {meta['code']} (listed in the report)", file=sys.stderr)
@@ -398,7 +413,7 @@ def main(argv: list[str] | None = None) -> int:
         areas = {s: float(load(s)[1].explorable_area_m2) for s in specs}
         _EXPLORER_PARAMS = load_explorer_params()
         if a.no_runs:
-            results += _read_jsonl(out / "runs.jsonl")
+            results += records.read(out)
             tours += [dict(r, tour_m=float(r["tour_m"])) for r in
                       report.read_csv(out / "tours.csv")] if (out / "tours.csv").is_file() else []
             stray = sorted({f"{d['world']}:{d['strategy']}" for d in results
@@ -484,20 +499,17 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
     if a.resume:
         wanted = {t[:3] for t in tasks
                   if not any(st == t[1] and w in (None, t[0]) for w, st in a.redo_keys)}
-        old = _read_jsonl(out / "runs.jsonl")
+        old = records.read(out)
         for d in old:
             key = (d["world"], d["strategy"], d["seed"])
             if key in wanted:
                 wanted.discard(key)  # a duplicate line counts once
                 results.append(d)
         if len(results) < len(old):  # runs this command does not ask for: keep a copy
-            bak = out / "runs.jsonl.bak"
-            k = 1
-            while bak.exists():          # never overwrite an earlier copy
-                bak, k = out / f"runs.jsonl.bak{k}", k + 1
-            shutil.copyfile(out / "runs.jsonl", bak)
+            baks = [_backup(out / name) for name in (records.FULL, records.COMPACT)
+                    if (out / name).is_file()]
             print(f"[bench] resume: {len(old) - len(results)} runs not asked for or to "
-                  f"redo are left out (copy in {bak})", file=sys.stderr)
+                  f"redo are left out (copy in {', '.join(map(str, baks))})", file=sys.stderr)
         done = {(d["world"], d["strategy"], d["seed"]) for d in results}
         tasks = [t for t in tasks if t[:3] not in done]
         print(f"[bench] resume: {len(results)} runs kept, {len(tasks)} to run",
@@ -506,13 +518,15 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
     # +-1), long worlds first within a seed so the pool does not end on one slow run.
     tasks.sort(key=lambda t: (t[2], -areas[t[0]]))
     prog = Progress(len(tasks), "runs")
-    with open(out / "runs.jsonl", "w") as jl:
+    records.write_compact(out, results)
+    with open(out / records.FULL, "w") as jl:
         for d in results:
             jl.write(json.dumps(d) + "\n")
         jl.flush()
         for d in pool.imap_unordered(_run_task, tasks):
             jl.write(json.dumps(d) + "\n")
             jl.flush()
+            records.append_compact(out, d)
             results.append(d)
             counter[0] += 1
             prog.update(f"{d['world']}/{d['strategy']}/{d['seed']}: "
@@ -616,20 +630,54 @@ def _read_json(path: Path) -> dict[str, Any]:
     return d if isinstance(d, dict) else {}
 
 
-def _read_jsonl(path: Path) -> list[dict[str, Any]]:
-    """The run records of a ``runs.jsonl`` (unreadable lines, e.g. a cut last line, skipped)."""
-    out: list[dict[str, Any]] = []
-    if not path.is_file():
-        return out
-    with open(path) as f:
-        for line in f:
-            try:
-                d = json.loads(line)
-            except ValueError:
-                continue
-            if isinstance(d, dict) and {"world", "strategy", "seed"} <= d.keys():
-                out.append(d)
-    return out
+def _backup(path: Path) -> Path:
+    """A copy of ``path`` as ``<name>.bak``, ``.bak1``, ... (never over an earlier copy)."""
+    bak, k = path.with_name(path.name + ".bak"), 1
+    while bak.exists():
+        bak, k = path.with_name(f"{path.name}.bak{k}"), k + 1
+    shutil.copyfile(path, bak)
+    return bak
+
+
+def _merge(out: Path, other: Path, meta: dict[str, Any], old_meta: dict[str, Any]) -> str:
+    """Add the runs of ``other`` to ``out`` (a run of both: ``other``'s is kept) and its
+    parts to ``old_meta``'s; '' or what is wrong (then nothing was changed)."""
+    o_meta = _read_json(other / "meta.json")
+    if not o_meta:
+        return f"{other} has no meta.json"
+    if o_meta.get("settings") != meta["settings"]:
+        return (f"the runs in {other} were made with other settings ({o_meta.get('settings')}, "
+                f"now {meta['settings']})")
+    theirs = records.read(other)
+    if not theirs:
+        return f"{other} holds no runs"
+    mine = {records.key_of(d): d for d in records.read(out)}
+    keys = {records.key_of(d) for d in theirs}
+    if any(k in mine for k in keys) and (out / records.FULL).is_file():
+        _backup(out / records.FULL)
+    if any(k in mine for k in keys) and (out / records.COMPACT).is_file():
+        _backup(out / records.COMPACT)
+    merged = [d for k, d in mine.items() if k not in keys] + theirs
+    full = [d for d in merged if "timings_ms" in d]
+    if full:
+        with open(out / records.FULL, "w") as jl:
+            for d in full:
+                jl.write(json.dumps(d) + "\n")
+    records.write_compact(out, merged)
+    parts = (old_meta.get("parts") or ([_part_of(old_meta)] if old_meta else []))
+    o_parts = o_meta.get("parts") or [_part_of(o_meta)]
+    old_meta["parts"] = parts + [dict(p, merged_from=str(other)) for p in o_parts]
+    old_meta.setdefault("settings", meta["settings"])
+    tours = out / "tours.csv"
+    if (other / "tours.csv").is_file():
+        from bench import report
+        have = {r["world"] for r in report.read_csv(tours)}
+        extra = [r for r in report.read_csv(other / "tours.csv") if r["world"] not in have]
+        if extra:
+            _write_csv(tours, report.read_csv(tours) + extra)
+    print(f"[bench] --merge: {len(theirs)} runs and {len(o_parts)} parts of {other} added",
+          file=sys.stderr)
+    return ""
 
 
 def _part_of(meta: dict[str, Any]) -> dict[str, Any]:
@@ -647,7 +695,14 @@ def _row_from_dict(d: dict[str, Any]) -> dict[str, Any]:
     for k in ("coverage_pct", "explorable_area_m2"):
         if fields.get(k) is None:
             fields[k] = math.nan
-    return cls(**fields).summary_row()
+    if "timings_ms" not in d:              # compact or CSV record: its per-run percentiles
+        fields.pop("timings_ms", None)
+    row = cls(**fields).summary_row()
+    if "timings_ms" not in d:
+        for key, (p50, p95) in (d.get("timing_p") or {}).items():
+            row[f"{key}_ms_p50"] = p50 if p50 is not None else math.nan
+            row[f"{key}_ms_p95"] = p95 if p95 is not None else math.nan
+    return row
 
 
 def _slug(spec: str) -> str:

@@ -1,0 +1,284 @@
+"""Run records of a benchmark folder, and the compact copy of them that is kept in git.
+
+A run record is what :meth:`sim_bridge.lockstep.RunResult.to_dict` returns. Its
+per-update timings make ``runs.jsonl`` tens of MB, so that file stays out of git and a
+new checkout would lose every run with it. :func:`compact` keeps everything of a record
+but those lists, in their place:
+
+* ``timing_p``: per timing key ``[p50, p95]`` of the run, exact (what ``runs.csv`` shows);
+* ``timing_hist``: per key ``{"n", "sum", "bins"}``, a histogram on log-spaced bins
+  (:data:`BIN_RATIO` wide), from which the report pools all runs of a world (the paper's
+  Table I: p50 within half a bin, mean exact).
+
+``runs.jsonl.gz`` holds the compact records (a few hundred bytes a run) and is what
+``--resume`` falls back on; where ``runs.jsonl`` holds the full record of the same run,
+that one is used. Records rebuilt from an old ``runs.csv`` alone (:func:`from_csv_row`,
+``record: "csv"``) carry the table's scalars and ``timing_p`` but no coverage samples and
+no histogram.
+
+Usage (once, for a folder whose ``runs.jsonl`` is lost)::
+
+    .venv/bin/python bench/records.py import-csv bench/results --timing-md BENCHMARKS.md
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import gzip
+import json
+import math
+import re
+import sys
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+
+FULL = "runs.jsonl"
+COMPACT = "runs.jsonl.gz"
+#: Timing pooled from the full records of runs whose full records were later lost.
+LEGACY_TIMING = "timing_legacy.json"
+#: Width of a timing histogram bin (ratio of its edges) and the smallest time binned (ms).
+BIN_RATIO = 1.01
+BIN_MIN_MS = 1e-3
+TIMING_KEYS = ("frontier", "selection", "segmentation", "detection", "objects", "decision")
+_LOG_RATIO = math.log(BIN_RATIO)
+
+
+def key_of(d: dict[str, Any]) -> tuple[str, str, int]:
+    return d["world"], d["strategy"], int(d["seed"])
+
+
+# ------------------------------------------------------------------ histograms
+
+
+def histogram(values: Iterable[float]) -> dict[str, Any]:
+    """``{"n", "sum", "bins": {index: count}}`` of ``values`` (ms); bin ``i`` holds
+    ``BIN_MIN_MS * BIN_RATIO**i <= v < BIN_MIN_MS * BIN_RATIO**(i+1)`` (smaller values,
+    zero included, in bin 0)."""
+    v = np.asarray([x for x in values if x is not None and math.isfinite(x)], dtype=np.float64)
+    if v.size == 0:
+        return {"n": 0, "sum": 0.0, "bins": {}}
+    idx = np.floor(np.log(np.maximum(v, BIN_MIN_MS) / BIN_MIN_MS) / _LOG_RATIO).astype(np.int64)
+    u, c = np.unique(idx, return_counts=True)
+    return {"n": int(v.size), "sum": float(v.sum()),
+            "bins": {str(int(i)): int(k) for i, k in zip(u, c)}}
+
+
+def merge_histograms(hists: Iterable[dict[str, Any]]) -> dict[str, Any]:
+    n, total, bins = 0, 0.0, {}
+    for h in hists:
+        n += int(h["n"])
+        total += float(h["sum"])
+        for i, k in h["bins"].items():
+            bins[int(i)] = bins.get(int(i), 0) + int(k)
+    return {"n": n, "sum": total, "bins": {str(i): k for i, k in sorted(bins.items())}}
+
+
+def hist_stats(h: dict[str, Any]) -> tuple[float, float, float] | None:
+    """(p50, mean, p95) of a histogram, None when empty. A percentile is the geometric
+    centre of the bin that holds it (within half a bin of the exact value)."""
+    if not h or int(h["n"]) == 0:
+        return None
+    items = sorted((int(i), int(k)) for i, k in h["bins"].items())
+    idx = np.asarray([i for i, _ in items], dtype=np.float64)
+    cum = np.cumsum([k for _, k in items])
+    n = int(h["n"])
+
+    def pct(q: float) -> float:
+        # the value of rank ceil(q * n) (1-based), as numpy's "lower"/"higher" bracket it
+        rank = max(1, math.ceil(q / 100.0 * n))
+        j = int(np.searchsorted(cum, rank))
+        return float(BIN_MIN_MS * BIN_RATIO ** (idx[j] + 0.5))
+
+    return pct(50.0), float(h["sum"]) / n, pct(95.0)
+
+
+# ------------------------------------------------------------------ records
+
+
+def compact(d: dict[str, Any]) -> dict[str, Any]:
+    """The record without its per-update timings (see the module docstring). A record
+    that is compact already is returned as it is."""
+    if "timings_ms" not in d:
+        return dict(d)
+    out = {k: v for k, v in d.items() if k not in ("timings_ms", "goals")}
+    tp, th = {}, {}
+    for key, vals in (d.get("timings_ms") or {}).items():
+        v = [x for x in vals if x is not None]
+        tp[key] = ([round(float(np.percentile(v, 50)), 3), round(float(np.percentile(v, 95)), 3)]
+                   if v else [None, None])
+        th[key] = histogram(v)
+    out["timing_p"], out["timing_hist"] = tp, th
+    out["record"] = "compact"
+    return out
+
+
+def timing_hist(d: dict[str, Any], key: str) -> dict[str, Any] | None:
+    """The histogram of one timing of a record (built from the full list when it has
+    one), None when the record has neither."""
+    if "timings_ms" in d:
+        return histogram(d["timings_ms"].get(key) or [])
+    return (d.get("timing_hist") or {}).get(key)
+
+
+def _float(v: str) -> float | None:
+    if v is None or v == "":
+        return None
+    x = float(v)
+    return x if math.isfinite(x) else None
+
+
+def from_csv_row(row: dict[str, str]) -> dict[str, Any]:
+    """A record rebuilt from one row of ``runs.csv`` (no coverage samples, no timing
+    histograms, no start pose or goals: those were never in the CSV)."""
+    milestones = sorted({m.group(1) for k in row if (m := re.fullmatch(r"time_to_(\d+)_s", k))},
+                        key=float)
+    places = []
+    for item in (row.get("collision_places") or "").split(";"):
+        if item:
+            x, y, what = item.split(",", 2)
+            places.append([float(x), float(y), what])
+    return {
+        "world": row["world"], "strategy": row["strategy"], "seed": int(row["seed"]),
+        "completed": bool(int(row["completed"])), "stop_reason": row["stop_reason"],
+        "sim_time_s": float(row["sim_time_s"]), "wall_time_s": float(row["wall_time_s"]),
+        "coverage_pct": _float(row["coverage_pct"]),
+        "explorable_area_m2": _float(row["explorable_area_m2"]),
+        "path_length_m": float(row["path_length_m"]),
+        "time_to_s": {m: _float(row[f"time_to_{m}_s"]) for m in milestones},
+        "path_to_m": {m: _float(row[f"path_to_{m}_m"]) for m in milestones},
+        "collisions": int(row["collisions"]), "collision_places": places,
+        "goals_sent": int(row["goals_sent"]), "goal_switches": int(row["goal_switches"]),
+        "goals_blacklisted": int(row["goals_blacklisted"]),
+        "nav_aborts": int(row["nav_aborts"]), "n_objects": int(row["n_objects"]),
+        "timing_p": {k: [_float(row.get(f"{k}_ms_p50", "")), _float(row.get(f"{k}_ms_p95", ""))]
+                     for k in TIMING_KEYS if f"{k}_ms_p50" in row},
+        "coverage_samples": [],
+        "record": "csv",
+    }
+
+
+def read_jsonl(path: Path) -> list[dict[str, Any]]:
+    """The run records of a JSON-lines file, plain or gzipped (unreadable lines, e.g. a cut
+    last line, skipped; [] when absent)."""
+    out: list[dict[str, Any]] = []
+    if not path.is_file():
+        return out
+    opener = gzip.open if path.suffix == ".gz" else open
+    try:
+        with opener(path, "rt") as f:
+            for line in f:
+                try:
+                    d = json.loads(line)
+                except ValueError:
+                    continue
+                if isinstance(d, dict) and {"world", "strategy", "seed"} <= d.keys():
+                    out.append(d)
+    except (EOFError, OSError):      # a gzip member cut short by a kill: keep what came
+        pass
+    return out
+
+
+def read(folder: Path) -> list[dict[str, Any]]:
+    """Every run of a benchmark folder, one record per (world, strategy, seed): the full
+    record where ``runs.jsonl`` has it, else the compact one of ``runs.jsonl.gz``; in the
+    order they first appear (compact file first). A later duplicate replaces an earlier
+    one of the same file."""
+    by_key: dict[tuple[str, str, int], dict[str, Any]] = {}
+    for d in read_jsonl(folder / COMPACT):
+        by_key[key_of(d)] = d
+    for d in read_jsonl(folder / FULL):
+        by_key[key_of(d)] = d
+    return list(by_key.values())
+
+
+def write_compact(folder: Path, records: Iterable[dict[str, Any]]) -> None:
+    """``runs.jsonl.gz`` anew from ``records`` (written beside, then moved over it). The
+    gzip header carries no time stamp, so the same runs give the same bytes."""
+    tmp = folder / (COMPACT + ".tmp")
+    with open(tmp, "wb") as raw, gzip.GzipFile(fileobj=raw, mode="wb", mtime=0) as f:
+        for d in records:
+            f.write((json.dumps(compact(d), sort_keys=True) + "\n").encode())
+    tmp.replace(folder / COMPACT)
+
+
+def append_compact(folder: Path, d: dict[str, Any]) -> None:
+    """One more record at the end of ``runs.jsonl.gz`` (a gzip member of its own, so a
+    run that is killed later loses nothing written before)."""
+    with open(folder / COMPACT, "ab") as raw, gzip.GzipFile(fileobj=raw, mode="wb",
+                                                            mtime=0) as f:
+        f.write((json.dumps(compact(d), sort_keys=True) + "\n").encode())
+
+
+# ------------------------------------------------------------------ legacy timing
+
+
+def timing_from_markdown(text: str) -> dict[str, dict[str, list[float]]]:
+    """world -> timing key -> [p50, mean, p95] read from the per-module timing table of
+    a BENCHMARKS.md written by :mod:`bench.report` (its row labels name the keys)."""
+    from bench.report import TIMING_ROWS
+
+    label_key = {label: key for key, label in TIMING_ROWS}
+    lines = text.splitlines()
+    try:
+        start = next(i for i, ln in enumerate(lines) if ln.startswith("## Per-module timing"))
+    except StopIteration:
+        return {}
+    worlds: list[str] = []
+    out: dict[str, dict[str, list[float]]] = {}
+    for ln in lines[start + 1:]:
+        if ln.startswith("## "):
+            break
+        cells = [c.strip() for c in ln.strip().strip("|").split("|")]
+        if ln.startswith("| module |"):
+            worlds = cells[1:]
+            continue
+        if not worlds or cells[0] not in label_key:
+            continue
+        for w, cell in zip(worlds, cells[1:]):
+            parts = [p.strip() for p in cell.split("/")]
+            if len(parts) == 3:
+                out.setdefault(w, {})[label_key[cells[0]]] = [float(p) for p in parts]
+    return out
+
+
+def import_csv(folder: Path, timing_md: Path | None) -> int:
+    """``runs.jsonl.gz`` from ``runs.csv`` (and the pooled timing of ``timing_md``)."""
+    if (folder / COMPACT).exists() or (folder / FULL).exists():
+        print(f"[records] {folder} has run records already; nothing imported", file=sys.stderr)
+        return 2
+    with open(folder / "runs.csv", newline="") as f:
+        recs = [from_csv_row(r) for r in csv.DictReader(f)]
+    write_compact(folder, recs)
+    n_t = 0
+    if timing_md is not None:
+        timing = timing_from_markdown(timing_md.read_text())
+        (folder / LEGACY_TIMING).write_text(json.dumps(
+            {"source": f"per-module timing table of {timing_md.name} (pooled from the full "
+                       "records of the runs imported from runs.csv, which were not kept)",
+             "worlds": timing}, indent=1, sort_keys=True))
+        n_t = len(timing)
+    print(f"[records] {len(recs)} runs imported into {folder / COMPACT}"
+          + (f", timing of {n_t} worlds into {folder / LEGACY_TIMING}" if timing_md else ""),
+          file=sys.stderr)
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    imp = sub.add_parser("import-csv", help="runs.jsonl.gz from runs.csv (lost runs.jsonl)")
+    imp.add_argument("folder")
+    imp.add_argument("--timing-md", default="",
+                     help="BENCHMARKS.md whose timing table was pooled from those runs")
+    a = ap.parse_args(argv)
+    return import_csv(Path(a.folder), Path(a.timing_md) if a.timing_md else None)
+
+
+if __name__ == "__main__":
+    ROOT = Path(__file__).resolve().parents[1]
+    if str(ROOT) not in sys.path:
+        sys.path.insert(0, str(ROOT))
+    raise SystemExit(main())

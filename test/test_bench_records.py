@@ -1,0 +1,171 @@
+"""bench/records.py: compact run records (what the repository keeps of a benchmark), their
+timing histograms, records rebuilt from runs.csv, and --resume / --merge reading them."""
+
+from __future__ import annotations
+
+import csv
+import gzip
+import json
+import math
+import shutil
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from bench import records, report, run_bench  # noqa: E402
+
+ARGS = ["--worlds", "small_house", "--strategies", "nearest", "--jobs", "1",
+        "--max-sim-time", "20", "--no-tour", "--yolo-frames", "0"]
+
+
+def _full(out: Path) -> list[dict]:
+    return [json.loads(line) for line in (out / records.FULL).read_text().splitlines()]
+
+
+@pytest.fixture(scope="module")
+def bench2(tmp_path_factory):
+    """A benchmark folder with seeds 0 and 1 of small_house / nearest."""
+    out = tmp_path_factory.mktemp("rec")
+    assert run_bench.main(ARGS + ["--runs", "2", "--out", str(out), "--md", ""]) == 0
+    return out
+
+
+def _copy(src: Path, dst: Path, names=(records.FULL, records.COMPACT, "meta.json")) -> Path:
+    dst.mkdir()
+    for name in names:
+        if (src / name).is_file():
+            shutil.copyfile(src / name, dst / name)
+    return dst
+
+
+def test_histogram_percentiles_within_half_a_bin_and_exact_mean():
+    rng = np.random.default_rng(3)
+    v = np.exp(rng.normal(1.0, 0.8, 5000))            # ms, log-normal like update times
+    h = records.histogram(v)
+    assert h["n"] == 5000 and sum(h["bins"].values()) == 5000
+    p50, mean, p95 = records.hist_stats(h)
+    assert mean == pytest.approx(v.mean(), rel=1e-12)
+    half = math.sqrt(records.BIN_RATIO) * 1.0005       # half a bin, and rank rounding
+    for got, q in ((p50, 50), (p95, 95)):
+        exact = float(np.percentile(v, q))
+        assert exact / half <= got <= exact * half, (q, got, exact)
+    # pooling two halves gives what the whole gives
+    a, b = records.histogram(v[:1234]), records.histogram(v[1234:])
+    assert records.hist_stats(records.merge_histograms([a, b])) == (p50, mean, p95)
+    assert records.hist_stats(records.histogram([])) is None
+    assert records.histogram([0.0, float("nan")])["bins"] == {"0": 1}
+
+
+def test_compact_keeps_everything_but_the_per_update_lists(bench2):
+    full = _full(bench2)
+    comp = records.read_jsonl(bench2 / records.COMPACT)
+    assert [records.key_of(d) for d in comp] == [records.key_of(d) for d in full]
+    for f, c in zip(full, comp):
+        assert "timings_ms" not in c and c["record"] == "compact"
+        assert c["coverage_samples"] == f["coverage_samples"]
+        for k in ("completed", "sim_time_s", "time_to_s", "path_to_m", "collisions"):
+            assert c[k] == f[k], k
+        for key, vals in f["timings_ms"].items():
+            if vals:
+                assert c["timing_p"][key][0] == round(float(np.percentile(vals, 50)), 3)
+                assert c["timing_hist"][key]["n"] == len(vals)
+        # the CSV row of the compact record is the full record's row
+        assert run_bench._row_from_dict(c) == run_bench._row_from_dict(f)
+    # a few hundred bytes to a few kB a run instead of the full record's size
+    assert (bench2 / records.COMPACT).stat().st_size < (bench2 / records.FULL).stat().st_size
+
+
+def test_resume_from_the_compact_file_alone(bench2, tmp_path):
+    """A new checkout has runs.jsonl.gz (in git) but no runs.jsonl: nothing is run again."""
+    res = _copy(bench2, tmp_path / "new", names=(records.COMPACT, "meta.json"))
+    md = res / "B.md"
+    assert run_bench.main(ARGS + ["--runs", "2", "--out", str(res), "--md", str(md),
+                                  "--resume"]) == 0
+    meta = json.loads((res / "meta.json").read_text())
+    assert [p["runs_run"] for p in meta["parts"]] == [2, 0]
+    assert "| small_house | nearest | 2 |" in md.read_text()
+    # the report pools the compact records' histograms
+    assert "| frontier detect + cluster | -" not in md.read_text()
+    rows = report.read_csv(res / "runs.csv")
+    assert rows == report.read_csv(bench2 / "runs.csv")
+
+
+def test_full_record_wins_over_the_compact_one(bench2, tmp_path):
+    res = _copy(bench2, tmp_path / "both")
+    full = _full(res)
+    full[0]["coverage_pct"] = 12.5
+    (res / records.FULL).write_text("".join(json.dumps(d) + "\n" for d in full[:1]))
+    got = {records.key_of(d): d for d in records.read(res)}
+    assert len(got) == 2
+    assert got[records.key_of(full[0])]["coverage_pct"] == 12.5
+    assert got[records.key_of(full[1])]["record"] == "compact"
+
+
+def test_a_cut_gzip_member_loses_only_the_last_run(bench2, tmp_path):
+    res = _copy(bench2, tmp_path / "cut", names=(records.COMPACT,))
+    d = records.read_jsonl(res / records.COMPACT)[0]
+    records.append_compact(res, dict(d, seed=7))
+    data = (res / records.COMPACT).read_bytes()
+    (res / records.COMPACT).write_bytes(data[:-12])            # killed while writing
+    assert [r["seed"] for r in records.read_jsonl(res / records.COMPACT)] == [0, 1]
+    records.write_compact(res, [d])
+    assert gzip.decompress((res / records.COMPACT).read_bytes()).count(b"\n") == 1
+
+
+def test_import_from_csv_rebuilds_the_rows_and_the_timing_table(bench2, tmp_path):
+    res = _copy(bench2, tmp_path / "csv", names=("meta.json",))
+    shutil.copyfile(bench2 / "runs.csv", res / "runs.csv")
+    md = tmp_path / "old.md"
+    report.write_all(bench2, md, command="x")
+    assert records.import_csv(res, md) == 0
+    assert records.import_csv(res, md) == 2                  # never over existing records
+    recs = records.read(res)
+    assert all(r["record"] == "csv" and r["coverage_samples"] == [] for r in recs)
+    with open(bench2 / "runs.csv", newline="") as f:
+        old = list(csv.DictReader(f))
+    for r, o in zip(recs, old):
+        row = run_bench._row_from_dict(r)
+        for k, v in o.items():
+            got = row.get(k, "")
+            assert (str(got) == v or (v == "" and (got == "" or (isinstance(got, float)
+                                                                and math.isnan(got))))
+                    or float(got) == pytest.approx(float(v))), (k, got, v)
+    legacy = json.loads((res / records.LEGACY_TIMING).read_text())["worlds"]
+    old_cells = [ln for ln in md.read_text().splitlines()
+                 if ln.startswith("| frontier detect + cluster |")][0]
+    p50, mean, p95 = legacy["small_house"]["frontier"]
+    assert f"{p50:.1f} / {mean:.1f} / {p95:.1f}" in old_cells
+    new_md = tmp_path / "new.md"
+    report.write_all(res, new_md, command="x")
+    text = new_md.read_text()
+    assert f"| frontier detect + cluster | {p50:.1f} / {mean:.1f} / {p95:.1f} † |" in text
+    assert "rebuilt from `runs.csv`" in text
+    assert "| small_house | nearest | 2 |" in text
+
+
+def test_merge_adds_another_folders_runs_and_parts(bench2, tmp_path):
+    a = tmp_path / "a"
+    assert run_bench.main(ARGS + ["--runs", "1", "--out", str(a), "--md", ""]) == 0
+    b = _copy(bench2, tmp_path / "b")
+    with pytest.raises(SystemExit):
+        run_bench.main(ARGS + ["--runs", "2", "--out", str(a), "--merge", str(b)])
+    md = tmp_path / "M.md"
+    assert run_bench.main(ARGS + ["--runs", "2", "--out", str(a), "--md", str(md), "--resume",
+                                  "--merge", str(b)]) == 0
+    meta = json.loads((a / "meta.json").read_text())
+    # a's own part, b's part (merged), and this one, which ran nothing
+    assert [p["runs_run"] for p in meta["parts"]] == [1, 2, 0]
+    assert meta["parts"][1]["merged_from"] == str(b)
+    assert sorted(r["seed"] for r in records.read(a)) == [0, 1]
+    assert (a / (records.FULL + ".bak")).is_file()           # a's seed 0 was replaced: kept aside
+    assert "added with `--merge`" in md.read_text()
+    other = tmp_path / "other"
+    assert run_bench.main([x if x != "20" else "25" for x in ARGS]
+                          + ["--runs", "1", "--out", str(other), "--md", ""]) == 0
+    assert run_bench.main(ARGS + ["--runs", "2", "--out", str(a), "--md", "", "--resume",
+                                  "--merge", str(other)]) == 2   # other settings: refused
