@@ -30,6 +30,7 @@ import json
 import math
 import re
 import sys
+import zlib
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -176,7 +177,7 @@ def read_jsonl(path: Path) -> list[dict[str, Any]]:
                     continue
                 if isinstance(d, dict) and {"world", "strategy", "seed"} <= d.keys():
                     out.append(d)
-    except (EOFError, OSError):      # a gzip member cut short by a kill: keep what came
+    except (EOFError, OSError, zlib.error):  # a member cut short by a kill: keep what came
         pass
     return out
 

@@ -218,15 +218,18 @@ def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
              "detection and costmap once per processed camera frame).", "",
              head, "|" + "|".join(["---"] * (len(worlds) + 1)) + "|"]
     totals = {w: 0.0 for w in worlds}
-    marked = False
+    marked = partial = False
     for key, label in TIMING_ROWS:
         cells = []
         for w in worlds:
-            hists = [h for r in sel if r["world"] == w
-                     for h in [records.timing_hist(r, key)] if h is not None]
+            in_w = [r for r in sel if r["world"] == w]
+            hists = [h for r in in_w for h in [records.timing_hist(r, key)] if h is not None]
             st = records.hist_stats(records.merge_histograms(hists)) if hists else None
             if st is not None:
-                cells.append(f"{st[0]:.1f} / {st[1]:.1f} / {st[2]:.1f}")
+                part = len(hists) < len(in_w)
+                cells.append(f"{st[0]:.1f} / {st[1]:.1f} / {st[2]:.1f}"
+                             + (f" ‡{len(hists)}/{len(in_w)}" if part else ""))
+                partial |= part
                 totals[w] += st[1]
             elif not hists and key in legacy.get(w, {}):
                 p50, mean, p95 = legacy[w][key]
@@ -249,6 +252,9 @@ def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
     elif yolo:
         lines.append("")
         lines.append(f"Real detector not timed: {yolo.get('error')}")
+    if partial:
+        lines += ["", "‡k/n: pooled over the k of the world's n runs whose timings are kept "
+                  "(the others' records were rebuilt from `runs.csv`)."]
     if marked:
         lines += ["", "†: pooled over the same runs when their full records (every update's "
                   "time) still existed; only their compact records are kept now "

@@ -169,3 +169,18 @@ def test_merge_adds_another_folders_runs_and_parts(bench2, tmp_path):
                           + ["--runs", "1", "--out", str(other), "--md", ""]) == 0
     assert run_bench.main(ARGS + ["--runs", "2", "--out", str(a), "--md", "", "--resume",
                                   "--merge", str(other)]) == 2   # other settings: refused
+
+
+def test_timing_table_marks_worlds_pooled_over_part_of_their_runs():
+    full = {"world": "w", "strategy": "paper", "seed": 0,
+            "timings_ms": {"frontier": [1.0, 2.0, 3.0]}}
+    rebuilt = {"world": "w", "strategy": "paper", "seed": 1, "record": "csv",
+               "timing_p": {"frontier": [9.0, 9.0]}}
+    only_csv = {"world": "v", "strategy": "paper", "seed": 0, "record": "csv"}
+    lines = report.timing_table([full, rebuilt, only_csv], None,
+                                legacy={"v": {"frontier": [4.0, 5.0, 6.0]}})
+    row = next(ln for ln in lines if ln.startswith("| frontier detect + cluster |"))
+    cells = [c.strip() for c in row.strip("|").split("|")][1:]
+    p50, mean, _ = records.hist_stats(records.histogram([1.0, 2.0, 3.0]))
+    assert cells == [f"{p50:.1f} / {mean:.1f} / 3.0 ‡1/2", "4.0 / 5.0 / 6.0 †"]
+    assert any(ln.startswith("‡k/n") for ln in lines) and any(ln.startswith("†") for ln in lines)
