@@ -383,6 +383,7 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
                          + f": `{part.get('command')}`")
             L.append("")
     mount = meta.get("camera_mount") if meta else None
+    margin = float((meta.get("settings") or {}).get("nav_inflation_margin_m", 0.0)) if meta else 0.0
     mount_txt = (f"{mount[0]:g} m above the floor, pitched {mount[1]:g} rad down"
                  + (" (the paper's robot)" if mount and list(mount) == [0.894, 0.1] else "")
                  if mount else "at the simulator's default mount")
@@ -410,7 +411,9 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
           "* Robot: TurtleBot3-waffle-sized disk (0.22 m), 1.1 m tall: chair seats and table "
           "tops are collisions although the 0.17 m lidar plane only sees legs. RGB-D camera "
           f"{mount_txt}. Navigation stand-in: "
-          "grid planner + pure pursuit (arc kept out of the lethal zone); after a collision "
+          "grid planner + pure pursuit (arc kept out of the lethal zone: cells closer than "
+          + (f"the robot radius + {margin:g} m" if margin else "the robot radius")
+          + " to an obstacle); after a collision "
           "it backs off 0.15 m and replans, twice per goal, before aborting the goal "
           "(each contact counts as a collision).",
           "* Coverage tour: full-knowledge reference (`sim_bridge/coverage_tour.py`): "

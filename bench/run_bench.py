@@ -130,12 +130,17 @@ def sim_time_limit(area_m2: float, override: float | None) -> float:
 PAPER_CAMERA_MOUNT = (0.894, 0.1)
 
 
-def sim_params_for(camera_mount: tuple[float, float] | None) -> SimParams:
+def sim_params_for(camera_mount: tuple[float, float] | None,
+                   nav_margin_m: float | None = None) -> SimParams:
     """Simulator parameters of the runs: the defaults, with the camera at
-    ``camera_mount`` = (height m, pitch rad) unless None."""
-    if camera_mount is None:
-        return SimParams()
-    return SimParams(camera_mount_z_m=camera_mount[0], camera_pitch_rad=camera_mount[1])
+    ``camera_mount`` = (height m, pitch rad) unless None, and the navigation stand-in's
+    clearance beyond the robot radius (``nav_inflation_margin_m``) unless None."""
+    kw: dict[str, float] = {}
+    if camera_mount is not None:
+        kw.update(camera_mount_z_m=camera_mount[0], camera_pitch_rad=camera_mount[1])
+    if nav_margin_m is not None:
+        kw["nav_inflation_margin_m"] = nav_margin_m
+    return SimParams(**kw)
 
 
 #: The nodes' parameters of this benchmark, read once before the workers fork (an edit
@@ -143,9 +148,9 @@ def sim_params_for(camera_mount: tuple[float, float] | None) -> SimParams:
 _EXPLORER_PARAMS: ExplorerParams | None = None
 
 
-def _run_task(task: tuple[str, str, int, float, str | None, tuple[float, float] | None]
-              ) -> dict[str, Any]:
-    spec, strategy, seed, max_t, picture, mount = task
+def _run_task(task: tuple[str, str, int, float, str | None, tuple[float, float] | None,
+                          float | None]) -> dict[str, Any]:
+    spec, strategy, seed, max_t, picture, mount, nav_margin = task
     world, gt = load(spec)
     last: dict[str, LockstepState] = {}
 
@@ -153,7 +158,8 @@ def _run_task(task: tuple[str, str, int, float, str | None, tuple[float, float] 
         last["state"] = st
 
     res = run_exploration(world, strategy, seed, max_sim_time_s=max_t, ground_truth=gt,
-                          sim_params=sim_params_for(mount), explorer_params=_EXPLORER_PARAMS,
+                          sim_params=sim_params_for(mount, nav_margin),
+                          explorer_params=_EXPLORER_PARAMS,
                           observer=keep_last if picture else None)
     if picture and "state" in last:
         _save_picture(last["state"], picture)
@@ -290,6 +296,10 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                     help="RGB-D camera mount of the runs: 'paper' (0.894 m up, pitched 0.1 rad "
                          "down, as on the paper's robot), 'sim' (the simulator's default) or "
                          "HEIGHT_M,PITCH_RAD")
+    ap.add_argument("--nav-margin", type=float, default=None,
+                    help="clearance in m that the navigation stand-in keeps beyond the robot "
+                         "radius (sim_bridge's nav_inflation_margin_m; default: its default, "
+                         f"{SimParams().nav_inflation_margin_m:g})")
     ap.add_argument("--report-only", action="store_true",
                     help="only redo plots and BENCHMARKS.md from --out")
     ap.add_argument("--resume", action="store_true",
@@ -316,6 +326,8 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
         ap.error("--no-runs needs --resume")
     if a.no_runs and a.redo:
         ap.error("--no-runs runs nothing: no --redo")
+    if a.nav_margin is not None and not (math.isfinite(a.nav_margin) and a.nav_margin >= 0):
+        ap.error("--nav-margin must be finite and >= 0")
     if a.runs < 1 or a.jobs < 1:
         ap.error("--runs and --jobs must be >= 1")
     try:
@@ -455,7 +467,8 @@ def main(argv: list[str] | None = None) -> int:
     if a.ros > 0 and not interrupted:
         ros = compare_with_ros(specs[0], a.ros_strategy, [a.seed0 + k for k in range(a.ros)],
                                out / "ros", a.ros_rtf,
-                               sim_time_limit(areas[specs[0]], a.max_sim_time), a.mount)
+                               sim_time_limit(areas[specs[0]], a.max_sim_time), a.mount,
+                               a.nav_margin)
         (out / "ros.json").write_text(json.dumps(ros, indent=1))
     part = {"command": command, "started": meta["started"], "code": meta["code"],
             "runs_run": counter[0], "wall_s": round(time.monotonic() - t_start, 1)}
@@ -495,7 +508,7 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
         for strat in strategies:
             for k in range(a.runs):
                 pic = (str(out / "maps" / f"{_slug(s)}_{strat}.png") if k == 0 else None)
-                tasks.append((s, strat, a.seed0 + k, limit, pic, a.mount))
+                tasks.append((s, strat, a.seed0 + k, limit, pic, a.mount, a.nav_margin))
     if a.resume:
         wanted = {t[:3] for t in tasks
                   if not any(st == t[1] and w in (None, t[0]) for w, st in a.redo_keys)}
@@ -537,10 +550,16 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
 def _settings(a: argparse.Namespace) -> dict[str, Any]:
     """What must match for runs of two parts to be comparable (``--resume``), as it reads
     back from meta.json."""
-    return json.loads(json.dumps({
+    settings: dict[str, Any] = {
         "max_sim_time": a.max_sim_time,
         "camera_mount": list(a.mount) if a.mount is not None else None,
-        "lockstep_params": {k: v for k, v in vars(LockstepParams()).items()}}))
+        "lockstep_params": {k: v for k, v in vars(LockstepParams()).items()}}
+    margin = sim_params_for(None, a.nav_margin).nav_inflation_margin_m
+    if margin != SimParams().nav_inflation_margin_m:
+        # only when not the default, so that earlier benchmarks (which had no such
+        # setting and ran on the default) still compare equal
+        settings["nav_inflation_margin_m"] = margin
+    return json.loads(json.dumps(settings))
 
 
 def _code_version() -> str:
@@ -568,8 +587,8 @@ def _worker_init() -> None:
 
 
 def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf: float,
-                     max_sim_time_s: float, camera_mount: tuple[float, float] | None = None
-                     ) -> dict[str, Any]:
+                     max_sim_time_s: float, camera_mount: tuple[float, float] | None = None,
+                     nav_margin: float | None = None) -> dict[str, Any]:
     """The same world/strategy/seeds in lock step and through ROS (``scripts/demo.py``:
     ``sim_bridge`` + ``explorer`` processes), both stopping at 99 % coverage.
 
@@ -583,7 +602,7 @@ def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf
     world_obj, gt = load(world)
     for seed in seeds:
         r = run_exploration(world_obj, strategy, seed, max_sim_time_s=max_sim_time_s,
-                            ground_truth=gt, sim_params=sim_params_for(camera_mount),
+                            ground_truth=gt, sim_params=sim_params_for(camera_mount, nav_margin),
                             params=LockstepParams(start_jitter_m=0.0, start_yaw_jitter_rad=0.0))
         rows.append({"seed": seed, "mode": "lock-step", "stop": r.stop_reason,
                      "coverage_pct": r.coverage_pct, "sim_time_s": r.sim_time_s,
@@ -601,6 +620,8 @@ def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf
                     "--sim-arg=-p", f"--sim-arg=camera_pitch_rad:={pitch}",
                     "--explorer-arg=-p", f"--explorer-arg=camera_z_m:={z}",
                     "--explorer-arg=-p", f"--explorer-arg=camera_pitch_rad:={pitch}"]
+        if nav_margin is not None:
+            cmd += ["--sim-arg=-p", f"--sim-arg=nav_inflation_margin_m:={nav_margin}"]
         proc = subprocess.run(cmd, cwd=str(ROOT), capture_output=True, text=True)
         mj = d / "metrics.json"
         m = json.loads(mj.read_text()) if mj.is_file() else {}

@@ -187,3 +187,25 @@ def test_no_runs_keeps_every_run_and_adds_a_part(first, tmp_path):
     assert (out / "runs.jsonl").read_text() == before
     with pytest.raises(SystemExit):
         run_bench.main(ARGS + ["--out", str(out), "--no-runs"])      # needs --resume
+
+
+def test_nav_margin_is_a_setting_only_when_not_the_default(first, tmp_path):
+    out, _ = first
+    meta = json.loads((out / "meta.json").read_text())
+    assert "nav_inflation_margin_m" not in meta["settings"]   # old benchmarks compare equal
+    res = _copy_results(out, tmp_path / "margin")
+    # the same folder with another margin: refused (its runs used the default)
+    assert run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
+                                  "--nav-margin", "0.03"]) == 2
+    # the default given explicitly is the same setting
+    assert run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
+                                  "--nav-margin", "0", "--no-runs"]) == 0
+    m = tmp_path / "m"
+    md = m / "B.md"
+    assert run_bench.main(ARGS + ["--runs", "1", "--out", str(m), "--md", str(md),
+                                  "--nav-margin", "0.03"]) == 0
+    assert json.loads((m / "meta.json").read_text())["settings"]["nav_inflation_margin_m"] == 0.03
+    assert "the robot radius + 0.03 m" in md.read_text()
+    with pytest.raises(SystemExit):
+        run_bench.main(ARGS + ["--out", str(m), "--nav-margin", "-1"])
+    assert run_bench.sim_params_for(None, 0.03).nav_inflation_margin_m == 0.03
