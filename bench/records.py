@@ -10,9 +10,10 @@ but those lists, in their place:
   (:data:`BIN_RATIO` wide), from which the report pools all runs of a world (the paper's
   Table I: p50 within half a bin, mean exact).
 
-``runs.jsonl.gz`` holds the compact records (a few hundred bytes a run) and is what
-``--resume`` falls back on; where ``runs.jsonl`` holds the full record of the same run,
-that one is used. Records rebuilt from an old ``runs.csv`` alone (:func:`from_csv_row`,
+``runs.jsonl.gz`` holds the compact records (about 10 kB gzipped for a 5000 s maze
+run, mostly its coverage samples; 1-3 kB for a house) and is the truth that ``--resume``
+reads; the full record of the same run in the local ``runs.jsonl`` is used in its place
+(:func:`read`). Records rebuilt from an old ``runs.csv`` alone (:func:`from_csv_row`,
 ``record: "csv"``) carry the table's scalars and ``timing_p`` but no coverage samples and
 no histogram.
 
@@ -55,16 +56,25 @@ def key_of(d: dict[str, Any]) -> tuple[str, str, int]:
 
 
 def histogram(values: Iterable[float]) -> dict[str, Any]:
-    """``{"n", "sum", "bins": {index: count}}`` of ``values`` (ms); bin ``i`` holds
-    ``BIN_MIN_MS * BIN_RATIO**i <= v < BIN_MIN_MS * BIN_RATIO**(i+1)`` (smaller values,
-    zero included, in bin 0)."""
+    """``{"n", "sum", "first", "counts"}`` of ``values`` (ms): ``counts[j]`` values in bin
+    ``i = first + j``, which holds ``BIN_MIN_MS * BIN_RATIO**i <= v < BIN_MIN_MS *
+    BIN_RATIO**(i+1)`` (smaller values, zero included, in bin 0)."""
     v = np.asarray([x for x in values if x is not None and math.isfinite(x)], dtype=np.float64)
     if v.size == 0:
-        return {"n": 0, "sum": 0.0, "bins": {}}
+        return {"n": 0, "sum": 0.0, "first": 0, "counts": []}
     idx = np.floor(np.log(np.maximum(v, BIN_MIN_MS) / BIN_MIN_MS) / _LOG_RATIO).astype(np.int64)
-    u, c = np.unique(idx, return_counts=True)
-    return {"n": int(v.size), "sum": float(v.sum()),
-            "bins": {str(int(i)): int(k) for i, k in zip(u, c)}}
+    first = int(idx.min())
+    counts = np.bincount(idx - first)
+    return {"n": int(v.size), "sum": float(v.sum()), "first": first,
+            "counts": [int(k) for k in counts]}
+
+
+def _bins(h: dict[str, Any]) -> dict[int, int]:
+    """bin index -> count of a histogram (also of the sparse ``bins`` form)."""
+    if "bins" in h:
+        return {int(i): int(k) for i, k in h["bins"].items() if int(k)}
+    first = int(h.get("first", 0))
+    return {first + j: int(k) for j, k in enumerate(h.get("counts") or []) if k}
 
 
 def merge_histograms(hists: Iterable[dict[str, Any]]) -> dict[str, Any]:
@@ -72,9 +82,15 @@ def merge_histograms(hists: Iterable[dict[str, Any]]) -> dict[str, Any]:
     for h in hists:
         n += int(h["n"])
         total += float(h["sum"])
-        for i, k in h["bins"].items():
-            bins[int(i)] = bins.get(int(i), 0) + int(k)
-    return {"n": n, "sum": total, "bins": {str(i): k for i, k in sorted(bins.items())}}
+        for i, k in _bins(h).items():
+            bins[i] = bins.get(i, 0) + k
+    if not bins:
+        return {"n": n, "sum": total, "first": 0, "counts": []}
+    first = min(bins)
+    counts = [0] * (max(bins) - first + 1)
+    for i, k in bins.items():
+        counts[i - first] = k
+    return {"n": n, "sum": total, "first": first, "counts": counts}
 
 
 def hist_stats(h: dict[str, Any]) -> tuple[float, float, float] | None:
@@ -82,7 +98,7 @@ def hist_stats(h: dict[str, Any]) -> tuple[float, float, float] | None:
     centre of the bin that holds it (within half a bin of the exact value)."""
     if not h or int(h["n"]) == 0:
         return None
-    items = sorted((int(i), int(k)) for i, k in h["bins"].items())
+    items = sorted(_bins(h).items())
     idx = np.asarray([i for i, _ in items], dtype=np.float64)
     cum = np.cumsum([k for _, k in items])
     n = int(h["n"])
@@ -99,12 +115,20 @@ def hist_stats(h: dict[str, Any]) -> tuple[float, float, float] | None:
 # ------------------------------------------------------------------ records
 
 
+def _samples(samples: Iterable[Any]) -> list[list[Any]]:
+    """Coverage samples (t s, coverage %, path m) rounded to 0.01 (what a figure shows)."""
+    return [[None if v is None else round(float(v), 2) for v in smp] for smp in samples]
+
+
 def compact(d: dict[str, Any]) -> dict[str, Any]:
-    """The record without its per-update timings (see the module docstring). A record
-    that is compact already is returned as it is."""
-    if "timings_ms" not in d:
-        return dict(d)
+    """The record without its per-update timings and with its coverage samples rounded
+    to 0.01 (see the module docstring). A compact record comes back in today's form."""
     out = {k: v for k, v in d.items() if k not in ("timings_ms", "goals")}
+    out["coverage_samples"] = _samples(d.get("coverage_samples") or [])
+    if "timings_ms" not in d:
+        if d.get("timing_hist"):
+            out["timing_hist"] = {k: merge_histograms([h]) for k, h in d["timing_hist"].items()}
+        return out
     tp, th = {}, {}
     for key, vals in (d.get("timings_ms") or {}).items():
         v = [x for x in vals if x is not None]
@@ -114,6 +138,17 @@ def compact(d: dict[str, Any]) -> dict[str, Any]:
     out["timing_p"], out["timing_hist"] = tp, th
     out["record"] = "compact"
     return out
+
+
+#: Fields that tell two records of one (world, strategy, seed) apart when they come from
+#: different runs (the wall time differs between any two runs).
+_RUN_FIELDS = ("wall_time_s", "sim_time_s", "coverage_pct", "path_length_m", "goals_sent",
+               "collisions", "stop_reason")
+
+
+def same_run(a: dict[str, Any], b: dict[str, Any]) -> bool:
+    """Whether two records are of the same run (a full record and its compact copy)."""
+    return all(a.get(k) == b.get(k) for k in _RUN_FIELDS)
 
 
 def timing_hist(d: dict[str, Any], key: str) -> dict[str, Any] | None:
@@ -177,22 +212,41 @@ def read_jsonl(path: Path) -> list[dict[str, Any]]:
                     continue
                 if isinstance(d, dict) and {"world", "strategy", "seed"} <= d.keys():
                     out.append(d)
-    except (EOFError, OSError, zlib.error):  # a member cut short by a kill: keep what came
-        pass
+    except (EOFError, OSError, zlib.error) as err:  # cut short by a kill: keep what came
+        print(f"[records] {path}: unreadable after {len(out)} records ({err}); "
+              "the rest is left out", file=sys.stderr)
     return out
 
 
 def read(folder: Path) -> list[dict[str, Any]]:
-    """Every run of a benchmark folder, one record per (world, strategy, seed): the full
-    record where ``runs.jsonl`` has it, else the compact one of ``runs.jsonl.gz``; in the
-    order they first appear (compact file first). A later duplicate replaces an earlier
-    one of the same file."""
+    """Every run of a benchmark folder, one record per (world, strategy, seed).
+
+    ``runs.jsonl.gz`` (in git) is the truth; the full record of ``runs.jsonl`` (local)
+    replaces a compact one only when it is of the same run (:func:`same_run`), so a local
+    file left from before a newer part was committed elsewhere cannot bring old runs
+    back. Runs only in ``runs.jsonl`` (a part that was not committed) are kept. Order: as
+    they first appear, compact file first; a later duplicate in one file replaces an
+    earlier one.
+    """
     by_key: dict[tuple[str, str, int], dict[str, Any]] = {}
     for d in read_jsonl(folder / COMPACT):
         by_key[key_of(d)] = d
+    stale = 0
     for d in read_jsonl(folder / FULL):
-        by_key[key_of(d)] = d
-    return list(by_key.values())
+        k = key_of(d)
+        if k not in by_key or same_run(d, by_key[k]) or by_key[k].get("_from") == FULL:
+            by_key[k] = dict(d, _from=FULL)
+        else:
+            stale += 1
+    if stale:
+        print(f"[records] {folder}: {stale} runs of {FULL} differ from those of {COMPACT} "
+              f"(older or newer runs of the same seeds); {COMPACT}'s are used",
+              file=sys.stderr)
+    return [{k: v for k, v in d.items() if k != "_from"} for d in by_key.values()]
+
+
+def _line(d: dict[str, Any]) -> bytes:
+    return (json.dumps(compact(d), sort_keys=True, separators=(",", ":")) + "\n").encode()
 
 
 def write_compact(folder: Path, records: Iterable[dict[str, Any]]) -> None:
@@ -201,7 +255,7 @@ def write_compact(folder: Path, records: Iterable[dict[str, Any]]) -> None:
     tmp = folder / (COMPACT + ".tmp")
     with open(tmp, "wb") as raw, gzip.GzipFile(fileobj=raw, mode="wb", mtime=0) as f:
         for d in records:
-            f.write((json.dumps(compact(d), sort_keys=True) + "\n").encode())
+            f.write(_line(d))
     tmp.replace(folder / COMPACT)
 
 
@@ -210,15 +264,18 @@ def append_compact(folder: Path, d: dict[str, Any]) -> None:
     run that is killed later loses nothing written before)."""
     with open(folder / COMPACT, "ab") as raw, gzip.GzipFile(fileobj=raw, mode="wb",
                                                             mtime=0) as f:
-        f.write((json.dumps(compact(d), sort_keys=True) + "\n").encode())
+        f.write(_line(d))
 
 
 # ------------------------------------------------------------------ legacy timing
 
 
-def timing_from_markdown(text: str) -> dict[str, dict[str, list[float]]]:
+def timing_from_markdown(text: str, strategy: list[str] | None = None
+                         ) -> dict[str, dict[str, list[float]]]:
     """world -> timing key -> [p50, mean, p95] read from the per-module timing table of
-    a BENCHMARKS.md written by :mod:`bench.report` (its row labels name the keys)."""
+    a BENCHMARKS.md written by :mod:`bench.report` (its row labels name the keys); the
+    strategy the table is of (``paper`` or ``all``) goes into ``strategy[0]``."""
+    strategy = strategy if strategy is not None else [""]
     from bench.report import TIMING_ROWS
 
     label_key = {label: key for key, label in TIMING_ROWS}
@@ -232,6 +289,8 @@ def timing_from_markdown(text: str) -> dict[str, dict[str, list[float]]]:
     for ln in lines[start + 1:]:
         if ln.startswith("## "):
             break
+        if (m := re.match(r"Strategy `([^`]+)`", ln)):
+            strategy[0] = m.group(1)
         cells = [c.strip() for c in ln.strip().strip("|").split("|")]
         if ln.startswith("| module |"):
             worlds = cells[1:]
@@ -255,10 +314,12 @@ def import_csv(folder: Path, timing_md: Path | None) -> int:
     write_compact(folder, recs)
     n_t = 0
     if timing_md is not None:
-        timing = timing_from_markdown(timing_md.read_text())
+        strategy = ["paper"]
+        timing = timing_from_markdown(timing_md.read_text(), strategy)
         (folder / LEGACY_TIMING).write_text(json.dumps(
             {"source": f"per-module timing table of {timing_md.name} (pooled from the full "
                        "records of the runs imported from runs.csv, which were not kept)",
+             "strategy": strategy[0],
              "worlds": timing}, indent=1, sort_keys=True))
         n_t = len(timing)
     print(f"[records] {len(recs)} runs imported into {folder / COMPACT}"

@@ -7,9 +7,10 @@ run ``k`` of every (world, strategy) uses seed ``--seed0 + k``. Runs are spread 
 (:mod:`sim_bridge.coverage_tour`) is computed once from the unperturbed start.
 
 Outputs in ``--out``: ``runs.csv`` (one row per run), ``runs.jsonl`` (everything,
-coverage samples and per-update timings included; tens of MB), ``runs.jsonl.gz`` (the same
-runs without the per-update timings, a few hundred bytes each, kept in git so that a new
-checkout can ``--resume``; :mod:`bench.records`), ``tours.csv``, ``yolo.json`` (the
+coverage samples and per-update timings included; tens of MB, not in git),
+``runs.jsonl.gz`` (every run without its per-update timings, ~1-10 kB gzipped each: commit
+it with the results, so that a new checkout can ``--resume``; :mod:`bench.records`),
+``tours.csv``, ``yolo.json`` (the
 real detector timed on rendered frames), ``maps/`` (final map of the first run of every
 world x strategy), the figures of :mod:`bench.report`, and ``BENCHMARKS.md`` at ``--md``
 (default: the repository root).
@@ -326,8 +327,11 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
         ap.error("--no-runs needs --resume")
     if a.no_runs and a.redo:
         ap.error("--no-runs runs nothing: no --redo")
-    if a.nav_margin is not None and not (math.isfinite(a.nav_margin) and a.nav_margin >= 0):
-        ap.error("--nav-margin must be finite and >= 0")
+    if a.nav_margin is not None:
+        try:
+            sim_params_for(None, a.nav_margin).nav_params()
+        except ValueError as err:
+            ap.error(f"--nav-margin {a.nav_margin}: {err}")
     if a.runs < 1 or a.jobs < 1:
         ap.error("--runs and --jobs must be >= 1")
     try:
@@ -398,7 +402,7 @@ def main(argv: list[str] | None = None) -> int:
     old_meta = _read_json(out / "meta.json") if a.resume else {}
     if old_meta:
         old_settings = old_meta.get("settings")
-        if old_settings is not None and old_settings != meta["settings"]:
+        if old_settings is not None and not _same_settings(old_settings, meta["settings"]):
             print(f"[bench] --resume: the runs in {out} were made with other settings "
                   f"({old_settings}, now {meta['settings']}); use another --out",
                   file=sys.stderr)
@@ -547,18 +551,18 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
                         f"({d['wall_time_s']:.0f} s)")
 
 
+#: Settings that parts of earlier versions did not record, with the value they ran on.
+SETTING_DEFAULTS: dict[str, Any] = {"nav_inflation_margin_m": 0.0}
+
+
 def _settings(a: argparse.Namespace) -> dict[str, Any]:
     """What must match for runs of two parts to be comparable (``--resume``), as it reads
     back from meta.json."""
     settings: dict[str, Any] = {
         "max_sim_time": a.max_sim_time,
         "camera_mount": list(a.mount) if a.mount is not None else None,
-        "lockstep_params": {k: v for k, v in vars(LockstepParams()).items()}}
-    margin = sim_params_for(None, a.nav_margin).nav_inflation_margin_m
-    if margin != SimParams().nav_inflation_margin_m:
-        # only when not the default, so that earlier benchmarks (which had no such
-        # setting and ran on the default) still compare equal
-        settings["nav_inflation_margin_m"] = margin
+        "lockstep_params": {k: v for k, v in vars(LockstepParams()).items()},
+        "nav_inflation_margin_m": sim_params_for(None, a.nav_margin).nav_inflation_margin_m}
     return json.loads(json.dumps(settings))
 
 
@@ -662,43 +666,56 @@ def _backup(path: Path) -> Path:
 
 def _merge(out: Path, other: Path, meta: dict[str, Any], old_meta: dict[str, Any]) -> str:
     """Add the runs of ``other`` to ``out`` (a run of both: ``other``'s is kept) and its
-    parts to ``old_meta``'s; '' or what is wrong (then nothing was changed)."""
+    parts to ``old_meta``'s; '' or what is wrong (then nothing was changed). Merging a
+    folder again adds no part twice."""
     o_meta = _read_json(other / "meta.json")
     if not o_meta:
         return f"{other} has no meta.json"
-    if o_meta.get("settings") != meta["settings"]:
+    if not _same_settings(o_meta.get("settings"), meta["settings"]):
         return (f"the runs in {other} were made with other settings ({o_meta.get('settings')}, "
                 f"now {meta['settings']})")
     theirs = records.read(other)
     if not theirs:
         return f"{other} holds no runs"
+    stray = sorted({f"{d['world']}:{d['strategy']}" for d in theirs
+                    if d["world"] not in meta["worlds"] or d["strategy"] not in meta["strategies"]})
+    if stray:
+        return f"{other} holds runs of worlds/strategies this command does not name: {stray}"
     mine = {records.key_of(d): d for d in records.read(out)}
     keys = {records.key_of(d) for d in theirs}
-    if any(k in mine for k in keys) and (out / records.FULL).is_file():
-        _backup(out / records.FULL)
-    if any(k in mine for k in keys) and (out / records.COMPACT).is_file():
-        _backup(out / records.COMPACT)
+    if any(k in mine for k in keys):
+        for name in (records.FULL, records.COMPACT):
+            if (out / name).is_file():
+                _backup(out / name)
     merged = [d for k, d in mine.items() if k not in keys] + theirs
-    full = [d for d in merged if "timings_ms" in d]
-    if full:
-        with open(out / records.FULL, "w") as jl:
-            for d in full:
-                jl.write(json.dumps(d) + "\n")
+    with open(out / records.FULL, "w") as jl:        # both files hold the merged runs
+        for d in merged:
+            jl.write(json.dumps(d) + "\n")
     records.write_compact(out, merged)
     parts = (old_meta.get("parts") or ([_part_of(old_meta)] if old_meta else []))
-    o_parts = o_meta.get("parts") or [_part_of(o_meta)]
-    old_meta["parts"] = parts + [dict(p, merged_from=str(other)) for p in o_parts]
+    have = {(p.get("started"), p.get("command")) for p in parts}
+    o_parts = [dict(p, merged_from=str(other)) for p in (o_meta.get("parts") or [_part_of(o_meta)])
+               if (p.get("started"), p.get("command")) not in have]
+    old_meta["parts"] = parts + o_parts
     old_meta.setdefault("settings", meta["settings"])
     tours = out / "tours.csv"
     if (other / "tours.csv").is_file():
         from bench import report
-        have = {r["world"] for r in report.read_csv(tours)}
-        extra = [r for r in report.read_csv(other / "tours.csv") if r["world"] not in have]
+        have_t = {r["world"] for r in report.read_csv(tours)}
+        extra = [r for r in report.read_csv(other / "tours.csv") if r["world"] not in have_t]
         if extra:
             _write_csv(tours, report.read_csv(tours) + extra)
     print(f"[bench] --merge: {len(theirs)} runs and {len(o_parts)} parts of {other} added",
           file=sys.stderr)
     return ""
+
+
+def _same_settings(old: dict[str, Any] | None, new: dict[str, Any]) -> bool:
+    """Settings of two parts compare equal; a setting an older part did not record had
+    the value it was always run with (:data:`SETTING_DEFAULTS`)."""
+    if old is None:
+        return False
+    return ({**SETTING_DEFAULTS, **old} == {**SETTING_DEFAULTS, **new})
 
 
 def _part_of(meta: dict[str, Any]) -> dict[str, Any]:

@@ -189,11 +189,16 @@ def test_no_runs_keeps_every_run_and_adds_a_part(first, tmp_path):
         run_bench.main(ARGS + ["--out", str(out), "--no-runs"])      # needs --resume
 
 
-def test_nav_margin_is_a_setting_only_when_not_the_default(first, tmp_path):
+def test_nav_margin_is_a_setting_and_earlier_folders_ran_on_zero(first, tmp_path):
     out, _ = first
     meta = json.loads((out / "meta.json").read_text())
-    assert "nav_inflation_margin_m" not in meta["settings"]   # old benchmarks compare equal
+    assert meta["settings"]["nav_inflation_margin_m"] == 0.0
     res = _copy_results(out, tmp_path / "margin")
+    # a folder of a version that did not record the setting ran on 0.0: it still resumes
+    del meta["settings"]["nav_inflation_margin_m"]
+    (res / "meta.json").write_text(json.dumps(meta))
+    assert run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
+                                  "--no-runs"]) == 0
     # the same folder with another margin: refused (its runs used the default)
     assert run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
                                   "--nav-margin", "0.03"]) == 2
@@ -206,6 +211,7 @@ def test_nav_margin_is_a_setting_only_when_not_the_default(first, tmp_path):
                                   "--nav-margin", "0.03"]) == 0
     assert json.loads((m / "meta.json").read_text())["settings"]["nav_inflation_margin_m"] == 0.03
     assert "the robot radius + 0.03 m" in md.read_text()
-    with pytest.raises(SystemExit):
-        run_bench.main(ARGS + ["--out", str(m), "--nav-margin", "-1"])
+    for bad in ("-1", "0.5"):      # negative; beyond the inflation radius (0.6 - 0.22)
+        with pytest.raises(SystemExit):
+            run_bench.main(ARGS + ["--out", str(m), "--nav-margin", bad])
     assert run_bench.sim_params_for(None, 0.03).nav_inflation_margin_m == 0.03

@@ -47,7 +47,7 @@ def test_histogram_percentiles_within_half_a_bin_and_exact_mean():
     rng = np.random.default_rng(3)
     v = np.exp(rng.normal(1.0, 0.8, 5000))            # ms, log-normal like update times
     h = records.histogram(v)
-    assert h["n"] == 5000 and sum(h["bins"].values()) == 5000
+    assert h["n"] == 5000 and sum(h["counts"]) == 5000
     p50, mean, p95 = records.hist_stats(h)
     assert mean == pytest.approx(v.mean(), rel=1e-12)
     half = math.sqrt(records.BIN_RATIO) * 1.0005       # half a bin, and rank rounding
@@ -58,7 +58,7 @@ def test_histogram_percentiles_within_half_a_bin_and_exact_mean():
     a, b = records.histogram(v[:1234]), records.histogram(v[1234:])
     assert records.hist_stats(records.merge_histograms([a, b])) == (p50, mean, p95)
     assert records.hist_stats(records.histogram([])) is None
-    assert records.histogram([0.0, float("nan")])["bins"] == {"0": 1}
+    assert records.histogram([0.0, float("nan")])["counts"] == [1]
 
 
 def test_compact_keeps_everything_but_the_per_update_lists(bench2):
@@ -67,7 +67,8 @@ def test_compact_keeps_everything_but_the_per_update_lists(bench2):
     assert [records.key_of(d) for d in comp] == [records.key_of(d) for d in full]
     for f, c in zip(full, comp):
         assert "timings_ms" not in c and c["record"] == "compact"
-        assert c["coverage_samples"] == f["coverage_samples"]
+        assert len(c["coverage_samples"]) == len(f["coverage_samples"])
+        assert np.allclose(c["coverage_samples"], f["coverage_samples"], atol=0.005)
         for k in ("completed", "sim_time_s", "time_to_s", "path_to_m", "collisions"):
             assert c[k] == f[k], k
         for key, vals in f["timings_ms"].items():
@@ -95,15 +96,53 @@ def test_resume_from_the_compact_file_alone(bench2, tmp_path):
     assert rows == report.read_csv(bench2 / "runs.csv")
 
 
-def test_full_record_wins_over_the_compact_one(bench2, tmp_path):
+def test_full_record_is_used_only_when_it_is_the_same_run(bench2, tmp_path, capsys):
     res = _copy(bench2, tmp_path / "both")
     full = _full(res)
+    got = {records.key_of(d): d for d in records.read(res)}
+    assert all("timings_ms" in d for d in got.values())         # the same runs: full ones
+    # a local runs.jsonl older than the committed runs.jsonl.gz (another part redid seed 0)
+    full[0]["wall_time_s"] += 1.0
     full[0]["coverage_pct"] = 12.5
-    (res / records.FULL).write_text("".join(json.dumps(d) + "\n" for d in full[:1]))
+    (res / records.FULL).write_text("".join(json.dumps(d) + "\n" for d in full))
     got = {records.key_of(d): d for d in records.read(res)}
     assert len(got) == 2
-    assert got[records.key_of(full[0])]["coverage_pct"] == 12.5
-    assert got[records.key_of(full[1])]["record"] == "compact"
+    assert got[records.key_of(full[0])]["record"] == "compact"
+    assert got[records.key_of(full[0])]["coverage_pct"] != 12.5
+    assert "timings_ms" in got[records.key_of(full[1])]
+    assert "differ from those of runs.jsonl.gz" in capsys.readouterr().err
+    # a run only in runs.jsonl (a part that was not committed) is kept
+    extra = dict(full[1], seed=5)
+    (res / records.FULL).write_text(json.dumps(extra) + "\n")
+    assert sorted(d["seed"] for d in records.read(res)) == [0, 1, 5]
+
+
+def test_compact_records_stay_small():
+    """A long run (a 5000 s maze: 1000 coverage samples, 5000 updates per timing) stays
+    near 10 kB gzipped; its full record is ~50x that."""
+    rng = np.random.default_rng(0)
+    t = np.arange(1000) * 5.0
+    full = {"world": "maze", "strategy": "paper", "seed": 0, "wall_time_s": 512.3456789,
+            "coverage_samples": [[float(a), float(b), float(c)] for a, b, c in
+                                 zip(t + 0.0123456, np.linspace(0, 99.0123456, 1000),
+                                     np.linspace(0, 1200.98765, 1000))],
+            "timings_ms": {k: list(np.exp(rng.normal(1.5, 0.6, 5000)))
+                           for k in records.TIMING_KEYS}}
+    line = records._line(full)
+    gz = len(gzip.compress(line))
+    assert gz < 15_000, gz
+    assert len(gzip.compress(json.dumps(full).encode())) > 10 * gz
+    d = json.loads(line)
+    assert all(isinstance(h["counts"], list) for h in d["timing_hist"].values())
+    assert d["coverage_samples"][1] == [5.01, 0.1, 1.2]
+    # an old sparse histogram is read and rewritten in today's form
+    old = {"n": 3, "sum": 6.0, "bins": {"5": 2, "9": 1}}
+    assert records.hist_stats(old) == records.hist_stats(records.merge_histograms([old]))
+    again = records.compact({"world": "w", "strategy": "s", "seed": 0,
+                             "timing_hist": {"frontier": old},
+                             "coverage_samples": [[1.234567, 50.0, 0.123456]]})
+    assert again["timing_hist"]["frontier"]["counts"] == [2, 0, 0, 0, 1]
+    assert again["coverage_samples"] == [[1.23, 50.0, 0.12]]
 
 
 def test_a_cut_gzip_member_loses_only_the_last_run(bench2, tmp_path):
@@ -164,6 +203,19 @@ def test_merge_adds_another_folders_runs_and_parts(bench2, tmp_path):
     assert sorted(r["seed"] for r in records.read(a)) == [0, 1]
     assert (a / (records.FULL + ".bak")).is_file()           # a's seed 0 was replaced: kept aside
     assert "added with `--merge`" in md.read_text()
+    # a clone of b (its runs.jsonl.gz alone) merged again: its runs win, no part twice
+    c = _copy(bench2, tmp_path / "c", names=(records.COMPACT, "meta.json"))
+    assert run_bench.main(ARGS + ["--runs", "2", "--out", str(a), "--md", "", "--resume",
+                                  "--merge", str(c)]) == 0
+    meta = json.loads((a / "meta.json").read_text())
+    assert [p["runs_run"] for p in meta["parts"]] == [1, 2, 0, 0]
+    got = records.read(a)
+    assert sorted(d["seed"] for d in got) == [0, 1]
+    assert all(d["record"] == "compact" for d in got)
+    # runs of a world this command does not name: refused
+    assert run_bench.main([x if x != "small_house" else "small_cluttered" for x in ARGS]
+                          + ["--runs", "2", "--out", str(a), "--md", "", "--resume",
+                             "--merge", str(c)]) == 2
     other = tmp_path / "other"
     assert run_bench.main([x if x != "20" else "25" for x in ARGS]
                           + ["--runs", "1", "--out", str(other), "--md", ""]) == 0
