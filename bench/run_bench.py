@@ -541,11 +541,16 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
             jl.write(json.dumps(d) + "\n")
         jl.flush()
         for d in pool.imap_unordered(_run_task, tasks):
-            jl.write(json.dumps(d) + "\n")
-            jl.flush()
-            records.append_compact(out, d)
-            results.append(d)
-            counter[0] += 1
+            # an interrupt waits until the run is in both files and counted
+            mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+            try:
+                jl.write(json.dumps(d) + "\n")
+                jl.flush()
+                records.append_compact(out, d)
+                results.append(d)
+                counter[0] += 1
+            finally:
+                signal.pthread_sigmask(signal.SIG_SETMASK, mask)
             prog.update(f"{d['world']}/{d['strategy']}/{d['seed']}: "
                         f"{d['coverage_pct'] or 0:.1f} % {d['stop_reason']} "
                         f"({d['wall_time_s']:.0f} s)")

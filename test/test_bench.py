@@ -105,6 +105,9 @@ def test_sigterm_reports_what_ran_and_resume_finishes(tmp_path):
     done = len(_runs(out))
     assert 1 <= done < 4 and meta["parts"][0]["interrupted"] is True
     assert meta["parts"][0]["runs_run"] == done
+    from bench import records
+    # every run written to runs.jsonl is in runs.jsonl.gz too (the signal waited for it)
+    assert len(records.read_jsonl(out / records.COMPACT)) == done
     assert "(interrupted)" not in (out / "B.md").read_text()   # one part: no parts list
     assert run_bench.main(ARGS + ["--runs", "4", "--out", str(out), "--md",
                                   str(out / "B.md"), "--resume"]) == 0
