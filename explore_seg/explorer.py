@@ -24,7 +24,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from explore_seg.node_util import run
+from explore_seg.node_util import config_file, run
 
 
 @dataclass(frozen=True)
@@ -46,16 +46,7 @@ COMPONENTS: tuple[Component, ...] = (
 
 def default_params_file() -> Path | None:
     """config/explorer.yaml from the installed share folder, else from the source tree."""
-    try:
-        from ament_index_python.packages import get_package_share_directory
-
-        cand = Path(get_package_share_directory("explore_seg")) / "config" / "explorer.yaml"
-        if cand.is_file():
-            return cand
-    except Exception:  # noqa: BLE001 - PackageNotFoundError or ament_index missing
-        pass
-    cand = Path(__file__).resolve().parents[1] / "config" / "explorer.yaml"
-    return cand if cand.is_file() else None
+    return config_file("explorer.yaml")
 
 
 def node_classes(without: set[str]) -> list[type]:

@@ -4,12 +4,28 @@ from __future__ import annotations
 
 import math
 import time
+from pathlib import Path
 from typing import Callable, Sequence
 
 import rclpy
 from rclpy.executors import (ExternalShutdownException, MultiThreadedExecutor,
                              SingleThreadedExecutor)
 from rclpy.node import Node
+
+
+def config_file(name: str) -> Path | None:
+    """``config/<name>`` of the package: from its installed share folder (colcon), else
+    from the source tree; None when neither has it."""
+    try:
+        from ament_index_python.packages import get_package_share_directory
+
+        cand = Path(get_package_share_directory("explore_seg")) / "config" / name
+        if cand.is_file():
+            return cand
+    except Exception:  # noqa: BLE001 - PackageNotFoundError or ament_index missing
+        pass
+    cand = Path(__file__).resolve().parents[1] / "config" / name
+    return cand if cand.is_file() else None
 
 
 def run(node_cls: Callable[..., Node] | Sequence[Callable[..., Node]],

@@ -38,7 +38,7 @@ from explore_seg.core.grid import GridMap, quaternion_from_yaw
 from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D, ObjectMap,
                                       ObjectParams, load_priors, parse_class_ids,
                                       process_frame, WallMask, wall_mask)
-from explore_seg.node_util import WarnThrottle, run
+from explore_seg.node_util import WarnThrottle, config_file, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, POSE_QOS, SENSOR_QOS, map_qos
 
@@ -85,7 +85,9 @@ class ObjectCostmapNode(Node):
         self._p = ParamBinding(self, ObjectParams())
         self._dp = ParamBinding(self, DetectorParams(), prefix="detector.")
         p = self._p.params
-        self._priors = load_priors(p.priors_path or None)
+        # the installed share's priors when no file is given (the core knows only the
+        # source tree)
+        self._priors = load_priors(p.priors_path or config_file("object_priors.yaml"))
         self._objects = ObjectMap(p, self._priors)
         self._detector: Detector | None = None
         self._detector_failed = False

@@ -10,7 +10,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 ROS_MODULES = ("rclpy", "rcl_interfaces", "builtin_interfaces", "std_msgs", "std_srvs",
                "geometry_msgs", "nav_msgs", "sensor_msgs", "visualization_msgs",
-               "diagnostic_msgs", "rosgraph_msgs")
+               "diagnostic_msgs", "rosgraph_msgs", "ament_index_python")
 
 
 def _imports(path: Path) -> set[str]:

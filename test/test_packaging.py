@@ -24,7 +24,7 @@ VENV_BIN = Path(sys.executable).parent
 def _ros_imports() -> set[str]:
     ros_pkgs = {"rclpy", "rcl_interfaces", "builtin_interfaces", "std_msgs", "std_srvs",
                 "geometry_msgs", "nav_msgs", "sensor_msgs", "visualization_msgs",
-                "diagnostic_msgs", "rosgraph_msgs"}
+                "diagnostic_msgs", "rosgraph_msgs", "ament_index_python"}
     found = set()
     for path in list((ROOT / "explore_seg").rglob("*.py")) + list((ROOT / "sim_bridge").rglob("*.py")):
         for node in ast.walk(ast.parse(path.read_text())):

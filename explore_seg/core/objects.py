@@ -417,25 +417,18 @@ class SizePrior:
 
 
 def default_priors_path() -> Path:
-    """The package's ``config/object_priors.yaml`` (source tree or installed share).
+    """The source tree's ``config/object_priors.yaml`` (an installed package's nodes pass
+    the share folder's file instead: :func:`explore_seg.node_util.config_file`).
 
     Raises
     ------
     FileNotFoundError
-        When neither location holds the file.
+        When the file is not there.
     """
     here = Path(__file__).resolve().parents[2] / "config" / "object_priors.yaml"
     if here.is_file():
         return here
-    try:
-        from ament_index_python.packages import get_package_share_directory
-
-        shared = Path(get_package_share_directory("explore_seg")) / "config" / "object_priors.yaml"
-        if shared.is_file():
-            return shared
-    except (ImportError, LookupError, ValueError):
-        pass
-    raise FileNotFoundError(f"object priors not found at {here} nor in the package share")
+    raise FileNotFoundError(f"object priors not found at {here}: pass the file's path")
 
 
 def load_priors(path: str | Path | None = None) -> dict[str, SizePrior]:
