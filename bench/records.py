@@ -231,18 +231,19 @@ def read(folder: Path) -> list[dict[str, Any]]:
     by_key: dict[tuple[str, str, int], dict[str, Any]] = {}
     for d in read_jsonl(folder / COMPACT):
         by_key[key_of(d)] = d
-    stale = 0
+    stale, from_full = 0, set()
     for d in read_jsonl(folder / FULL):
         k = key_of(d)
-        if k not in by_key or same_run(d, by_key[k]) or by_key[k].get("_from") == FULL:
-            by_key[k] = dict(d, _from=FULL)
+        if k in from_full or k not in by_key or same_run(d, by_key[k]):
+            by_key[k] = d
+            from_full.add(k)
         else:
             stale += 1
     if stale:
         print(f"[records] {folder}: {stale} runs of {FULL} differ from those of {COMPACT} "
               f"(older or newer runs of the same seeds); {COMPACT}'s are used",
               file=sys.stderr)
-    return [{k: v for k, v in d.items() if k != "_from"} for d in by_key.values()]
+    return list(by_key.values())
 
 
 def _line(d: dict[str, Any]) -> bytes:

@@ -39,7 +39,7 @@ TIMING_ROWS = (("frontier", "frontier detect + cluster"),
 
 
 def load_runs(out: Path) -> list[dict[str, Any]]:
-    """Every run of ``out`` (``runs.jsonl``, else the compact ``runs.jsonl.gz``)."""
+    """Every run of ``out`` (:func:`bench.records.read`)."""
     return records.read(out)
 
 
@@ -210,18 +210,21 @@ def results_table(runs: list[dict[str, Any]], tours: dict[str, float]) -> list[s
 
 
 def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
-                 legacy: dict[str, dict[str, list[float]]] | None = None) -> list[str]:
+                 legacy: dict[str, Any] | None = None) -> list[str]:
     """The paper's Table I: per-module p50 / mean / p95 ms over all updates of all runs.
 
     Pooled from the runs' timing histograms (:mod:`bench.records`: percentiles within
     half a 1 % bin, means exact). A world none of whose runs has timings left (records
-    rebuilt from ``runs.csv``) takes its cells from ``legacy`` (world -> key -> [p50,
-    mean, p95], pooled when those runs' full records still existed), marked with †.
+    rebuilt from ``runs.csv``) takes its cells from ``legacy`` (the contents of
+    ``timing_legacy.json``: ``worlds``: world -> key -> [p50, mean, p95], pooled when those
+    runs' full records still existed, for the table's ``strategy``), marked with †.
     """
     strat = "paper" if any(r["strategy"] == "paper" for r in runs) else None
     sel = [r for r in runs if strat is None or r["strategy"] == strat]
     worlds = list(dict.fromkeys(r["world"] for r in sel))
-    legacy = legacy or {}
+    # old cells only under the heading of the strategy they were pooled for
+    legacy = ((legacy or {}).get("worlds") or {}
+              if (legacy or {}).get("strategy", "paper") == (strat or "all") else {})
     head = "| module | " + " | ".join(worlds) + " |"
     lines = [f"Strategy `{strat or 'all'}`; each cell p50 / mean / p95 in ms over every "
              "update of every run (frontier, selection and segmentation once per decision, "
@@ -476,10 +479,7 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
                               for p in maps)]
         L.append("")
     legacy_path = out / records.LEGACY_TIMING
-    legacy_doc = json.loads(legacy_path.read_text()) if legacy_path.is_file() else {}
-    # the cells are of the strategy of the table they were read from
-    legacy = (legacy_doc.get("worlds") if legacy_doc.get("strategy", "paper")
-              == ("paper" if any(r["strategy"] == "paper" for r in runs) else "all") else None)
+    legacy = json.loads(legacy_path.read_text()) if legacy_path.is_file() else None
     L += (["## Per-module timing (paper's Table I)", ""] + timing_table(runs, yolo, legacy)
           + [""])
     if tours_rows:

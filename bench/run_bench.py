@@ -738,10 +738,8 @@ def _row_from_dict(d: dict[str, Any]) -> dict[str, Any]:
     for k in ("coverage_pct", "explorable_area_m2"):
         if fields.get(k) is None:
             fields[k] = math.nan
-    if "timings_ms" not in d:              # compact or CSV record: its per-run percentiles
-        fields.pop("timings_ms", None)
     row = cls(**fields).summary_row()
-    if "timings_ms" not in d:
+    if "timings_ms" not in d:              # compact or CSV record: its per-run percentiles
         for key, (p50, p95) in (d.get("timing_p") or {}).items():
             row[f"{key}_ms_p50"] = p50 if p50 is not None else math.nan
             row[f"{key}_ms_p95"] = p95 if p95 is not None else math.nan

@@ -230,7 +230,8 @@ def test_timing_table_marks_worlds_pooled_over_part_of_their_runs():
                "timing_p": {"frontier": [9.0, 9.0]}}
     only_csv = {"world": "v", "strategy": "paper", "seed": 0, "record": "csv"}
     lines = report.timing_table([full, rebuilt, only_csv], None,
-                                legacy={"v": {"frontier": [4.0, 5.0, 6.0]}})
+                                legacy={"strategy": "paper",
+                                        "worlds": {"v": {"frontier": [4.0, 5.0, 6.0]}}})
     row = next(ln for ln in lines if ln.startswith("| frontier detect + cluster |"))
     cells = [c.strip() for c in row.strip("|").split("|")][1:]
     p50, mean, _ = records.hist_stats(records.histogram([1.0, 2.0, 3.0]))
