@@ -27,6 +27,10 @@ Usage::
     .venv/bin/python bench/run_bench.py --runs 3 --worlds house --strategies paper,nearest
     .venv/bin/python bench/run_bench.py --report-only --out out/bench
     .venv/bin/python bench/run_bench.py --ros 2 --runs 2 --worlds small_house
+
+Stopping: SIGINT/SIGTERM stop at once (the runs in flight are lost); ``kill -USR1 PID``
+finishes the runs in flight and starts no new ones. Either way the runs so far are
+reported, the part is marked interrupted, and ``--resume`` continues.
 """
 
 from __future__ import annotations
@@ -423,6 +427,8 @@ def main(argv: list[str] | None = None) -> int:
     results: list[dict[str, Any]] = []
     areas: dict[str, float] = {}
     old_term = signal.signal(signal.SIGTERM, _raise_interrupt)
+    _DRAIN[0] = False
+    old_usr1 = signal.signal(signal.SIGUSR1, _request_drain)
     try:
         # Worlds, ground truths and explorable areas before the workers fork (they
         # inherit the cache).
@@ -446,13 +452,15 @@ def main(argv: list[str] | None = None) -> int:
                 except KeyboardInterrupt as err:
                     interrupted = int(err.args[0]) if err.args else int(signal.SIGINT)
                     pool.terminate()
-                    print(f"\n[bench] interrupted after {counter[0]} runs: reporting what "
+                    how = ("stopped" if interrupted == signal.SIGUSR1 else "interrupted")
+                    print(f"\n[bench] {how} after {counter[0]} runs: reporting what "
                           "ran (continue with --resume)", file=sys.stderr)
     except KeyboardInterrupt as err:      # before the pool existed
         interrupted = int(err.args[0]) if err.args else int(signal.SIGINT)
         print("\n[bench] interrupted before any run", file=sys.stderr)
     finally:
         signal.signal(signal.SIGTERM, old_term)
+        signal.signal(signal.SIGUSR1, old_usr1)
     tour_by_world = {t["world"]: t["tour_m"] for t in tours}
     rows = []
     order = {(s, st): i for i, (s, st) in enumerate((s, st) for s in specs for st in strategies)}
@@ -540,7 +548,7 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
         for d in results:
             jl.write(json.dumps(d) + "\n")
         jl.flush()
-        for d in pool.imap_unordered(_run_task, tasks):
+        for d in _run_drainable(pool, a.jobs, tasks):
             # an interrupt waits until the run is in both files and counted
             mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
             try:
@@ -554,6 +562,49 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
             prog.update(f"{d['world']}/{d['strategy']}/{d['seed']}: "
                         f"{d['coverage_pct'] or 0:.1f} % {d['stop_reason']} "
                         f"({d['wall_time_s']:.0f} s)")
+
+
+def _run_drainable(pool: Any, jobs: int, tasks: list[tuple]) -> Any:
+    """Yield the results of ``tasks`` as they finish, at most ``jobs`` in flight.
+
+    SIGUSR1 makes it start no further task and end once the ones in flight have finished
+    (raising ``KeyboardInterrupt(SIGUSR1)`` then, so the caller reports like after an
+    interrupt): a long benchmark is stopped without losing the work of its running runs.
+    The next task is handed out before a result is yielded, so a run that is in the
+    output files is never the last one started.
+    """
+    import queue
+
+    done: queue.Queue = queue.Queue()
+    todo = list(tasks)
+    in_flight = 0
+    said = False
+
+    def top_up() -> int:
+        n = 0
+        while todo and in_flight + n < max(1, jobs) and not _DRAIN[0]:
+            pool.apply_async(_run_task, (todo.pop(0),), callback=lambda r: done.put((r, None)),
+                             error_callback=lambda e: done.put((None, e)))
+            n += 1
+        return n
+
+    in_flight += top_up()
+    while in_flight:
+        if _DRAIN[0] and not said:
+            said = True
+            print(f"\n[bench] SIGUSR1: finishing the {in_flight} run(s) in flight, starting "
+                  "no new ones", file=sys.stderr)
+        try:
+            result, err = done.get(timeout=0.2)
+        except queue.Empty:
+            continue
+        in_flight -= 1
+        if err is not None:
+            raise err
+        in_flight += top_up()
+        yield result
+    if _DRAIN[0] and todo:
+        raise KeyboardInterrupt(int(signal.SIGUSR1))
 
 
 #: Settings that parts of earlier versions did not record, with the value they ran on.
@@ -584,6 +635,14 @@ def _code_version() -> str:
     return (rev or "unknown") + ("+modified" if dirty and rev else "")
 
 
+#: Set by SIGUSR1: start no new run (see :func:`_run_drainable`).
+_DRAIN = [False]
+
+
+def _request_drain(signum: int, frame: Any) -> None:
+    _DRAIN[0] = True
+
+
 def _raise_interrupt(signum: int, frame: Any) -> None:
     """SIGTERM in the main process: stop like Ctrl-C (report what has run)."""
     raise KeyboardInterrupt(signum)
@@ -592,6 +651,7 @@ def _raise_interrupt(signum: int, frame: Any) -> None:
 def _worker_init() -> None:
     """Workers leave interrupts to the main process (which terminates them)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGUSR1, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 

@@ -116,6 +116,42 @@ def test_sigterm_reports_what_ran_and_resume_finishes(tmp_path):
     assert "Run in 2 parts" in text and "(interrupted)" in text
 
 
+def test_sigusr1_finishes_the_run_in_flight_and_starts_no_new_one(tmp_path):
+    import os
+    import signal
+    import subprocess
+    import time
+
+    out = tmp_path / "drain"
+    cmd = [sys.executable, str(ROOT / "bench" / "run_bench.py"), *ARGS, "--runs", "5",
+           "--out", str(out), "--md", str(out / "B.md")]
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    jl = out / "runs.jsonl"
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 120:
+        if jl.is_file() and jl.read_text().count("\n") >= 1:
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGUSR1)
+    _, err = proc.communicate(timeout=120)
+    if proc.returncode == 0:
+        pytest.skip("the benchmark finished before the signal")
+    assert proc.returncode == 128 + signal.SIGUSR1, err
+    assert "finishing the 1 run(s) in flight" in err
+    runs = _runs(out)
+    # run 1 was written after run 2 had been started: run 2 was finished, none after it
+    if len(runs) < 5:
+        assert sorted(r["seed"] for r in runs) == list(range(len(runs)))
+    assert len(runs) == 2, err
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["parts"][0]["interrupted"] is True and meta["parts"][0]["runs_run"] == 2
+    assert run_bench.main(ARGS + ["--runs", "3", "--out", str(out), "--md", "",
+                                  "--resume"]) == 0
+    assert sorted(r["seed"] for r in _runs(out)) == [0, 1, 2]
+
+
 def test_resume_refuses_other_settings_and_keeps_a_copy_of_dropped_runs(first, tmp_path):
     out, _ = first
     res = _copy_results(out, tmp_path / "res2")
