@@ -543,7 +543,7 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
         for row in ros.get("rows", []):
             L.append(f"| {row['seed']} | {row['mode']} | {row['stop']} | "
                      f"{_fmt(row.get('coverage_pct'))} | {_fmt(row.get('sim_time_s'))} | "
-                     f"{_fmt(row.get('path_length_m'))} | {row.get('collisions', '-')} | "
+                     f"{_fmt(row.get('path_length_m'))} | {_count(row.get('collisions', '-'))} | "
                      f"{row.get('goals', '-')} | {row.get('objects', '-')} | "
                      f"{row.get('object_frames', '-')} |")
         L.append("")
@@ -563,6 +563,11 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
 
 def _fmt(v: Any) -> str:
     return f"{v:.1f}" if isinstance(v, (int, float)) and math.isfinite(v) else str(v)
+
+
+def _count(v: Any) -> str:
+    """A count as an integer (the ROS metrics topic carries counts as floats)."""
+    return str(int(v)) if isinstance(v, float) and v.is_integer() else str(v)
 
 
 def main(argv: list[str] | None = None) -> int:
