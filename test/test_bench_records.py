@@ -272,6 +272,9 @@ def test_targets_answer_the_issue_questions_in_words():
             "`explore_lite` never reached 95 % and `paper` did.") in text
     assert ("against `nearest`: `paper` is faster in 1 of the 2 worlds where both reached "
             "95 %; ratio median 0.85×, from 0.50× (a) to 1.20× (b).") in text
+    assert ("against `paper_noobj`: `paper` is faster in 1 of the 2 worlds where both "
+            "reached 95 % and within 1 % in 1; ratio median 0.97×") in text
+    assert "against `paper_noseg`" not in text                      # no such runs
     assert ("`paper` 0/4 runs, `paper_noobj` 0/4 runs, `explore_lite` 2/4 runs in 1 worlds, "
             "`nearest` 1/4 runs in 1 worlds.") in text
     assert ("Collisions in the 1 worlds with furniture the object costmap found (a): 0.00 per "
