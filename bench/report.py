@@ -446,6 +446,9 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
                          + (f", code {part['code']}" if part.get("code") and len(codes) != 1
                             else "")
                          + (" (interrupted)" if part.get("interrupted") else "")
+                         + (f" ({len(part['failed'])} runs failed: "
+                            + "; ".join(f"`{f}`" for f in part["failed"]) + ")"
+                            if part.get("failed") else "")
                          + (f" (run in `{part['merged_from']}`, added with `--merge`)"
                             if part.get("merged_from") else "")
                          + f": `{part.get('command')}`")

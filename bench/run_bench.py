@@ -423,6 +423,7 @@ def main(argv: list[str] | None = None) -> int:
                   f"this one on {meta['code']} (listed in the report)", file=sys.stderr)
     interrupted: int = 0          # the signal that stopped the runs, 0 = none
     counter = [0]                 # runs run so far
+    failed: list[str] = []        # runs that raised: "world/strategy/seed: error"
     tours: list[dict[str, Any]] = []
     results: list[dict[str, Any]] = []
     areas: dict[str, float] = {}
@@ -448,7 +449,8 @@ def main(argv: list[str] | None = None) -> int:
             ctx = mp.get_context("fork")
             with ctx.Pool(a.jobs, initializer=_worker_init, maxtasksperchild=20) as pool:
                 try:
-                    _run_all(a, out, specs, strategies, areas, pool, tours, results, counter)
+                    _run_all(a, out, specs, strategies, areas, pool, tours, results, counter,
+                             failed)
                 except KeyboardInterrupt as err:
                     interrupted = int(err.args[0]) if err.args else int(signal.SIGINT)
                     pool.terminate()
@@ -486,6 +488,8 @@ def main(argv: list[str] | None = None) -> int:
             "runs_run": counter[0], "wall_s": round(time.monotonic() - t_start, 1)}
     if interrupted:
         part["interrupted"] = True
+    if failed:
+        part["failed"] = failed
     parts = (old_meta.get("parts") or ([_part_of(old_meta)] if old_meta else [])) + [part]
     meta["parts"] = parts
     meta["wall_s"] = round(sum(float(p.get("wall_s") or 0.0) for p in parts), 1)
@@ -493,13 +497,17 @@ def main(argv: list[str] | None = None) -> int:
     report.write_all(out, Path(a.md) if a.md else None, command=command)
     print(f"[bench] {len(results)} runs in {_hms(meta['wall_s'])}; results in {out}"
           + (f", summary in {a.md}" if a.md else ""), file=sys.stderr)
-    return 128 + interrupted if interrupted else 0
+    if failed:
+        print(f"[bench] {len(failed)} runs failed (not in the results; --resume runs them "
+              "again): " + "; ".join(failed), file=sys.stderr)
+    return 128 + interrupted if interrupted else (1 if failed else 0)
 
 
 def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: list[str],
              areas: dict[str, float], pool: Any, tours: list[dict[str, Any]],
-             results: list[dict[str, Any]], counter: list[int]) -> None:
-    """Tours and runs, filling ``tours`` and ``results``; ``counter[0]`` counts the runs
+             results: list[dict[str, Any]], counter: list[int], failed: list[str]) -> None:
+    """Tours and runs, filling ``tours`` and ``results`` (and ``failed`` with the runs
+    that raised); ``counter[0]`` counts the runs
     run (read it after an interrupt)."""
     from bench import report
 
@@ -548,7 +556,7 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
         for d in results:
             jl.write(json.dumps(d) + "\n")
         jl.flush()
-        for d in _run_drainable(pool, a.jobs, tasks):
+        for d in _run_drainable(pool, a.jobs, tasks, failed):
             # an interrupt waits until the run is in both files and counted
             mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
             try:
@@ -564,8 +572,13 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
                         f"({d['wall_time_s']:.0f} s)")
 
 
-def _run_drainable(pool: Any, jobs: int, tasks: list[tuple]) -> Any:
+def _run_drainable(pool: Any, jobs: int, tasks: list[tuple],
+                   failed: list[str] | None = None) -> Any:
     """Yield the results of ``tasks`` as they finish, at most ``jobs`` in flight.
+
+    A run that raises is reported on stderr (with its traceback) and added to ``failed``
+    as ``"world/strategy/seed: error"``; the others go on (it is not in the output files,
+    so ``--resume`` runs it again).
 
     SIGUSR1 makes it start no further task and end once the ones in flight have finished
     (raising ``KeyboardInterrupt(SIGUSR1)`` then, so the caller reports like after an
@@ -583,8 +596,9 @@ def _run_drainable(pool: Any, jobs: int, tasks: list[tuple]) -> Any:
     def top_up() -> int:
         n = 0
         while todo and in_flight + n < max(1, jobs) and not _DRAIN[0]:
-            pool.apply_async(_run_task, (todo.pop(0),), callback=lambda r: done.put((r, None)),
-                             error_callback=lambda e: done.put((None, e)))
+            task = todo.pop(0)
+            pool.apply_async(_run_task, (task,), callback=lambda r: done.put((r, None, None)),
+                             error_callback=lambda e, t=task: done.put((None, e, t)))
             n += 1
         return n
 
@@ -595,14 +609,21 @@ def _run_drainable(pool: Any, jobs: int, tasks: list[tuple]) -> Any:
             print(f"\n[bench] SIGUSR1: finishing the {in_flight} run(s) in flight, starting "
                   "no new ones", file=sys.stderr)
         try:
-            result, err = done.get(timeout=0.2)
+            result, err, task = done.get(timeout=0.2)
         except queue.Empty:
             continue
         in_flight -= 1
-        if err is not None:
-            raise err
         in_flight += top_up()
-        yield result
+        if err is None:
+            yield result
+            continue
+        name = f"{task[0]}/{task[1]}/{task[2]}"
+        cause = getattr(err, "__cause__", None)     # the worker's traceback, as text
+        print(f"\n[bench] run {name} failed: {type(err).__name__}: {err}"
+              + (f"\n{cause}" if cause is not None else ""), file=sys.stderr)
+        if failed is None:
+            raise err
+        failed.append(f"{name}: {type(err).__name__}: {err}")
     if _DRAIN[0] and todo:
         raise KeyboardInterrupt(int(signal.SIGUSR1))
 

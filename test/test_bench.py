@@ -144,6 +144,30 @@ def test_sigusr1_finishes_the_run_in_flight_and_starts_no_new_one(tmp_path):
     assert sorted(r["seed"] for r in _runs(out)) == [0, 1, 2]
 
 
+def test_a_failing_run_is_reported_and_the_others_go_on(tmp_path, monkeypatch):
+    real = run_bench.run_exploration
+
+    def flaky(world, strategy, seed, **kw):
+        if seed == 1:
+            raise ValueError("boom")
+        return real(world, strategy, seed, **kw)
+
+    monkeypatch.setattr(run_bench, "run_exploration", flaky)   # the fork inherits it
+    out = tmp_path / "fail"
+    assert run_bench.main(ARGS + ["--runs", "3", "--out", str(out), "--md",
+                                  str(out / "B.md")]) == 1
+    assert sorted(r["seed"] for r in _runs(out)) == [0, 2]
+    part = json.loads((out / "meta.json").read_text())["parts"][0]
+    assert part["failed"] == ["small_house/nearest/1: ValueError: boom"]
+    assert part["runs_run"] == 2 and "interrupted" not in part
+    monkeypatch.setattr(run_bench, "run_exploration", real)
+    assert run_bench.main(ARGS + ["--runs", "3", "--out", str(out), "--md", str(out / "B.md"),
+                                  "--resume"]) == 0
+    assert sorted(r["seed"] for r in _runs(out)) == [0, 1, 2]
+    assert "(1 runs failed: `small_house/nearest/1: ValueError: boom`)" in (
+        out / "B.md").read_text()
+
+
 def test_resume_refuses_other_settings_and_keeps_a_copy_of_dropped_runs(first, tmp_path):
     out, _ = first
     res = _copy_results(out, tmp_path / "res2")

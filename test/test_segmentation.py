@@ -301,3 +301,26 @@ def test_random_maps_invariants(seed):
     lab = segment(g, p)
     assert_coverage(g, lab, p)
     assert region_ids(lab) == list(range(1, len(region_ids(lab)) + 1))
+
+
+def test_cut_sets_no_duplicate_when_nothing_resolves_a_notch(monkeypatch):
+    """A notch whose cuts to two other notches resolve nothing keeps its best single cut
+    once: it is among the single cuts already (this used to compare the cut sets' numpy
+    end points with ``in`` and raise "truth value of an array is ambiguous" in a maze)."""
+    from explore_seg.core import dude
+
+    ring = dude._Ring(np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]]),
+                      np.zeros((4, 1, 2), np.int32), False)
+    notches = [dude._Notch(0, k, np.array(p, float), 1.0)
+               for k, p in enumerate([(0.0, 0.0), (10.0, 0.0), (10.0, 10.0)])]
+    far = [dude._End(np.array([10.0, 0.0]), 0, 10.0, 1, 10.0),    # weight 1/10
+           dude._End(np.array([10.0, 10.0]), 0, 20.0, 2, 5.0)]    # weight 1/5: the best
+    monkeypatch.setattr(dude, "_far_ends",
+                        lambda v, vi, *a: (list(far), []) if vi == 0 else ([], []))
+    monkeypatch.setattr(dude, "_segments_clear", lambda vis, border, P0, P1, w:
+                        np.ones(len(P1), bool))
+    monkeypatch.setattr(dude, "_resolves", lambda v, ends, tau: False)
+    st = dude.DudeSettings(tau_px=2.0, simplify_eps_px=1.0, min_hole_area_px=1.0,
+                           min_component_px=1, max_rounds=1)
+    sets = dude._cut_sets(notches, [ring], np.ones((12, 12), bool), np.zeros((12, 12), bool), st)
+    assert [(s.owner, s.far, round(s.weight, 3)) for s in sets] == [(0, {1}, 0.1), (0, {2}, 0.2)]

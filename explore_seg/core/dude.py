@@ -620,14 +620,16 @@ def _cut_sets(notches: list[_Notch], rings: list[_Ring], vis: npt.NDArray[np.boo
             sets.append(_CutSet(vi, [(v.pt, best_pair[1].pt), (v.pt, best_pair[2].pt)],
                                 resolved, w, far))
             continue
-        # nothing resolves v: keep the single cut with the best weight anyway
-        best = None
+        # nothing resolves v: keep the single cut with the best weight anyway (a cut to a
+        # notch is in ``sets`` already, with this weight: every single resolved nothing)
+        best, best_end = None, None
         for res, e in singles_res:
             resolved, w = weight_of([e], False)
             if best is None or w > best.weight:
                 best = _CutSet(vi, [(v.pt, e.pt)], resolved, w,
                                {e.notch} if e.notch >= 0 else set())
-        if best is not None and best not in sets:
+                best_end = e
+        if best is not None and best_end is not None and best_end.notch < 0:
             sets.append(best)
     return sets
 
