@@ -24,7 +24,7 @@ from explore_seg import convert
 from explore_seg.core.frontiers import Frontier, FrontierParams, find_frontiers, object_obstacles, \
     traversable_mask
 from explore_seg.core.grid import GridMap
-from explore_seg.node_util import WarnThrottle, run
+from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import map_qos
 
@@ -123,6 +123,7 @@ class FrontierDetectorNode(Node):
         self.frontiers: list[Frontier] = []
         self.runs = 0
         self._warn = WarnThrottle(self, _WARN_PERIOD_S)
+        self.failures = 0          # cycles lost to an exception (node_util.failsafe)
 
         self._pub_cells = self.create_publisher(PointCloud2, "frontiers", 1)
         self._pub_groups = self.create_publisher(PointCloud2, "frontiers/groups", 1)
@@ -166,6 +167,7 @@ class FrontierDetectorNode(Node):
         except ValueError as err:
             self._warn("object_costmap", f"dropped object_costmap: {err}")
 
+    @failsafe("frontier detection")
     def _tick(self) -> None:
         if self._grid is None:
             self._state = State.WAITING_FOR_MAP

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import functools
 import math
+import os
 import time
+import traceback
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence, TypeVar
 
 import rclpy
 from rclpy.executors import (ExternalShutdownException, MultiThreadedExecutor,
@@ -88,3 +91,48 @@ class WarnThrottle:
         if now - self._last.get(key, -math.inf) >= self._period_s:
             self._last[key] = now
             self._logger.warn(msg)
+
+
+#: Set to 1 (the tests do) to let an exception in a node's periodic work propagate
+#: instead of being logged and survived (:func:`failsafe`).
+STRICT_ENV = "EXPLORE_SEG_STRICT"
+#: Seconds between two logged failures of the same work in one node.
+FAILURE_LOG_PERIOD_S = 10.0
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def failsafe(what: str, on_error: str | None = None) -> Callable[[_F], _F]:
+    """Decorator for a node's periodic work (a timer callback method): an exception in
+    it is logged as an error with its traceback (once per :data:`FAILURE_LOG_PERIOD_S`),
+    counted in the node's ``failures`` attribute, and that cycle is skipped; the node
+    keeps its state and runs the next cycle. One bad map or an algorithm bug on one
+    input then costs a cycle instead of the whole exploration (all nodes of ``explorer``
+    share one process). ``on_error`` names a method called after a failure (e.g. to
+    drop a half-updated incremental state). With ``EXPLORE_SEG_STRICT=1`` the exception
+    propagates (tests).
+    """
+    def deco(fn: _F) -> _F:
+        @functools.wraps(fn)
+        def wrapper(self: Node, *args: Any, **kwargs: Any) -> Any:
+            try:
+                return fn(self, *args, **kwargs)
+            except Exception as err:
+                if os.environ.get(STRICT_ENV, "") not in ("", "0"):
+                    raise
+                n = getattr(self, "failures", 0) + 1
+                self.failures = n
+                now = time.monotonic()
+                last = getattr(self, "_failure_logged", {})
+                if now - last.get(what, -math.inf) >= FAILURE_LOG_PERIOD_S:
+                    last[what] = now
+                    self._failure_logged = last
+                    self.get_logger().error(
+                        f"{what} failed ({n} failure(s) so far); skipped this cycle, the "
+                        f"node keeps running: {type(err).__name__}: {err}\n"
+                        + traceback.format_exc())
+                if on_error is not None:
+                    getattr(self, on_error)()
+                return None
+        return wrapper  # type: ignore[return-value]
+    return deco

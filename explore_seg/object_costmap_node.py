@@ -38,7 +38,7 @@ from explore_seg.core.grid import GridMap, quaternion_from_yaw
 from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D, ObjectMap,
                                       ObjectParams, load_priors, parse_class_ids,
                                       process_frame, WallMask, wall_mask)
-from explore_seg.node_util import WarnThrottle, config_file, run
+from explore_seg.node_util import WarnThrottle, config_file, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, POSE_QOS, SENSOR_QOS, map_qos
 
@@ -113,6 +113,7 @@ class ObjectCostmapNode(Node):
         #: (ROS time ns, frames_received, frames_processed) at the start of the lag window.
         self._lag_mark: tuple[int, int, int] | None = None
         self._warn = WarnThrottle(self, _WARN_PERIOD_S)
+        self.failures = 0          # cycles lost to an exception (node_util.failsafe)
         self._warn_lag = WarnThrottle(self, _LAG_WARN_PERIOD_S)
 
         self._pub_grid = self.create_publisher(OccupancyGrid, "object_costmap", MAP_QOS)
@@ -222,6 +223,7 @@ class ObjectCostmapNode(Node):
         self._objects.note_robot_position(pose[0], pose[1])   # swept path: cleared
 
     # ------------------------------------------------------------------- tick
+    @failsafe("object costmap update")
     def _tick(self) -> None:
         if self._info is None:
             self._state = State.WAITING_FOR_CAMERA_INFO

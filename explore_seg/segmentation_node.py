@@ -33,7 +33,7 @@ from explore_seg import convert
 from explore_seg.core.grid import GridMap
 from explore_seg.core.segmentation import (IncrementalSegmenter, SegmentationNodeParams,
                                            SegmentationParams)
-from explore_seg.node_util import WarnThrottle, run
+from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, map_qos
 
@@ -71,6 +71,7 @@ class SegmentationNode(Node):
         self._latest: OccupancyGrid | None = None
         self._state = State.WAITING_FOR_MAP
         self._warn = WarnThrottle(self, _WARN_PERIOD_S)
+        self.failures = 0          # cycles lost to an exception (node_util.failsafe)
         #: Number of maps segmented and of maps skipped as stale.
         self.processed = 0
         self.skipped = 0
@@ -116,11 +117,16 @@ class SegmentationNode(Node):
             self.destroy_timer(self._timer)
             self._timer = self.create_timer(new.process_period_s, self._tick)
 
+    def _restart_segmenter(self) -> None:
+        """After a failed update: the next one is a full run (no half-updated state)."""
+        self._seg.set_params(self._seg.params)
+
     def _on_map(self, msg: OccupancyGrid) -> None:
         if self._latest is not None:
             self.skipped += 1
         self._latest = msg
 
+    @failsafe("segmentation update", on_error="_restart_segmenter")
     def _tick(self) -> None:
         msg, self._latest = self._latest, None
         if msg is None:

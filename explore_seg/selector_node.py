@@ -37,7 +37,7 @@ from explore_seg.core.frontiers import (Frontier, find_frontiers, object_obstacl
                                          traversable_mask)
 from explore_seg.core.grid import GridMap, resample_array
 from explore_seg.core.selection import Action, Goal, GoalManager, PathGraphs, SelectionParams
-from explore_seg.node_util import WarnThrottle, run
+from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS, map_qos
 
@@ -85,6 +85,7 @@ class TargetSelectorNode(Node):
         self._last_goal_pub_s = -math.inf
         self._region_warned = False
         self._warn = WarnThrottle(self, _WARN_PERIOD_S)
+        self.failures = 0          # cycles lost to an exception (node_util.failsafe)
         self.last_reason = ""
         self.goals_sent = 0
 
@@ -266,6 +267,7 @@ class TargetSelectorNode(Node):
         self._dirty = False
         return t1 - t0
 
+    @failsafe("goal selection")
     def _tick(self) -> None:
         if self._state is State.STOPPED:
             return

@@ -19,6 +19,9 @@ from typing import Callable
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.setdefault("ROS_DOMAIN_ID", str(20 + os.getpid() % 70))
 os.environ.setdefault("ROS_LOG_DIR", tempfile.mkdtemp(prefix="explore_seg_roslog_"))
+# An exception in a node's periodic work fails the test instead of being logged and
+# survived (explore_seg.node_util.failsafe); test_failsafe_* switch it off.
+os.environ.setdefault("EXPLORE_SEG_STRICT", "1")
 
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:

@@ -75,3 +75,53 @@ def test_parameter_change_is_validated(ros, setup):
     assert node.segmenter.params.tau_m == 3.0
     bad = node.set_parameters([Parameter("tau_m", value=-1.0)])
     assert not bad[0].successful and "tau_m" in bad[0].reason
+
+
+def test_failsafe_a_failing_update_is_logged_and_the_node_goes_on(ros, setup, monkeypatch):
+    """An exception in the segmenter costs one cycle (logged, counted); the node keeps
+    its last regions, restarts the segmenter from scratch and segments the next map."""
+    node, pub, got = setup
+    monkeypatch.delenv("EXPLORE_SEG_STRICT")
+    seg = node.segmenter
+    real = seg.update
+    calls = []
+
+    def broken(grid):
+        calls.append(1)
+        raise ValueError("boom")
+
+    monkeypatch.setattr(seg, "update", broken)
+    grid = two_rooms(door_at_end=True)
+    pub.publish(convert.grid_to_msg(grid, stamp=1_000_000_000))
+    ros.spin_until(lambda: node.failures == 1, what="the failed update")
+    assert node.processed == 0 and not got["regions"] and seg._force_full  # noqa: SLF001
+    monkeypatch.setattr(seg, "update", real)
+    pub.publish(convert.grid_to_msg(grid, stamp=2_000_000_000))
+    ros.spin_until(lambda: got["regions"], what="regions after the failure")
+    assert node.processed == 1 and node.failures == 1 and len(calls) == 1
+
+
+def test_failsafe_strict_mode_lets_the_exception_through(monkeypatch):
+    from explore_seg.node_util import failsafe
+
+    class Fake:
+        def get_logger(self):
+            raise AssertionError("not logged in strict mode")
+
+        @failsafe("work")
+        def tick(self):
+            raise ValueError("boom")
+
+    monkeypatch.setenv("EXPLORE_SEG_STRICT", "1")
+    with pytest.raises(ValueError, match="boom"):
+        Fake().tick()
+
+
+def test_failsafe_guards_the_periodic_work_of_every_node():
+    from explore_seg.frontier_node import FrontierDetectorNode
+    from explore_seg.object_costmap_node import ObjectCostmapNode
+    from explore_seg.segmentation_node import SegmentationNode
+    from explore_seg.selector_node import TargetSelectorNode
+
+    for cls in (FrontierDetectorNode, ObjectCostmapNode, SegmentationNode, TargetSelectorNode):
+        assert getattr(cls._tick, "__wrapped__", None) is not None, cls.__name__
