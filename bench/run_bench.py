@@ -572,8 +572,7 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
                         f"({d['wall_time_s']:.0f} s)")
 
 
-def _run_drainable(pool: Any, jobs: int, tasks: list[tuple],
-                   failed: list[str] | None = None) -> Any:
+def _run_drainable(pool: Any, jobs: int, tasks: list[tuple], failed: list[str]) -> Any:
     """Yield the results of ``tasks`` as they finish, at most ``jobs`` in flight.
 
     A run that raises is reported on stderr (with its traceback) and added to ``failed``
@@ -621,8 +620,6 @@ def _run_drainable(pool: Any, jobs: int, tasks: list[tuple],
         cause = getattr(err, "__cause__", None)     # the worker's traceback, as text
         print(f"\n[bench] run {name} failed: {type(err).__name__}: {err}"
               + (f"\n{cause}" if cause is not None else ""), file=sys.stderr)
-        if failed is None:
-            raise err
         failed.append(f"{name}: {type(err).__name__}: {err}")
     if _DRAIN[0] and todo:
         raise KeyboardInterrupt(int(signal.SIGUSR1))

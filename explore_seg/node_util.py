@@ -87,10 +87,20 @@ class WarnThrottle:
 
     def __call__(self, key: str, msg: str) -> None:
         """Log ``msg`` unless a warning of cause ``key`` was logged less than a period ago."""
-        now = time.monotonic()
-        if now - self._last.get(key, -math.inf) >= self._period_s:
-            self._last[key] = now
+        if self._due(key):
             self._logger.warn(msg)
+
+    def error(self, key: str, msg: str) -> None:
+        """The same at error level."""
+        if self._due(key):
+            self._logger.error(msg)
+
+    def _due(self, key: str) -> bool:
+        now = time.monotonic()
+        if now - self._last.get(key, -math.inf) < self._period_s:
+            return False
+        self._last[key] = now
+        return True
 
 
 #: Set to 1 (the tests do) to let an exception in a node's periodic work propagate
@@ -120,17 +130,13 @@ def failsafe(what: str, on_error: str | None = None) -> Callable[[_F], _F]:
             except Exception as err:
                 if os.environ.get(STRICT_ENV, "") not in ("", "0"):
                     raise
-                n = getattr(self, "failures", 0) + 1
-                self.failures = n
-                now = time.monotonic()
-                last = getattr(self, "_failure_logged", {})
-                if now - last.get(what, -math.inf) >= FAILURE_LOG_PERIOD_S:
-                    last[what] = now
-                    self._failure_logged = last
-                    self.get_logger().error(
-                        f"{what} failed ({n} failure(s) so far); skipped this cycle, the "
-                        f"node keeps running: {type(err).__name__}: {err}\n"
-                        + traceback.format_exc())
+                self.failures = getattr(self, "failures", 0) + 1
+                log = getattr(self, "_failure_log", None)
+                if log is None:
+                    log = self._failure_log = WarnThrottle(self, FAILURE_LOG_PERIOD_S)
+                log.error(what, f"{what} failed ({self.failures} failure(s) so far); skipped "
+                                f"this cycle, the node keeps running: {type(err).__name__}: "
+                                f"{err}\n" + traceback.format_exc())
                 if on_error is not None:
                     getattr(self, on_error)()
                 return None
