@@ -3,7 +3,7 @@
 Conventions (shared by every module of the package):
 
 * ``data[row, col]`` with ``row`` growing with world ``y`` and ``col`` with world ``x``
-  (the layout of ``nav_msgs/OccupancyGrid.data`` reshaped to ``(height, width)``).
+  (the layout of an OccupancyGrid message's ``data`` reshaped to ``(height, width)``).
   Image files (PGM/PNG, row 0 at the top) are flipped once when they are read.
 * Values: ``-1`` unknown, ``0..100`` occupancy probability in percent.
 * Cell ``(0, 0)``'s lower-left corner is at ``origin_xy_m``, the grid being turned by

@@ -86,7 +86,7 @@ class ObjectParams:
         "Largest stamp difference between the depth image and the robot pose used for it; "
         "frames without a pose this close are dropped", "s"))
     pose_topic_type: str = field(default="odom", metadata=_doc(
-        "Where the robot pose in the map frame comes from: 'odom' (nav_msgs/Odometry on "
+        "Where the robot pose in the map frame comes from: 'odom' (Odometry on "
         "'odom') or 'pose' (PoseWithCovarianceStamped on 'pose')", read_only=True))
     map_frame: str = field(default="map", metadata=_doc(
         "Frame of the published cloud and markers"))

@@ -128,7 +128,7 @@ class SelectionParams:
         "doc": "drive back to the start pose when exploration is done"})
     rate_hz: float = field(default=1.0, metadata={"doc": "decision rate", "unit": "Hz"})
     pose_topic_type: str = field(default="odom", metadata={
-        "doc": "robot pose source: odom (nav_msgs/Odometry on 'odom', pose in the map "
+        "doc": "robot pose source: odom (Odometry on 'odom', pose in the map "
                "frame) | pose (PoseWithCovarianceStamped on 'pose')"})
     pose_timeout_s: float = field(default=5.0, metadata={
         "doc": "a pose older than this is not used", "unit": "s"})
