@@ -303,7 +303,8 @@ class TargetSelectorNode(Node):
                 self._warn("robot_blocked", f"robot cell {robot_rc} is not passable and has "
                                             "no passable cell nearby: no new goals")
             else:
-                dist = graph.distances(robot_rc, self.frontiers)
+                dist = graph.distances(robot_rc, self.frontiers,
+                                       self._manager.excluded(self.frontiers))
         result = self._manager.step(self._now_s(), (x, y), grid, self.frontiers, dist,
                                     self._labels, robot_rc)
         t1 = time.perf_counter()

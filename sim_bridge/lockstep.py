@@ -646,7 +646,8 @@ def run_exploration(world: World, strategy: str, seed: int, *,
                 graph_key = key
             x, y, _ = engine.pose
             robot_rc = grid.world_to_cell(x, y)
-            dist = graph.distances(robot_rc, frontiers) if grid.in_bounds(*robot_rc) else None
+            dist = (graph.distances(robot_rc, frontiers, manager.excluded(frontiers))
+                    if grid.in_bounds(*robot_rc) else None)
             use_labels = labels if (labels is not None and labels.shape == grid.shape) else None
             old_goal = manager.goal
             black_before = manager.blacklist

@@ -479,3 +479,49 @@ def test_blacklist_retried_once_before_done():
     assert [a.action for a in actions[:2]] == [Action.WAIT, Action.WAIT]
     assert "blacklist cleared" in actions[1].reason and m.blacklist == ()
     assert actions[3].action is Action.DONE and m.done
+
+
+# The robot's room (left) has a frontier F1 at its top; a doorway (rows 3-5 of the wall at
+# col 8) is still unknown, so the pocket seen through it and its frontier F2 (col 14) are
+# reachable only across unknown cells. The doorway's own 3 frontier cells are too few for
+# a group.
+HIDDEN_POCKET = """
+####################
+#????...#.....?????#
+#.......#.....?????#
+#.......?.....?????#
+#...R...?.....?????#
+#.......?.....?????#
+#.......#.....?????#
+#.......#.....?????#
+####################
+"""
+
+
+def test_blacklisted_reachable_frontier_does_not_hide_one_behind_unknown_cells():
+    from explore_seg.core.selection import PathGraphs
+    g, marks = grid_from_ascii(HIDDEN_POCKET, resolution_m=RES)
+    robot = marks["R"][0]
+    params = SelectionParams(strategy="nearest", done_confirmations=1, blacklist_retries=0,
+                             **{**BASE, "min_group_size_cells": 4})
+    fr = find_frontiers(g, None, params.frontier_params())
+    top = [i for i, f in enumerate(fr) if f.centroid_rc[1] < 8]
+    pocket = [i for i, f in enumerate(fr) if f.centroid_rc[1] > 12]
+    assert len(fr) == 2 and len(top) == len(pocket) == 1
+    graphs = PathGraphs(g, None, params)
+    d = graphs.distances(robot, fr)
+    assert np.isfinite(d[top[0]]) and np.isinf(d[pocket[0]])   # known space only
+    m = GoalManager(params)
+    m.add_to_blacklist(fr[top[0]].point_xy_m)
+    xy = g.cells_to_world(*robot)
+    # Before the fix the reachable (blacklisted) F1 kept the fallback off: DONE at 0 %.
+    d = graphs.distances(robot, fr, m.excluded(fr))
+    assert np.isfinite(d[pocket[0]])
+    res = m.step(0.0, xy, g, fr, d, None, robot)
+    assert res.action is Action.NEW_GOAL
+    assert res.goal.xy_m == pytest.approx(fr[pocket[0]].point_xy_m)
+    # Without the exclusion mask, the old behaviour: no candidate, DONE.
+    m2 = GoalManager(params)
+    m2.add_to_blacklist(fr[top[0]].point_xy_m)
+    assert m2.step(0.0, xy, g, fr, graphs.distances(robot, fr), None, robot).action \
+        is Action.DONE

@@ -385,7 +385,8 @@ def select_goal(frontiers: Sequence[Frontier], dist_m: npt.ArrayLike,
 def frontier_distances(graph: BlockGraph, robot_rc: tuple[int, int],
                        frontiers: Sequence[Frontier],
                        params: SelectionParams = SelectionParams(),
-                       fallback: Callable[[], BlockGraph] | None = None
+                       fallback: Callable[[], BlockGraph] | None = None,
+                       excluded: npt.NDArray[np.bool_] | None = None
                        ) -> npt.NDArray[np.float64]:
     """Path length (m) robot -> each cPoint, all from one sweep; inf when unreachable.
 
@@ -395,17 +396,22 @@ def frontier_distances(graph: BlockGraph, robot_rc: tuple[int, int],
 
     ``fallback`` builds a graph over an optimistic mask (free or unknown, see
     ``traversable_mask(..., allow_unknown=True)``). It is used only when no cPoint is
-    reachable through known free space: a frontier seen through a doorway whose known
-    free strip is narrower than the robot is then still a goal (the planner may cross
-    unknown cells, as Nav2 does with ``allow_unknown``) instead of ending exploration
-    early. Those distances are multiplied by ``unknown_path_factor``.
+    reachable through known free space, leaving out the frontiers marked in ``excluded``
+    (the goal manager's blacklist: a reachable but blacklisted frontier must not hide
+    the others). A frontier seen through a doorway whose known free strip is narrower
+    than the robot is then still a goal (the planner may cross unknown cells, as Nav2
+    does with ``allow_unknown``) instead of ending exploration early. Those distances
+    are multiplied by ``unknown_path_factor``.
 
     Returns
     -------
     ndarray of float64, shape (N,)
     """
     d = _frontier_distances(graph, robot_rc, frontiers, params)
-    if fallback is not None and len(d) and not np.isfinite(d).any():
+    usable = np.isfinite(d)
+    if excluded is not None:
+        usable &= ~np.asarray(excluded, dtype=bool)
+    if fallback is not None and len(d) and not usable.any():
         d = _frontier_distances(fallback(), robot_rc, frontiers, params) \
             * params.unknown_path_factor
     return d
@@ -463,11 +469,13 @@ class PathGraphs:
                                         self._params.path_block_cells)
         return self._fallback
 
-    def distances(self, robot_rc: tuple[int, int], frontiers: Sequence[Frontier]
+    def distances(self, robot_rc: tuple[int, int], frontiers: Sequence[Frontier],
+                  excluded: npt.NDArray[np.bool_] | None = None
                   ) -> npt.NDArray[np.float64]:
-        """:func:`frontier_distances` with the fallback through unknown space."""
+        """:func:`frontier_distances` with the fallback through unknown space
+        (``excluded``: e.g. :meth:`GoalManager.excluded`)."""
         return frontier_distances(self.graph, robot_rc, frontiers, self._params,
-                                  self.fallback)
+                                  self.fallback, excluded)
 
 
 # ------------------------------------------------------------------------ goal manager
@@ -618,6 +626,11 @@ class GoalManager:
         for pt in pts:
             self.add_to_blacklist(pt)
         return True
+
+    def excluded(self, frontiers: Sequence[Frontier]) -> npt.NDArray[np.bool_]:
+        """Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted
+        goal (not candidates now); pass it to :meth:`PathGraphs.distances`."""
+        return self._blacklisted(frontiers)
 
     def _blacklisted(self, frontiers: Sequence[Frontier]) -> np.ndarray:
         if not self._blacklist or not frontiers:
