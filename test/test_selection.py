@@ -10,8 +10,9 @@ import pytest
 from explore_seg.core.frontiers import Frontier, find_frontiers, traversable_mask
 from explore_seg.core.grid import GridMap, grid_from_ascii
 from explore_seg.core.paths import BlockGraph
-from explore_seg.core.selection import (Action, GoalManager, SelectionParams, compute_costs,
-                                        frontier_distances, goal_yaw, region_at, select_goal)
+from explore_seg.core.selection import (Action, GoalManager, PathGraphs, SelectionParams,
+                                        compute_costs, frontier_distances, goal_yaw, region_at,
+                                        select_goal)
 
 # Fig. 2 of the paper: the robot R in room A (cols 1..14) next to the door (col 15) into
 # room B (cols 16..29). A small frontier (3 cells) is left at A's far left wall; a big one
@@ -499,7 +500,6 @@ HIDDEN_POCKET = """
 
 
 def test_blacklisted_reachable_frontier_does_not_hide_one_behind_unknown_cells():
-    from explore_seg.core.selection import PathGraphs
     g, marks = grid_from_ascii(HIDDEN_POCKET, resolution_m=RES)
     robot = marks["R"][0]
     params = SelectionParams(strategy="nearest", done_confirmations=1, blacklist_retries=0,

@@ -630,9 +630,6 @@ class GoalManager:
     def excluded(self, frontiers: Sequence[Frontier]) -> npt.NDArray[np.bool_]:
         """Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted
         goal (not candidates now); pass it to :meth:`PathGraphs.distances`."""
-        return self._blacklisted(frontiers)
-
-    def _blacklisted(self, frontiers: Sequence[Frontier]) -> np.ndarray:
         if not self._blacklist or not frontiers:
             return np.zeros(len(frontiers), dtype=bool)
         pts = np.asarray([f.point_xy_m for f in frontiers])
@@ -770,7 +767,7 @@ class GoalManager:
             action = Action.KEEP if self.goal is not None else Action.WAIT
             return StepResult(action, self.goal, reason or "no path distances")
         # 2. candidates
-        excluded = self._blacklisted(frontiers)
+        excluded = self.excluded(frontiers)
         sel = select_goal(frontiers, dist_m, labels, robot_rc, p, grid.resolution_m,
                           excluded)
         if sel.index is None:
