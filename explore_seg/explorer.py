@@ -1,8 +1,9 @@
 """``explorer``: the whole exploration pipeline in one process.
 
-Runs the frontier detector, DuDe segmentation, target selector and object costmap nodes
-in one executor, single-threaded by default: rclpy's MultiThreadedExecutor busy-waits
-while a callback of a mutually exclusive group runs (its entity stays ready), and that
+Runs the DuDe segmentation, object costmap and target selector nodes in one executor (the
+target selector detects frontiers itself and publishes them, so the standalone
+``frontier_detector`` is not run here: one detection per map), single-threaded by default:
+rclpy's MultiThreadedExecutor busy-waits while a callback of a mutually exclusive group runs (its entity stays ready), and that
 loop, holding the GIL, starved the object costmap in this process (measured in the
 simulator demo at 4x real time: 25 of 801 camera frames processed, explorer at 100 % of a
 core, against a third to a half of the frames and a third of a core single-threaded). Each node
@@ -37,7 +38,6 @@ class Component:
 
 
 COMPONENTS: tuple[Component, ...] = (
-    Component("frontier_detector", "explore_seg.frontier_node", "FrontierDetectorNode"),
     Component("segmentation", "explore_seg.segmentation_node", "SegmentationNode"),
     Component("object_costmap", "explore_seg.object_costmap_node", "ObjectCostmapNode"),
     Component("target_selector", "explore_seg.selector_node", "TargetSelectorNode"),
@@ -68,7 +68,7 @@ def build_args(argv: list[str]) -> tuple[argparse.Namespace, list[str]]:
         ours, ros = argv, []
     ap = argparse.ArgumentParser(prog="explorer", description=__doc__.split("\n\n")[0])
     ap.add_argument("--without", action="append", default=[],
-                    help="leave out a component (object_costmap, segmentation, frontier_detector)")
+                    help="leave out a component (object_costmap, segmentation)")
     ap.add_argument("--threads", type=int, default=1,
                     help="executor threads (1 = single-threaded, the default; more use "
                          "rclpy's MultiThreadedExecutor, see the module docstring)")

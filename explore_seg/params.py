@@ -15,9 +15,12 @@ import typing
 from pathlib import Path
 from typing import Any, Callable, Generic, TypeVar
 
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
+                                SetParametersResult)
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+
+from explore_seg.core.param_files import flatten_params, load_node_params  # noqa: F401 (API)
 
 T = TypeVar("T")
 
@@ -100,6 +103,24 @@ def field_doc(f: dataclasses.Field) -> str:
     return f"{doc} [{unit}]" if unit else doc
 
 
+def descriptor(f: dataclasses.Field, kind: str) -> ParameterDescriptor:
+    """The ROS descriptor of a field: description (doc + unit), read-only flag and, where
+    the field's metadata has a ``range``, a ``FloatingPointRange`` (float fields) or
+    ``IntegerRange`` (int fields), so out-of-range sets are rejected by rclpy itself."""
+    desc = ParameterDescriptor(description=field_doc(f), dynamic_typing=True,
+                               read_only=bool(f.metadata.get("read_only", False)))
+    rng = f.metadata.get("range")
+    if rng is not None and kind == "float":
+        step = float(rng[2]) if len(rng) > 2 else 0.0
+        desc.floating_point_range = [FloatingPointRange(
+            from_value=float(rng[0]), to_value=float(rng[1]), step=step)]
+    elif rng is not None and kind == "int":
+        step = int(rng[2]) if len(rng) > 2 else 0
+        desc.integer_range = [IntegerRange(from_value=int(rng[0]), to_value=int(rng[1]),
+                                           step=step)]
+    return desc
+
+
 class ParamBinding(Generic[T]):
     """Declare, validate and track a node's parameters from a frozen dataclass.
 
@@ -136,9 +157,7 @@ class ParamBinding(Generic[T]):
                          "list[bool]": Parameter.Type.BOOL_ARRAY}.get(
                              kind, Parameter.Type.DOUBLE_ARRAY)
                 ros_default = Parameter(name, ptype, []).value
-            desc = ParameterDescriptor(
-                description=field_doc(f), dynamic_typing=True,
-                read_only=bool(f.metadata.get("read_only", False)))
+            desc = descriptor(f, kind)
             param = node.declare_parameter(name, ros_default, desc)
             values[f.name] = self._coerce(f, kind, name, param.value)
         self.params: T = dataclasses.replace(defaults, **values)
@@ -183,41 +202,6 @@ class ParamBinding(Generic[T]):
         old, self.params, self._pending = self.params, self._pending, None
         for cb in self._callbacks:
             cb(old, self.params)
-
-
-def load_node_params(path: str | Path, node_name: str) -> dict[str, Any]:
-    """``ros__parameters`` of ``node_name`` in a ROS 2 parameter YAML (``/**`` merged first).
-
-    Raises
-    ------
-    ValueError
-        When the file is not a mapping of node names to ``ros__parameters``.
-    """
-    import yaml
-
-    text = Path(path).read_text()
-    data = yaml.safe_load(text) or {}
-    if not isinstance(data, dict):
-        raise ValueError(f"{path}: expected a mapping of node names, got {type(data).__name__}")
-    out: dict[str, Any] = {}
-    for key in ("/**", node_name, "/" + node_name):
-        section = data.get(key)
-        if section is None:
-            continue
-        if not isinstance(section, dict) or "ros__parameters" not in section:
-            raise ValueError(f"{path}: section {key!r} lacks 'ros__parameters'")
-        out.update(flatten_params(section["ros__parameters"] or {}))
-    return out
-
-
-def flatten_params(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for k, v in d.items():
-        if isinstance(v, dict):
-            out.update(flatten_params(v, f"{prefix}{k}."))
-        else:
-            out[f"{prefix}{k}"] = v
-    return out
 
 
 def overrides_from_dict(values: dict[str, Any]) -> list[Parameter]:

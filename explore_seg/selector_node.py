@@ -1,10 +1,12 @@
 """``target_selector`` node: picks the next frontier goal and sends it as ``goal_pose``.
 
-Self-contained: it detects frontiers from ``map`` (+ ``object_costmap``) itself with the
-core (no ``frontier_detector`` needed), computes path lengths robot -> cPoints in one
-sweep, scores them (``strategy``: the paper's eq. 1-3 with region labels from
-``regions``, nearest, or explore_lite) and lets a
-:class:`~explore_seg.core.selection.GoalManager` keep, switch, blacklist and finish.
+Thin wiring around the ROS-free decision core :class:`explore_seg.core.explorer.Explorer`:
+it detects frontiers from ``map`` (+ ``object_costmap``) itself (no ``frontier_detector``
+needed; it publishes the same ``frontiers`` topics), computes path lengths robot ->
+cPoints in one sweep, scores them (``strategy``: the paper's eq. 1-3 with region labels
+from ``regions``, nearest, or explore_lite) and keeps, switches, blacklists and finishes.
+Its parameters: :class:`~explore_seg.core.selection.SelectorNodeParams` and the detection
+parameters :class:`~explore_seg.core.frontiers.FrontierParams` under ``frontier.``.
 
 One timer ``_tick`` on the ROS clock (``rate_hz``) runs the state machine::
 
@@ -20,7 +22,6 @@ is kept and its progress still checked).
 from __future__ import annotations
 
 import math
-import time
 from enum import Enum
 
 import numpy as np
@@ -33,10 +34,13 @@ from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 
 from explore_seg import convert
-from explore_seg.core.frontiers import (Frontier, find_frontiers, object_obstacles,
-                                         traversable_mask)
+from explore_seg.core.explorer import Explorer, ExplorerStep
+from explore_seg.core.frontiers import Frontier, FrontierParams
 from explore_seg.core.grid import GridMap, resample_array
-from explore_seg.core.selection import Action, Goal, GoalManager, PathGraphs, SelectionParams
+from explore_seg.core.selection import (REGION_STRATEGIES, Action, Goal, GoalManager,
+                                        SelectorNodeParams)
+from explore_seg.frontier_msgs import FrontierPublisher
+from explore_seg.frontier_node import FRONTIER_PREFIX
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS, map_qos
@@ -66,9 +70,10 @@ class TargetSelectorNode(Node):
                  node_name: str = "target_selector", namespace: str = "") -> None:
         super().__init__(node_name, context=context,
                          parameter_overrides=parameter_overrides or [], namespace=namespace)
-        self._p = ParamBinding(self, SelectionParams())
+        self._p = ParamBinding(self, SelectorNodeParams())
+        self._fp = ParamBinding(self, FrontierParams(), prefix=FRONTIER_PREFIX)
         p = self._p.params
-        self._manager = GoalManager(p)
+        self._explorer = Explorer(self._fp.params, p)
         self._grid: GridMap | None = None
         self._layer: GridMap | None = None
         self._regions_img: Image | None = None
@@ -77,8 +82,6 @@ class TargetSelectorNode(Node):
         self._labels_dirty = False
         self._pose: tuple[float, float, float] | None = None
         self._pose_time_ns = 0
-        self._dirty = True
-        self._graph: PathGraphs | None = None
         self.frontiers: list[Frontier] = []
         self._state = State.STOPPED if not p.autostart else State.WAITING_FOR_MAP
         self._done_published: bool | None = None
@@ -93,6 +96,7 @@ class TargetSelectorNode(Node):
         self._pub_done = self.create_publisher(Bool, "exploration_done", MAP_QOS)
         self._pub_markers = self.create_publisher(MarkerArray, "~/markers", 1)
         self._pub_timing = self.create_publisher(Float64MultiArray, "~/timing", 10)
+        self._pub_frontiers = FrontierPublisher(self)
         qos = map_qos(p.map_transient_local)
         self.create_subscription(OccupancyGrid, "map", self._on_map, qos)
         self.create_subscription(OccupancyGrid, "object_costmap", self._on_layer, qos)
@@ -108,13 +112,19 @@ class TargetSelectorNode(Node):
         self.create_service(Trigger, "~/resume", self._srv_resume)
         self._timer = self.create_timer(1.0 / p.rate_hz, self._tick)
         self._p.on_change(self._params_changed)
+        self._fp.on_change(lambda old, new: self._explorer.set_params(frontier=new))
         self._publish_done(False)
 
     # ---------------------------------------------------------------- helpers
     @property
-    def params(self) -> SelectionParams:
-        """Current parameters."""
+    def params(self) -> SelectorNodeParams:
+        """Current parameters (selection and node settings)."""
         return self._p.params
+
+    @property
+    def frontier_params(self) -> FrontierParams:
+        """Current detection parameters (``frontier.*``)."""
+        return self._fp.params
 
     @property
     def state(self) -> State:
@@ -124,16 +134,13 @@ class TargetSelectorNode(Node):
     @property
     def manager(self) -> GoalManager:
         """The goal manager (current goal, blacklist)."""
-        return self._manager
-
+        return self._explorer.manager
 
     def _now_s(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
 
-    def _params_changed(self, old: SelectionParams, new: SelectionParams) -> None:
-        self._manager.set_params(new)
-        self._dirty = True
-        self._graph = None
+    def _params_changed(self, old: SelectorNodeParams, new: SelectorNodeParams) -> None:
+        self._explorer.set_params(selection=new)
         if new.rate_hz != old.rate_hz:
             self._timer.cancel()
             self.destroy_timer(self._timer)
@@ -154,7 +161,6 @@ class TargetSelectorNode(Node):
         except ValueError as err:
             self._warn("map", f"dropped map: {err}")
             return
-        self._dirty = True
         self._labels_dirty = True
 
     def _on_layer(self, msg: OccupancyGrid) -> None:
@@ -162,8 +168,6 @@ class TargetSelectorNode(Node):
             self._layer = convert.grid_from_msg(msg)
         except ValueError as err:
             self._warn("object_costmap", f"dropped object_costmap: {err}")
-            return
-        self._dirty = True
 
     def _on_regions(self, msg: Image) -> None:
         self._regions_img = msg
@@ -192,7 +196,7 @@ class TargetSelectorNode(Node):
     # --------------------------------------------------------------- services
     def _srv_start(self, request: Trigger.Request, response: Trigger.Response
                    ) -> Trigger.Response:
-        self._manager.reset(clear_blacklist=True)
+        self.manager.reset(clear_blacklist=True)
         self._state = State.WAITING_FOR_MAP
         self._publish_done(False)
         response.success, response.message = True, "exploration (re)started"
@@ -209,12 +213,12 @@ class TargetSelectorNode(Node):
 
     def _srv_resume(self, request: Trigger.Request, response: Trigger.Response
                     ) -> Trigger.Response:
-        if self._state is State.DONE or self._manager.done:
+        if self._state is State.DONE or self.manager.done:
             goal_kept = False
-            self._manager.reset(clear_blacklist=False)
+            self.manager.reset(clear_blacklist=False)
             self._publish_done(False)
         else:
-            goal_kept = self._manager.goal is not None
+            goal_kept = self.manager.goal is not None
         if self._state in (State.STOPPED, State.DONE):
             self._state = State.WAITING_FOR_MAP
             response.message = "resumed" + (" with the previous goal" if goal_kept else "")
@@ -248,25 +252,6 @@ class TargetSelectorNode(Node):
             labels = resample_array(labels, geom, grid, fill=0)
         self._labels = labels
 
-    def _update_frontiers(self, grid: GridMap) -> float:
-        """Recompute frontiers and the path graph after a map/layer change; seconds."""
-        p = self.params
-        t0 = time.perf_counter()
-        extra = None
-        if p.use_object_costmap and self._layer is not None:
-            if self._layer.frame_id != grid.frame_id:
-                self._warn("layer_frame", f"object_costmap frame {self._layer.frame_id!r} "
-                                          f"differs from map frame {grid.frame_id!r}: ignored")
-            else:
-                extra = object_obstacles(self._layer, grid, p.object_occupied_threshold)
-        fp = p.frontier_params()
-        passable = traversable_mask(grid, extra, fp)
-        self.frontiers = find_frontiers(grid, extra, fp, passable=passable)
-        t1 = time.perf_counter()
-        self._graph = PathGraphs(grid, extra, p, passable)
-        self._dirty = False
-        return t1 - t0
-
     @failsafe("goal selection")
     def _tick(self) -> None:
         if self._state is State.STOPPED:
@@ -283,44 +268,30 @@ class TargetSelectorNode(Node):
             return
         if self._state is State.DONE:
             return
-        x, y, yaw = self._pose
-        if self._manager.start_xy_m is None:
-            self._manager.set_start((x, y), yaw)
-
-        t_detect = 0.0
-        if self._dirty or self._graph is None:
-            t_detect = self._update_frontiers(grid)
-        t0 = time.perf_counter()
         self._update_labels(grid)
-        robot_rc = grid.world_to_cell(x, y)
-        graph = self._graph
-        dist = None
-        if not grid.in_bounds(*robot_rc):
-            self._warn("robot_outside", f"robot at ({x:.2f}, {y:.2f}) lies outside the map")
-        elif graph is not None:
-            radius = int(math.floor(p.start_search_radius_m / grid.resolution_m + 1e-9))
-            if graph.graph.nearest_passable(robot_rc, radius) is None:
-                self._warn("robot_blocked", f"robot cell {robot_rc} is not passable and has "
-                                            "no passable cell nearby: no new goals")
-            else:
-                dist = graph.distances(robot_rc, self.frontiers,
-                                       self._manager.excluded(self.frontiers))
-        result = self._manager.step(self._now_s(), (x, y), grid, self.frontiers, dist,
-                                    self._labels, robot_rc)
-        t1 = time.perf_counter()
-        self.last_reason = result.reason
-        sel = result.selection
-        if (sel is not None and p.strategy == "paper" and not sel.region_gain_active
-                and not self._region_warned and self.frontiers):
-            self._region_warned = True
-            self.get_logger().info("regionGain is 0 (no region labels for the map or the "
-                                   "robot's cell): ranking by distance and size only")
-        self._act(result.action, result.goal, result.reason, grid)
+        out = self._explorer.step(self._now_s(), grid, self._pose, self._layer, self._labels)
+        for key, text in out.warnings:
+            self._warn(key, text)
+        self.frontiers = out.frontiers
+        if out.detected:
+            self._pub_frontiers.publish(out.frontiers, grid)
+        self.last_reason = out.reason
+        self._log_region_gain(out)
+        self._act(out.action, out.goal, out.reason, grid)
         timing = Float64MultiArray()
         timing.layout.dim = [MultiArrayDimension(
             label="detect_cluster_ms,selection_ms,frontiers", size=3, stride=3)]
-        timing.data = [t_detect * 1e3, (t1 - t0) * 1e3, float(len(self.frontiers))]
+        timing.data = [out.detect_s * 1e3, out.select_s * 1e3, float(len(out.frontiers))]
         self._pub_timing.publish(timing)
+
+    def _log_region_gain(self, out: ExplorerStep) -> None:
+        """Say once when a region strategy runs without region labels."""
+        sel = out.selection
+        if (sel is not None and self.params.strategy in REGION_STRATEGIES
+                and not sel.region_gain_active and not self._region_warned and out.frontiers):
+            self._region_warned = True
+            self.get_logger().info("regionGain is 0 (no region labels for the map or the "
+                                   "robot's cell): ranking by distance and size only")
 
     def _act(self, action: Action, goal: Goal | None, reason: str, grid: GridMap) -> None:
         p = self.params
@@ -354,7 +325,7 @@ class TargetSelectorNode(Node):
         clear = Marker()
         clear.header, clear.action = header, Marker.DELETEALL
         out.markers.append(clear)
-        goal = self._manager.goal
+        goal = self.manager.goal
         if goal is not None:
             arrow = Marker()
             arrow.header, arrow.ns, arrow.id = header, "goal", 0
@@ -364,14 +335,14 @@ class TargetSelectorNode(Node):
             arrow.scale.z = _ARROW_M[1]
             arrow.color = ColorRGBA(r=0.1, g=0.9, b=0.2, a=1.0)
             out.markers.append(arrow)
-        if self._manager.blacklist:
+        if self.manager.blacklist:
             bl = Marker()
             bl.header, bl.ns, bl.id = header, "blacklist", 0
             bl.type, bl.action = Marker.SPHERE_LIST, Marker.ADD
             bl.pose.orientation.w = 1.0
             bl.scale.x = bl.scale.y = bl.scale.z = _BLACKLIST_MARKER_M
             bl.color = ColorRGBA(r=0.9, g=0.1, b=0.1, a=0.8)
-            bl.points = [Point(x=bx, y=by, z=0.0) for bx, by in self._manager.blacklist]
+            bl.points = [Point(x=bx, y=by, z=0.0) for bx, by in self.manager.blacklist]
             out.markers.append(bl)
         self._pub_markers.publish(out)
 

@@ -26,19 +26,27 @@ if str(ROOT) not in sys.path:
 
 from explore_seg.params import field_doc, ros_fields  # noqa: E402
 
-#: node name -> [(parameter prefix, "module:DataclassName")], in the order they are bound.
+#: node name (or ``/**``: every node) -> [(parameter prefix, "module:DataclassName")], in
+#: the order they are bound.
 NODE_PARAMS: dict[str, list[tuple[str, str]]] = {
-    "frontier_detector": [("", "explore_seg.core.frontiers:FrontierParams")],
+    "/**": [("frontier.", "explore_seg.core.frontiers:FrontierParams")],
+    "frontier_detector": [("", "explore_seg.core.frontiers:FrontierNodeParams")],
     "segmentation": [("", "explore_seg.core.segmentation:SegmentationNodeParams")],
     "object_costmap": [("", "explore_seg.core.objects:ObjectParams"),
                        ("detector.", "explore_seg.core.detector:DetectorParams")],
-    "target_selector": [("", "explore_seg.core.selection:SelectionParams")],
+    "target_selector": [("", "explore_seg.core.selection:SelectorNodeParams")],
     "sim_bridge": [("", "sim_bridge.engine:SimParams")],
 }
+#: README heading of a NODE_PARAMS key that is not a node.
+SECTION_TITLES = {"/**": "`frontier.*`: frontier detection, shared by `target_selector` and "
+                         "`frontier_detector` (the `/**` section of config/explorer.yaml)"}
+
+#: ``/**`` sections: the nodes that bind them (besides their own parameters).
+SHARED_BY: dict[str, tuple[str, ...]] = {"/**": ("frontier_detector", "target_selector")}
 
 #: generated parameter file -> the nodes it configures
 PARAM_FILES: dict[str, list[str]] = {
-    "config/explorer.yaml": ["frontier_detector", "segmentation", "object_costmap",
+    "config/explorer.yaml": ["/**", "frontier_detector", "segmentation", "object_costmap",
                              "target_selector"],
     "config/sim_bridge.yaml": ["sim_bridge"],
 }
@@ -53,15 +61,34 @@ def load_class(spec: str) -> type:
     return getattr(importlib.import_module(mod), name)
 
 
-def node_fields(node: str) -> list[tuple[str, str, Any, str]]:
-    """(full name, kind, default, doc) of every ROS parameter of ``node``."""
+def node_fields(node: str) -> list[tuple[str, str, Any, str, str]]:
+    """(full name, kind, default, doc, range) of every ROS parameter of ``node``."""
     out = []
     for prefix, spec in NODE_PARAMS[node]:
         cls = load_class(spec)
         defaults = cls()
         for f, kind in ros_fields(cls):
-            out.append((prefix + f.name, kind, getattr(defaults, f.name), field_doc(f)))
+            out.append((prefix + f.name, kind, getattr(defaults, f.name), field_doc(f),
+                        _range_text(f.metadata.get("range"))))
     return out
+
+
+def declared_fields(node: str) -> list[tuple[str, str, Any, str, str]]:
+    """:func:`node_fields` of ``node`` plus those of the shared sections it binds."""
+    shared = [f for sec, nodes in SHARED_BY.items() if node in nodes for f in node_fields(sec)]
+    return shared + node_fields(node)
+
+
+def _range_text(rng: Any) -> str:
+    """``[lo, hi]`` (``step k``) of a field's metadata range; empty without one."""
+    if rng is None:
+        return ""
+    ends = ["∞" if abs(float(v)) == float("inf") else
+            ("max" if isinstance(v, int) and v >= 2 ** 31 - 1 else f"{v:g}") for v in rng[:2]]
+    text = f"[{ends[0]}, {ends[1]}]"
+    if len(rng) > 2 and rng[2]:
+        text += f" step {rng[2]:g}"
+    return text
 
 
 def _yaml_value(v: Any) -> str:
@@ -85,7 +112,7 @@ def render_param_file(nodes: list[str]) -> str:
     for node in nodes:
         lines += [f"{node}:", "  ros__parameters:"]
         groups: dict[str, list[tuple[str, Any, str]]] = {}
-        for name, _kind, default, doc in node_fields(node):
+        for name, _kind, default, doc, _range in node_fields(node):
             head, _, leaf = name.rpartition(".")
             groups.setdefault(head, []).append((leaf, default, doc))
         for head, items in groups.items():
@@ -115,11 +142,12 @@ def render_readme_tables() -> str:
     """Markdown parameter tables of every node."""
     out = [README_BEGIN]
     for node in NODE_PARAMS:
-        out += ["", f"#### `{node}` parameters", "",
-                "| name | type | default | meaning |", "|---|---|---|---|"]
-        for name, kind, default, doc in node_fields(node):
+        title = SECTION_TITLES.get(node, f"`{node}` parameters")
+        out += ["", f"#### {title}", "",
+                "| name | type | default | range | meaning |", "|---|---|---|---|---|"]
+        for name, kind, default, doc, rng in node_fields(node):
             doc = doc.replace("|", "\\|").replace("\n", " ")
-            out.append(f"| `{name}` | {kind} | {_md_value(default)} | {doc} |")
+            out.append(f"| `{name}` | {kind} | {_md_value(default)} | {rng} | {doc} |")
     out += ["", README_END]
     return "\n".join(out)
 

@@ -4,11 +4,10 @@
 real-time waiting and, at the explorer's rates, runs the SAME core code the ROS nodes
 run:
 
-* frontier detection and grouping (:func:`explore_seg.core.frontiers.find_frontiers`,
-  object layer as extra obstacles) - the ``frontier_detector`` node;
-* path lengths (:class:`~explore_seg.core.paths.BlockGraph`), costs and goal keeping
-  (:class:`~explore_seg.core.selection.GoalManager`) - the ``target_selector`` node; a
-  NEW_GOAL is sent to the engine's navigation stand-in like a ``goal_pose`` message;
+* the decision core :class:`explore_seg.core.explorer.Explorer` (frontier detection with
+  the object layer as extra obstacles, path lengths, costs and goal keeping) - the
+  ``target_selector`` node; a NEW_GOAL is sent to the engine's navigation stand-in like a
+  ``goal_pose`` message;
 * DuDe regions (:class:`~explore_seg.core.segmentation.IncrementalSegmenter`) - the
   ``segmentation`` node;
 * the object costmap (:func:`~explore_seg.core.objects.process_frame` +
@@ -32,7 +31,7 @@ so seeded runs differ from one another.
 
 Parameters: the nodes' parameters come from ``config/explorer.yaml`` when it exists
 (:func:`load_explorer_params`), else from the dataclass defaults, so a lock-step run and
-the ROS explorer use the same values; decisions run at ``SelectionParams.rate_hz`` and
+the ROS explorer use the same values; decisions run at ``SelectorNodeParams.rate_hz`` and
 the object costmap at ``ObjectParams.rate_hz`` unless :class:`LockstepParams` says
 otherwise.
 
@@ -50,22 +49,24 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import asdict, dataclass, field, fields, replace
-from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 import numpy.typing as npt
 
+from explore_seg.core.fields import param_meta
 from explore_seg.core.camera import CameraIntrinsics
 from explore_seg.core.detector import Detector, DetectorParams
-from explore_seg.core.frontiers import Frontier, FrontierParams, find_frontiers, \
-    traversable_mask
+from explore_seg.core.explorer import Explorer
+from explore_seg.core.frontiers import Frontier
 from explore_seg.core.grid import GridMap
 from explore_seg.core.objects import DepthFrame, ObjectMap, ObjectParams, load_priors, \
     process_frame, wall_mask
-from explore_seg.core.segmentation import IncrementalSegmenter, SegmentationParams
-from explore_seg.core.selection import Action, GoalManager, PathGraphs, SelectionParams
+from explore_seg.core.segmentation import IncrementalSegmenter
+from explore_seg.core.selection import Action
 from sim_bridge import worlds
+from sim_bridge.explorer_params import (ExplorerParams, default_explorer_params_file,  # noqa: F401
+                                        load_explorer_params)
 from sim_bridge.engine import Collider, SimEngine, SimParams
 from sim_bridge.sensors import CLASS_IDS
 from sim_bridge.world import World
@@ -117,35 +118,36 @@ STRATEGIES: tuple[str, ...] = tuple(STRATEGY_SPECS)
 class LockstepParams:
     """Parameters of a lock-step run (rates, stop rule, seeded perturbations)."""
 
-    max_sim_time_s: float = field(default=1800.0, metadata={
-        "doc": "stop after this much sim time", "unit": "s"})
-    decision_period_s: float = field(default=0.0, metadata={
-        "doc": "frontier detection + segmentation + goal decision period; 0 = "
-               "1 / SelectionParams.rate_hz (the target_selector's rate)", "unit": "s"})
-    object_period_s: float = field(default=0.0, metadata={
-        "doc": "object costmap update period (one camera frame processed); 0 = "
-               "1 / ObjectParams.rate_hz (the object_costmap node's rate)", "unit": "s"})
-    coverage_target_pct: float = field(default=99.0, metadata={
-        "doc": "run completed at this coverage of the explorable area", "unit": "%"})
-    milestones_pct: tuple[float, ...] = field(default=(50.0, 90.0, 95.0, 99.0), metadata={
-        "doc": "coverages at which time and path length are recorded", "unit": "%"})
-    sample_period_s: float = field(default=5.0, metadata={
-        "doc": "coverage-vs-time sampling period", "unit": "s"})
-    start_jitter_m: float = field(default=0.2, metadata={
-        "doc": "seeded start position perturbation (uniform per axis)", "unit": "m"})
-    start_yaw_jitter_rad: float = field(default=math.pi, metadata={
-        "doc": "seeded start heading perturbation (uniform)", "unit": "rad"})
-    start_min_clearance_m: float = field(default=0.35, metadata={
-        "doc": "a perturbed start keeps at least this distance to every solid", "unit": "m"})
-    oracle_miss_prob: float = field(default=0.1, metadata={
-        "doc": "probability that the oracle detector misses an object in a frame"})
-    oracle_jitter_px: float = field(default=2.0, metadata={
-        "doc": "std of the oracle's box corner noise", "unit": "px"})
-    camera_scale: float = field(default=0.5, metadata={
-        "doc": "camera resolution relative to the simulator default (intrinsics scaled)"})
-    object_update_tolerance_m: float = field(default=0.05, metadata={
-        "doc": "the planner's object layer is replaced only when a box moved or grew "
-               "by more than this (or appeared/vanished)", "unit": "m"})
+    max_sim_time_s: float = field(default=1800.0, metadata=param_meta(
+        "stop after this much sim time", "s"))
+    decision_period_s: float = field(default=0.0, metadata=param_meta(
+        "frontier detection + segmentation + goal decision period; 0 = "
+        "1 / SelectorNodeParams.rate_hz (the target_selector's rate)", "s"))
+    object_period_s: float = field(default=0.0, metadata=param_meta(
+        "object costmap update period (one camera frame processed); 0 = "
+        "1 / ObjectParams.rate_hz (the object_costmap node's rate)", "s"))
+    coverage_target_pct: float = field(default=99.0, metadata=param_meta(
+        "run completed at this coverage of the explorable area", "%"))
+    milestones_pct: tuple[float, ...] = field(
+        default=(50.0, 90.0, 95.0, 99.0), metadata=param_meta(
+        "coverages at which time and path length are recorded", "%"))
+    sample_period_s: float = field(default=5.0, metadata=param_meta(
+        "coverage-vs-time sampling period", "s"))
+    start_jitter_m: float = field(default=0.2, metadata=param_meta(
+        "seeded start position perturbation (uniform per axis)", "m"))
+    start_yaw_jitter_rad: float = field(default=math.pi, metadata=param_meta(
+        "seeded start heading perturbation (uniform)", "rad"))
+    start_min_clearance_m: float = field(default=0.35, metadata=param_meta(
+        "a perturbed start keeps at least this distance to every solid", "m"))
+    oracle_miss_prob: float = field(default=0.1, metadata=param_meta(
+        "probability that the oracle detector misses an object in a frame"))
+    oracle_jitter_px: float = field(default=2.0, metadata=param_meta(
+        "std of the oracle's box corner noise", "px"))
+    camera_scale: float = field(default=0.5, metadata=param_meta(
+        "camera resolution relative to the simulator default (intrinsics scaled)"))
+    object_update_tolerance_m: float = field(default=0.05, metadata=param_meta(
+        "the planner's object layer is replaced only when a box moved or grew "
+        "by more than this (or appeared/vanished)", "m"))
 
     def __post_init__(self) -> None:
         for name in ("max_sim_time_s", "sample_period_s", "camera_scale"):
@@ -297,71 +299,6 @@ def _json_clean(v: Any) -> Any:
 
 
 # --------------------------------------------------------------------------- set-up
-
-
-@dataclass(frozen=True)
-class ExplorerParams:
-    """The explorer nodes' parameters (what ``config/explorer.yaml`` sets)."""
-
-    frontier: FrontierParams = field(default_factory=FrontierParams)
-    selection: SelectionParams = field(default_factory=SelectionParams)
-    segmentation: SegmentationParams = field(default_factory=SegmentationParams)
-    objects: ObjectParams = field(default_factory=ObjectParams)
-
-
-#: Node name in the parameter file -> ExplorerParams field.
-_NODE_SECTIONS = {"frontier_detector": "frontier", "target_selector": "selection",
-                  "segmentation": "segmentation", "object_costmap": "objects"}
-
-
-def default_explorer_params_file() -> Path | None:
-    """``config/explorer.yaml`` of the source tree, when present."""
-    cand = Path(__file__).resolve().parents[1] / "config" / "explorer.yaml"
-    return cand if cand.is_file() else None
-
-
-def load_explorer_params(path: str | Path | None = None) -> ExplorerParams:
-    """Explorer parameters from a ROS 2 parameter YAML (``/**`` merged first, then each
-    node's section); fields the file does not set keep the dataclass defaults and
-    parameters of other nodes or bindings (``detector.*``, ``use_sim_time``) are ignored.
-
-    Parameters
-    ----------
-    path : str or Path, optional
-        Default :func:`default_explorer_params_file`; without a file the defaults.
-
-    Raises
-    ------
-    ValueError
-        When the file is malformed or a value is rejected by its dataclass.
-    """
-    import yaml
-
-    p = Path(path) if path else default_explorer_params_file()
-    out = ExplorerParams()
-    if p is None:
-        return out
-    data = yaml.safe_load(p.read_text()) or {}
-    if not isinstance(data, dict):
-        raise ValueError(f"{p}: expected a mapping of node names, got {type(data).__name__}")
-    for node, attr in _NODE_SECTIONS.items():
-        values: dict[str, Any] = {}
-        for key in ("/**", node, "/" + node):
-            sec = data.get(key)
-            if sec is None:
-                continue
-            if not isinstance(sec, dict) or not isinstance(sec.get("ros__parameters"), dict):
-                raise ValueError(f"{p}: section {key!r} lacks a 'ros__parameters' mapping")
-            values.update(sec["ros__parameters"])
-        base = getattr(out, attr)
-        known = {f.name for f in fields(base)}
-        changes = {k: tuple(v) if isinstance(v, list) else v for k, v in values.items()
-                   if k in known}
-        try:
-            out = replace(out, **{attr: replace(base, **changes)})
-        except (TypeError, ValueError) as err:
-            raise ValueError(f"{p}: {node}: {err}") from err
-    return out
 
 
 def perturbed_start(world: World, seed: int, params: LockstepParams,
@@ -545,10 +482,8 @@ def run_exploration(world: World, strategy: str, seed: int, *,
     if decision_period_s is not None:
         p = replace(p, decision_period_s=float(decision_period_s))
     ep = explorer_params if explorer_params is not None else load_explorer_params()
-    sel_p = replace(ep.selection, strategy=spec.selection, use_regions=spec.use_regions,
-                    use_object_costmap=spec.use_objects)
+    sel_p = replace(ep.selection, strategy=spec.selection, use_regions=spec.use_regions)
     fr_p = replace(ep.frontier, use_object_costmap=spec.use_objects)
-    sel_fr_p = sel_p.frontier_params()
     obj_p = ep.objects
     p = replace(p, decision_period_s=p.decision_period_s or 1.0 / sel_p.rate_hz,
                 object_period_s=p.object_period_s or 1.0 / obj_p.rate_hz)
@@ -558,7 +493,7 @@ def run_exploration(world: World, strategy: str, seed: int, *,
     if ground_truth is None and sp.compute_coverage:
         ground_truth = worlds.ground_truth(run_world, resolution_m=sp.map_resolution_m)
     engine = SimEngine(run_world, sp, ground_truth=ground_truth)
-    manager = GoalManager(sel_p)
+    explorer = Explorer(fr_p, sel_p)
     segmenter = IncrementalSegmenter(ep.segmentation) if spec.use_regions else None
     objects = (_ObjectPipeline(engine, obj_p, seed, p)
                if spec.use_objects else None)
@@ -573,11 +508,8 @@ def run_exploration(world: World, strategy: str, seed: int, *,
     tick = min(p.decision_period_s, p.object_period_s) if objects else p.decision_period_s
     next_decision = 0.0
     next_sample = 0.0
-    graph_key: tuple[int, int] | None = None
-    graph: PathGraphs | None = None
     labels: npt.NDArray[np.int32] | None = None
     seg_version = -1
-    layer_version = 0
     layer: GridMap | None = None
     wall0 = time.perf_counter()
 
@@ -612,69 +544,39 @@ def run_exploration(world: World, strategy: str, seed: int, *,
             layer = objects.map.rasterize(engine.map)
             engine.add_costmap_layer(OBJECT_LAYER, layer)
             objects.mark_published()
-            layer_version += 1
             res.timings_ms["objects"][-1] += (time.perf_counter() - t0) * 1e3
         if now >= next_decision - 1e-9:
             next_decision += p.decision_period_s
             t_dec = time.perf_counter()
             grid = engine.map
-            extra = sel_extra = None
-            if layer is not None:
-                lay = layer.resample_to(grid, fill=0)
-                extra = lay >= fr_p.object_occupied_threshold if fr_p.use_object_costmap else None
-                sel_extra = extra if sel_fr_p == fr_p else (
-                    lay >= sel_fr_p.object_occupied_threshold
-                    if sel_fr_p.use_object_costmap else None)
             # --- segmentation node
             if segmenter is not None and engine.map_version != seg_version:
                 t0 = time.perf_counter()
                 labels = segmenter.update(grid)
                 seg_version = engine.map_version
                 res.timings_ms["segmentation"].append((time.perf_counter() - t0) * 1e3)
-            # --- frontier node
-            t0 = time.perf_counter()
-            passable = traversable_mask(grid, extra, fr_p)
-            frontiers = find_frontiers(grid, extra, fr_p, passable)
-            res.timings_ms["frontier"].append((time.perf_counter() - t0) * 1e3)
-            # --- selector node (its own passable mask unless the parameters agree)
-            t0 = time.perf_counter()
-            key = (engine.map_version, layer_version)
-            if graph is None or key != graph_key:
-                sel_pass = passable if (sel_fr_p == fr_p and sel_extra is extra) else \
-                    traversable_mask(grid, sel_extra, sel_fr_p)
-                graph = PathGraphs(grid, sel_extra, sel_p, sel_pass)
-                graph_key = key
-            x, y, _ = engine.pose
-            robot_rc = grid.world_to_cell(x, y)
-            dist = (graph.distances(robot_rc, frontiers, manager.excluded(frontiers))
-                    if grid.in_bounds(*robot_rc) else None)
+            # --- target_selector node (frontiers, distances, costs, goal)
             use_labels = labels if (labels is not None and labels.shape == grid.shape) else None
-            old_goal = manager.goal
-            black_before = manager.blacklist
-            step = manager.step(now, (x, y), grid, frontiers, dist, use_labels, robot_rc)
-            res.timings_ms["selection"].append((time.perf_counter() - t0) * 1e3)
-            newly_black = _blacklist_growth(black_before, manager.blacklist)
-            res.goals_blacklisted += newly_black
+            step = explorer.step(now, grid, engine.pose, layer, use_labels)
+            if step.detected:
+                res.timings_ms["frontier"].append(step.detect_s * 1e3)
+            res.timings_ms["selection"].append(step.select_s * 1e3)
+            res.goals_blacklisted += step.blacklisted
+            res.goal_switches += int(step.switched)
             if step.action is Action.NEW_GOAL and step.goal is not None:
-                # A switch: the previous goal was neither reached nor given up, and its
-                # frontier is still there and reachable (a cheaper one won).
-                if (old_goal is not None and not old_goal.is_return and not newly_black
-                        and step.selection is not None
-                        and _frontier_alive(grid, frontiers, step.selection.costs,
-                                            old_goal.xy_m, sel_p.frontier_match_radius_m)):
-                    res.goal_switches += 1
                 gx, gy = step.goal.xy_m
                 try:
                     engine.set_goal(gx, gy, step.goal.yaw_rad)
                     res.goals_sent += 1
                     res.goals.append((gx, gy))
                 except ValueError:
-                    manager.abandon_goal(blacklist=True)
+                    explorer.manager.abandon_goal(blacklist=True)
             res.timings_ms["decision"].append((time.perf_counter() - t_dec) * 1e3)
             if observer is not None:
-                observer(LockstepState(engine, grid, frontiers, use_labels, layer,
+                goal = explorer.goal
+                observer(LockstepState(engine, grid, step.frontiers, use_labels, layer,
                                        objects.map if objects else None,
-                                       manager.goal.xy_m if manager.goal else None,
+                                       goal.xy_m if goal else None,
                                        res.goals, step.action.value, step.reason))
             if step.action is Action.DONE:
                 res.stop_reason = "done"
@@ -696,25 +598,3 @@ def run_exploration(world: World, strategy: str, seed: int, *,
 
 def _key(m: float) -> str:
     return f"{m:g}"
-
-
-def _frontier_alive(grid: GridMap, frontiers: list[Frontier], costs: npt.NDArray[np.float64],
-                    xy: tuple[float, float], radius_m: float) -> bool:
-    """True when a frontier with finite cost has a cell within ``radius_m`` of ``xy``."""
-    for f, cost in zip(frontiers, costs):
-        if not np.isfinite(cost):
-            continue
-        fx, fy = grid.cells_to_world(f.cells[:, 0], f.cells[:, 1])
-        if float(np.min(np.hypot(fx - xy[0], fy - xy[1]))) <= radius_m:
-            return True
-    return False
-
-
-def _blacklist_growth(before: tuple, after: tuple) -> int:
-    """Entries added to a bounded blacklist between two snapshots (oldest first)."""
-    if after == before:
-        return 0
-    for k in range(len(after), 0, -1):   # longest suffix of `before` that prefixes `after`
-        if k <= len(before) and tuple(before[len(before) - k:]) == tuple(after[:k]):
-            return len(after) - k
-    return len(after)

@@ -9,9 +9,8 @@ import pytest
 from rclpy.parameter import Parameter
 
 from explore_seg import convert
-from explore_seg.core.frontiers import find_frontiers, traversable_mask
+from explore_seg.core.frontiers import FrontierParams, find_frontiers, traversable_mask
 from explore_seg.core.grid import grid_from_ascii
-from explore_seg.core.selection import SelectionParams
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS
 
 # Robot R in a corridor open (unknown) at its right end only; at 0.1 m per cell.
@@ -30,8 +29,8 @@ ORIGIN = (-1.0, -2.0)
 
 
 def selector_overrides(**extra):
-    values = dict(rate_hz=20.0, done_confirmations=2, min_group_size_cells=3,
-                  robot_radius_m=0.1, path_block_cells=2)
+    values = {"rate_hz": 20.0, "done_confirmations": 2, "frontier.min_group_size_cells": 3,
+              "frontier.robot_radius_m": 0.1, "path_block_cells": 2}
     values.update(extra)
     return [Parameter(k, value=v) for k, v in values.items()]
 
@@ -87,7 +86,7 @@ def test_selector_sends_goal_at_the_frontier(ros):
     grid, _, _keep = feed(ros, CORRIDOR)
     ros.spin_until(lambda: goals.msgs, timeout_s=15, what="a goal_pose")
     goal = goals.msgs[0]
-    fp = SelectionParams(min_group_size_cells=3, robot_radius_m=0.1).frontier_params()
+    fp = FrontierParams(min_group_size_cells=3, robot_radius_m=0.1)
     (frontier,) = find_frontiers(grid, None, fp, traversable_mask(grid, None, fp))
     assert goal.header.frame_id == "map"
     assert (goal.pose.position.x, goal.pose.position.y) == pytest.approx(frontier.point_xy_m)
@@ -173,7 +172,8 @@ def test_frontier_detector_publishes_groups_and_cells(ros):
 
     from explore_seg.frontier_node import FrontierDetectorNode
 
-    params = [Parameter("min_group_size_cells", value=3), Parameter("robot_radius_m", value=0.1),
+    params = [Parameter("frontier.min_group_size_cells", value=3),
+              Parameter("frontier.robot_radius_m", value=0.1),
               Parameter("rate_hz", value=20.0)]
     node = ros.add(FrontierDetectorNode(context=ros.context, parameter_overrides=params))
     groups = Inbox(ros, PointCloud2, "frontiers/groups")

@@ -10,7 +10,7 @@ import pytest
 from explore_seg.core.frontiers import FrontierParams
 from sim_bridge.coverage_tour import TourParams, _greedy_cover, _tour_order, coverage_tour
 from sim_bridge.engine import Collider
-from sim_bridge.lockstep import (STRATEGIES, LockstepParams, RunResult, _blacklist_growth,
+from sim_bridge.lockstep import (STRATEGIES, LockstepParams, RunResult,
                                  load_explorer_params, perturbed_start, run_exploration)
 from sim_bridge.worlds import default_world, ground_truth
 
@@ -144,14 +144,6 @@ def test_greedy_cover_covers_every_coverable_target():
     assert covered == {0, 1, 2, 3, 4, 5, 6}
 
 
-@pytest.mark.parametrize("before, after, added", [
-    ((), (), 0), ((), ((1.0, 2.0),), 1), (((1.0, 2.0),), ((1.0, 2.0), (3.0, 4.0)), 1),
-    (((1.0, 2.0), (3.0, 4.0)), ((3.0, 4.0), (5.0, 6.0)), 1),   # bounded: oldest dropped
-])
-def test_blacklist_growth(before, after, added):
-    assert _blacklist_growth(before, after) == added
-
-
 def test_summary_row_is_flat():
     r = RunResult("w", "paper", 0, time_to_s={"99": math.nan}, path_to_m={"99": 12.5},
                   timings_ms={"frontier": [1.0, 3.0]})
@@ -201,20 +193,21 @@ def test_coverage_tour_rejects_a_start_outside():
 def test_load_explorer_params_reads_each_node_section(tmp_path):
     f = tmp_path / "explorer.yaml"
     f.write_text(
-        "/**:\n  ros__parameters:\n    use_sim_time: true\n    robot_radius_m: 0.3\n"
+        "/**:\n  ros__parameters:\n    use_sim_time: true\n    frontier:\n"
+        "      robot_radius_m: 0.3\n"
         "target_selector:\n  ros__parameters:\n    gamma: 2.5\n    strategy: nearest\n"
         "segmentation:\n  ros__parameters:\n    tau_m: 3.0\n"
         "object_costmap:\n  ros__parameters:\n    rate_hz: 4.0\n    detector.backend: oracle\n")
     ep = load_explorer_params(f)
     assert ep.selection.gamma == 2.5 and ep.selection.strategy == "nearest"
-    assert ep.selection.robot_radius_m == 0.3 and ep.frontier.robot_radius_m == 0.3
+    assert ep.frontier.robot_radius_m == 0.3 and ep.objects.robot_radius_m != 0.3
     assert ep.segmentation.tau_m == 3.0 and ep.objects.rate_hz == 4.0
     assert ep.frontier.min_group_size_cells == FrontierParams().min_group_size_cells
 
 
 @pytest.mark.parametrize("text, match", [
     ("- a\n- b\n", "expected a mapping of node names"),
-    ("target_selector:\n  gamma: 1.0\n", "lacks a 'ros__parameters' mapping"),
+    ("target_selector:\n  gamma: 1.0\n", "lacks 'ros__parameters'"),
     ("target_selector:\n  ros__parameters:\n    gamma: -1.0\n", "gamma must be finite"),
 ])
 def test_load_explorer_params_errors(tmp_path, text, match):
@@ -222,22 +215,3 @@ def test_load_explorer_params_errors(tmp_path, text, match):
     f.write_text(text)
     with pytest.raises(ValueError, match=match):
         load_explorer_params(f)
-
-
-def test_frontier_alive_needs_a_reachable_frontier_near_the_goal():
-    from explore_seg.core.frontiers import find_frontiers
-    from explore_seg.core.grid import grid_from_ascii
-    from sim_bridge.lockstep import _frontier_alive
-
-    g, _ = grid_from_ascii("""
-??????????
-..........
-..........
-..........
-""", resolution_m=0.1)
-    fr = find_frontiers(g, params=FrontierParams(min_group_size_cells=3, robot_radius_m=0.0))
-    assert len(fr) == 1
-    x, y = g.cell_to_world(3, 5)                       # on the frontier row
-    assert _frontier_alive(g, fr, np.array([1.0]), (x, y), 0.05)
-    assert not _frontier_alive(g, fr, np.array([np.inf]), (x, y), 0.05)    # unreachable
-    assert not _frontier_alive(g, fr, np.array([1.0]), (x, y - 0.3), 0.2)  # too far

@@ -27,39 +27,37 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.grid import FREE_THRESHOLD, OCCUPIED_THRESHOLD, GridMap
+from explore_seg.core.fields import INT_MAX, param_meta
+from explore_seg.core.grid import (FREE_THRESHOLD, OCCUPIED_THRESHOLD, GridMap,
+                                    metres_to_cells)
 from explore_seg.core.paths import inflate
 
 
 @dataclass(frozen=True)
 class FrontierParams:
-    """Parameters of frontier detection (and of the ``frontier_detector`` node)."""
+    """Parameters of frontier detection (the explorer's ``frontier.*`` parameters)."""
 
-    free_threshold: int = field(default=FREE_THRESHOLD, metadata={
-        "doc": "map cells with 0 <= value < this are free", "unit": "percent"})
-    occupied_threshold: int = field(default=OCCUPIED_THRESHOLD, metadata={
-        "doc": "map cells with value >= this are obstacles", "unit": "percent"})
-    object_occupied_threshold: int = field(default=OCCUPIED_THRESHOLD, metadata={
-        "doc": "object_costmap cells with value >= this are obstacles", "unit": "percent"})
-    min_group_size_cells: int = field(default=10, metadata={
-        "doc": "frontier groups with fewer cells are ignored", "unit": "cells"})
-    free_neighbour_connectivity: int = field(default=4, metadata={
-        "doc": "neighbourhood (4 or 8) in which an unknown cell needs a free cell to be "
-               "a frontier cell"})
-    group_connectivity: int = field(default=8, metadata={
-        "doc": "connectivity (4 or 8) used to group frontier cells"})
-    robot_radius_m: float = field(default=0.22, metadata={
-        "doc": "obstacles are inflated by this radius to find passable cells", "unit": "m"})
-    cpoint_search_radius_m: float = field(default=1.0, metadata={
-        "doc": "how far a group's cPoint may be moved to reach a passable cell", "unit": "m"})
-    use_object_costmap: bool = field(default=True, metadata={
-        "doc": "treat occupied object_costmap cells as obstacles"})
-    map_transient_local: bool = field(default=True, metadata={
-        "doc": "subscribe to map/object_costmap with transient-local durability "
-               "(false for volatile publishers)"})
-    rate_hz: float = field(default=2.0, metadata={
-        "doc": "rate of the node's tick (frontiers are recomputed only after a map or "
-               "object_costmap update)", "unit": "Hz"})
+    free_threshold: int = field(default=FREE_THRESHOLD, metadata=param_meta(
+        "map cells with 0 <= value < this are free", "percent", range=(0, 101)))
+    occupied_threshold: int = field(default=OCCUPIED_THRESHOLD, metadata=param_meta(
+        "map cells with value >= this are obstacles", "percent", range=(0, 101)))
+    object_occupied_threshold: int = field(default=OCCUPIED_THRESHOLD, metadata=param_meta(
+        "object_costmap cells with value >= this are obstacles", "percent", range=(0, 101)))
+    min_group_size_cells: int = field(default=10, metadata=param_meta(
+        "frontier groups with fewer cells are ignored", "cells", range=(1, INT_MAX)))
+    free_neighbour_connectivity: int = field(default=4, metadata=param_meta(
+        "neighbourhood (4 or 8) in which an unknown cell needs a free cell to be "
+        "a frontier cell", range=(4, 8, 4)))
+    group_connectivity: int = field(default=8, metadata=param_meta(
+        "connectivity (4 or 8) used to group frontier cells", range=(4, 8, 4)))
+    robot_radius_m: float = field(default=0.22, metadata=param_meta(
+        "obstacles are inflated by this radius to find passable cells and paths", "m",
+        range=(0.0, math.inf)))
+    cpoint_search_radius_m: float = field(default=1.0, metadata=param_meta(
+        "how far a group's cPoint may be moved to reach a passable cell", "m",
+        range=(0.0, math.inf)))
+    use_object_costmap: bool = field(default=True, metadata=param_meta(
+        "treat occupied object_costmap cells as obstacles"))
 
     def __post_init__(self) -> None:
         for name in ("free_threshold", "occupied_threshold", "object_occupied_threshold"):
@@ -74,13 +72,28 @@ class FrontierParams:
         for name in ("free_neighbour_connectivity", "group_connectivity"):
             if getattr(self, name) not in (4, 8):
                 raise ValueError(f"{name} must be 4 or 8, got {getattr(self, name)}")
-        if not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
-            raise ValueError(f"rate_hz must be finite and > 0, got {self.rate_hz}")
         if not (math.isfinite(self.robot_radius_m) and self.robot_radius_m >= 0):
             raise ValueError(f"robot_radius_m must be finite and >= 0, got {self.robot_radius_m}")
         if not (math.isfinite(self.cpoint_search_radius_m) and self.cpoint_search_radius_m >= 0):
             raise ValueError("cpoint_search_radius_m must be finite and >= 0, "
                              f"got {self.cpoint_search_radius_m}")
+
+
+@dataclass(frozen=True)
+class FrontierNodeParams:
+    """Settings of the ``frontier_detector`` node (detection itself: :class:`FrontierParams`,
+    bound under ``frontier.``)."""
+
+    map_transient_local: bool = field(default=True, metadata=param_meta(
+        "subscribe to map/object_costmap with transient-local durability (false for "
+        "volatile publishers)"))
+    rate_hz: float = field(default=2.0, metadata=param_meta(
+        "rate of the node's tick (frontiers are recomputed only after a map or "
+        "object_costmap update)", "Hz", range=(0.0, math.inf)))
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
+            raise ValueError(f"rate_hz must be finite and > 0, got {self.rate_hz}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -339,7 +352,7 @@ def group_frontiers(grid: GridMap, frontier_mask: npt.NDArray[np.bool_],
 
     if pas is None:
         pas = traversable_mask(grid, extra, params)
-    radius_cells = int(math.floor(params.cpoint_search_radius_m / grid.resolution_m + 1e-9))
+    radius_cells = metres_to_cells(params.cpoint_search_radius_m, grid.resolution_m)
     out: list[Frontier] = []
     for gid, k in enumerate(keep):
         a, b = int(starts[k]), int(starts[k + 1])

@@ -28,6 +28,20 @@ FREE_THRESHOLD = 25
 OCCUPIED_THRESHOLD = 65
 
 
+def metres_to_cells(length_m: float, resolution_m: float) -> int:
+    """Whole cells within ``length_m``: ``floor(length_m / resolution_m)``, tolerant of
+    floating-point round-off (0.3 m at 0.05 m is 6 cells, not 5).
+
+    Examples
+    --------
+    >>> metres_to_cells(0.3, 0.05)
+    6
+    >>> metres_to_cells(0.29, 0.05)
+    5
+    """
+    return int(math.floor(length_m / resolution_m + 1e-9))
+
+
 @dataclass(frozen=True)
 class GridMap:
     """A 2D occupancy grid.

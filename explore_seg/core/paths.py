@@ -26,6 +26,8 @@ import numpy.typing as npt
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from explore_seg.core.grid import metres_to_cells
+
 SQRT2 = math.sqrt(2.0)
 # (drow, dcol, step length in cells): the 8 moves of the grid graph.
 _MOVES8: tuple[tuple[int, int, float], ...] = (
@@ -72,7 +74,7 @@ def inflate(blocked: npt.NDArray[np.bool_], radius_m: float, resolution_m: float
         raise ValueError(f"resolution_m must be > 0, got {resolution_m}")
     if not radius_m >= 0:
         raise ValueError(f"radius_m must be >= 0, got {radius_m}")
-    r = int(math.floor(radius_m / resolution_m + 1e-9))
+    r = metres_to_cells(radius_m, resolution_m)
     if r == 0 or not blocked.any():
         return blocked.copy()
     out = cv2.dilate(blocked.astype(np.uint8), disk_kernel(r), borderType=cv2.BORDER_CONSTANT,

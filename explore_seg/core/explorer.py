@@ -1,0 +1,295 @@
+"""The explorer's decision loop, ROS-free: one call per decision.
+
+:class:`Explorer` wires frontier detection, path distances, the strategy's costs and the
+goal manager once, for every caller: the ``target_selector`` node, the lock-step benchmark
+(``sim_bridge.lockstep``) and the tests. Per :meth:`Explorer.step` it
+
+1. detects frontiers and builds the path graphs when the map or the object layer changed
+   (cached per map / layer object: a caller passes the same object while nothing changed);
+2. finds the robot's cell and checks it is inside the map with a passable cell nearby;
+3. computes the path lengths robot -> cPoints (fallback through unknown space left to
+   :class:`~explore_seg.core.selection.PathGraphs`), with the blacklisted frontiers excluded;
+4. lets the :class:`~explore_seg.core.selection.GoalManager` keep, switch, blacklist or
+   finish, under the strategy of :class:`~explore_seg.core.selection.SelectionParams`.
+
+It returns an :class:`ExplorerStep`: the action (new goal / keep / wait / done), the goal,
+the frontiers with their distances and costs (for markers and metrics), what was
+blacklisted or switched, warnings for the caller to log, and the time spent.
+
+Examples
+--------
+>>> from explore_seg.core.grid import grid_from_ascii
+>>> grid, marks = grid_from_ascii('''
+... ##########
+... #R.......?
+... #........?
+... ##########''', resolution_m=0.1)
+>>> ex = Explorer(FrontierParams(min_group_size_cells=1, robot_radius_m=0.0),
+...               SelectionParams(strategy="nearest"))
+>>> x, y = grid.cell_to_world(*marks["R"][0])
+>>> out = ex.step(0.0, grid, (x, y, 0.0))
+>>> out.action.value, len(out.frontiers)
+('new_goal', 1)
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.frontiers import (Frontier, FrontierParams, find_frontiers,
+                                        object_obstacles, traversable_mask)
+from explore_seg.core.grid import GridMap, metres_to_cells
+from explore_seg.core.selection import (Action, Goal, GoalManager, PathGraphs, Selection,
+                                        SelectionParams)
+
+#: Keys of :attr:`ExplorerStep.warnings` (the caller throttles its log per key).
+WARN_LAYER_FRAME = "layer_frame"
+WARN_LABELS_SHAPE = "labels_shape"
+WARN_ROBOT_OUTSIDE = "robot_outside"
+WARN_ROBOT_BLOCKED = "robot_blocked"
+
+
+@dataclass(frozen=True)
+class Detection:
+    """Frontiers of one map (and object layer) and the masks they were found with."""
+
+    frontiers: list[Frontier]
+    extra_obstacles: npt.NDArray[np.bool_] | None = field(repr=False)
+    passable: npt.NDArray[np.bool_] = field(repr=False)
+    layer_warning: str = ""
+
+
+def detect_frontiers(grid: GridMap, layer: GridMap | None, params: FrontierParams
+                     ) -> Detection:
+    """Frontiers of ``grid`` with the object layer's occupied cells as obstacles.
+
+    The layer is used when ``params.use_object_costmap`` and it is in the map's frame
+    (else ignored, with ``layer_warning`` saying why); it may have any size or origin.
+    """
+    extra = None
+    warning = ""
+    if params.use_object_costmap and layer is not None:
+        if layer.frame_id != grid.frame_id:
+            warning = (f"object_costmap frame {layer.frame_id!r} differs from map frame "
+                       f"{grid.frame_id!r}: ignored")
+        else:
+            extra = object_obstacles(layer, grid, params.object_occupied_threshold)
+    passable = traversable_mask(grid, extra, params)
+    return Detection(find_frontiers(grid, extra, params, passable=passable), extra, passable,
+                     warning)
+
+
+@dataclass(frozen=True)
+class ExplorerStep:
+    """Outcome of one :meth:`Explorer.step`.
+
+    Attributes
+    ----------
+    action : Action
+        NEW_GOAL (send ``goal``), KEEP (drive on to ``goal``), WAIT, DONE.
+    goal : Goal or None
+        The goal to drive to (NEW_GOAL, KEEP).
+    reason : str
+        Why, in words (for the log).
+    selection : Selection or None
+        Costs, regions and the chosen index (None when no selection ran).
+    frontiers : list of Frontier
+        The frontiers of this map version.
+    dist_m : ndarray of float64, shape (N,), or None
+        Path lengths robot -> cPoints (None: robot outside the map or walled in).
+    robot_rc : (int, int)
+        The robot's cell.
+    detected : bool
+        True when frontiers and path graphs were recomputed in this step.
+    blacklisted : int
+        Goals added to the blacklist in this step.
+    switched : bool
+        A new goal replaced one that was neither reached nor given up while its frontier
+        was still there and reachable (a cheaper one won).
+    warnings : tuple of (key, message)
+        Problems with the input (layer frame, robot outside the map or walled in).
+    detect_s, select_s : float
+        Wall seconds of detection (0 when cached) and of distances + selection.
+    """
+
+    action: Action
+    goal: Goal | None
+    reason: str
+    selection: Selection | None
+    frontiers: list[Frontier] = field(repr=False)
+    dist_m: npt.NDArray[np.float64] | None = field(repr=False)
+    robot_rc: tuple[int, int]
+    detected: bool
+    blacklisted: int
+    switched: bool
+    warnings: tuple[tuple[str, str], ...]
+    detect_s: float
+    select_s: float
+
+
+class Explorer:
+    """Frontier exploration decisions (see the module docstring).
+
+    Parameters
+    ----------
+    frontier : FrontierParams
+        Detection (thresholds, robot radius, object layer use).
+    selection : SelectionParams
+        Strategy and goal handling.
+    """
+
+    def __init__(self, frontier: FrontierParams = FrontierParams(),
+                 selection: SelectionParams = SelectionParams()) -> None:
+        self._fp = frontier
+        self._sp = selection
+        self.manager = GoalManager(selection)
+        self._key: tuple[GridMap, GridMap | None] | None = None
+        self._frontiers: list[Frontier] = []
+        self._graph: PathGraphs | None = None
+        self._layer_warning = ""
+
+    # ------------------------------------------------------------------ state
+    @property
+    def frontier_params(self) -> FrontierParams:
+        """Current detection parameters."""
+        return self._fp
+
+    @property
+    def selection_params(self) -> SelectionParams:
+        """Current selection parameters."""
+        return self._sp
+
+    @property
+    def frontiers(self) -> list[Frontier]:
+        """Frontiers of the last map seen by :meth:`step`."""
+        return self._frontiers
+
+    @property
+    def goal(self) -> Goal | None:
+        """The current goal."""
+        return self.manager.goal
+
+    @property
+    def done(self) -> bool:
+        """True once exploration is finished (until :meth:`reset`)."""
+        return self.manager.done
+
+    def set_params(self, frontier: FrontierParams | None = None,
+                   selection: SelectionParams | None = None) -> None:
+        """Apply new parameters; frontiers and paths are recomputed at the next step."""
+        if frontier is not None:
+            self._fp = frontier
+        if selection is not None:
+            self._sp = selection
+            self.manager.set_params(selection)
+        self._key = None
+
+    def reset(self, clear_blacklist: bool = False) -> None:
+        """Forget the goal and DONE (and the blacklist when asked), as on a (re)start."""
+        self.manager.reset(clear_blacklist=clear_blacklist)
+
+    # ------------------------------------------------------------------- step
+    def _detect(self, grid: GridMap, layer: GridMap | None) -> None:
+        det = detect_frontiers(grid, layer, self._fp)
+        self._layer_warning = det.layer_warning
+        self._frontiers = det.frontiers
+        self._graph = PathGraphs(grid, det.extra_obstacles, self._fp, self._sp, det.passable)
+        self._key = (grid, layer)
+
+    def step(self, now_s: float, grid: GridMap, pose: tuple[float, float, float],
+             layer: GridMap | None = None,
+             labels: npt.NDArray[np.integer] | None = None) -> ExplorerStep:
+        """One decision.
+
+        Parameters
+        ----------
+        now_s : float
+            Current time in seconds (sim or ROS clock; monotonic between resets).
+        grid : GridMap
+            The occupancy map. Pass the same object while the map is unchanged: frontiers
+            and path graphs are cached on it.
+        pose : (x_m, y_m, yaw_rad)
+            The robot's pose in the map frame.
+        layer : GridMap, optional
+            The object costmap (any geometry; resampled onto ``grid``); used when
+            ``FrontierParams.use_object_costmap``. Same object while unchanged.
+        labels : ndarray of int, shape (H, W), optional
+            Region labels aligned with ``grid`` (0 = no region); others are ignored with a
+            warning.
+
+        Returns
+        -------
+        ExplorerStep
+        """
+        warnings: list[tuple[str, str]] = []
+        t0 = time.perf_counter()
+        detected = self._key is None or self._key[0] is not grid or self._key[1] is not layer
+        if detected:
+            self._detect(grid, layer)
+        if self._layer_warning:
+            warnings.append((WARN_LAYER_FRAME, self._layer_warning))
+        t1 = time.perf_counter()
+        x, y, yaw = (float(v) for v in pose)
+        manager = self.manager
+        if manager.start_xy_m is None:
+            manager.set_start((x, y), yaw)
+        if labels is not None and labels.shape != grid.shape:
+            warnings.append((WARN_LABELS_SHAPE, f"region labels of shape {labels.shape} do "
+                                                f"not match the map's {grid.shape}: ignored"))
+            labels = None
+        frontiers = self._frontiers
+        robot_rc = grid.world_to_cell(x, y)
+        dist, excluded = self._distances(grid, robot_rc, (x, y), warnings)
+        old_goal = manager.goal
+        added = manager.blacklist_added
+        res = manager.step(now_s, (x, y), grid, frontiers, dist, labels, robot_rc, excluded)
+        blacklisted = manager.blacklist_added - added
+        switched = (res.action is Action.NEW_GOAL and res.goal is not None
+                    and old_goal is not None and not old_goal.is_return and not blacklisted
+                    and res.selection is not None
+                    and _frontier_alive(grid, frontiers, res.selection.costs, old_goal.xy_m,
+                                        self._sp.frontier_match_radius_m))
+        return ExplorerStep(res.action, res.goal, res.reason, res.selection, frontiers, dist,
+                            robot_rc, detected, blacklisted, switched, tuple(warnings),
+                            t1 - t0, time.perf_counter() - t1)
+
+    def _distances(self, grid: GridMap, robot_rc: tuple[int, int], xy: tuple[float, float],
+                   warnings: list[tuple[str, str]]
+                   ) -> tuple[npt.NDArray[np.float64] | None, npt.NDArray[np.bool_] | None]:
+        """Path lengths robot -> cPoints and the blacklist mask; (None, None) when the robot
+        is outside the map or has no passable cell within ``start_search_radius_m``."""
+        graph = self._graph
+        assert graph is not None
+        if not grid.in_bounds(*robot_rc):
+            warnings.append((WARN_ROBOT_OUTSIDE,
+                             f"robot at ({xy[0]:.2f}, {xy[1]:.2f}) lies outside the map"))
+            return None, None
+        radius = metres_to_cells(self._sp.start_search_radius_m, grid.resolution_m)
+        if graph.graph.nearest_passable(robot_rc, radius) is None:
+            warnings.append((WARN_ROBOT_BLOCKED, f"robot cell {robot_rc} is not passable and "
+                                                 "has no passable cell nearby: no new goals"))
+            return None, None
+        excluded = self.manager.excluded(self._frontiers)
+        return graph.distances(robot_rc, self._frontiers, excluded), excluded
+
+
+def _frontier_alive(grid: GridMap, frontiers: Sequence[Frontier],
+                    costs: npt.NDArray[np.float64], xy: tuple[float, float],
+                    radius_m: float) -> bool:
+    """True when a frontier with finite cost has a cell within ``radius_m`` of ``xy``."""
+    for f, cost in zip(frontiers, costs):
+        if not np.isfinite(cost):
+            continue
+        fx, fy = grid.cells_to_world(f.cells[:, 0], f.cells[:, 1])
+        if float(np.min(np.hypot(fx - xy[0], fy - xy[1]))) <= radius_m:
+            return True
+    return False
+
+
+__all__ = ["Detection", "Explorer", "ExplorerStep", "detect_frontiers", "WARN_LABELS_SHAPE", "WARN_LAYER_FRAME",
+           "WARN_ROBOT_BLOCKED", "WARN_ROBOT_OUTSIDE"]

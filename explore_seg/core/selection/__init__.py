@@ -1,0 +1,29 @@
+"""Target selection (Kim, Kim & Lee, RA-L 2022, Alg. 2 and eq. 1-3) and goal handling.
+
+One concern per module:
+
+* :mod:`.strategies`: the cost functions, one table entry per strategy;
+* :mod:`.params`: :class:`SelectionParams` (algorithm) and :class:`SelectorNodeParams`;
+* :mod:`.regions`: region ids of cells and cPoints from DuDe labels;
+* :mod:`.costs`: costs of all frontiers and the cheapest (:func:`select_goal`);
+* :mod:`.distances`: path lengths robot -> cPoints (:class:`PathGraphs`);
+* :mod:`.goals`: :class:`GoalManager` (keep, switch, blacklist, done).
+
+The decision loop that wires them is :class:`explore_seg.core.explorer.Explorer`.
+"""
+
+from explore_seg.core.selection.costs import Selection, compute_costs, select_goal
+from explore_seg.core.selection.distances import PathGraphs, frontier_distances
+from explore_seg.core.selection.goals import Action, Goal, GoalManager, StepResult, goal_yaw
+from explore_seg.core.selection.params import (POSE_TOPIC_TYPES, SelectionParams,
+                                               SelectorNodeParams)
+from explore_seg.core.selection.regions import frontier_regions, region_at
+from explore_seg.core.selection.strategies import (COST_FUNCTIONS, REGION_STRATEGIES,
+                                                   STRATEGIES, CostInputs)
+
+__all__ = [
+    "Action", "COST_FUNCTIONS", "CostInputs", "Goal", "GoalManager", "POSE_TOPIC_TYPES",
+    "PathGraphs", "REGION_STRATEGIES", "STRATEGIES", "Selection", "SelectionParams",
+    "SelectorNodeParams", "StepResult", "compute_costs", "frontier_distances",
+    "frontier_regions", "goal_yaw", "region_at", "select_goal",
+]

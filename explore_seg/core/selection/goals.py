@@ -1,0 +1,415 @@
+"""Goal bookkeeping around the strategy's choice: keep, switch, blacklist, finish.
+
+:class:`GoalManager` is ROS-free and time-agnostic (the caller passes the clock); the
+decision core (:mod:`explore_seg.core.explorer`) drives it once per decision.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.frontiers import Frontier
+from explore_seg.core.grid import GridMap
+from explore_seg.core.selection.costs import Selection, select_goal
+from explore_seg.core.selection.params import SelectionParams
+
+#: Goal points kept per vanished-frontier area, and areas kept (oldest dropped).
+_FLICKER_POINTS = 20
+_FLICKER_AREAS = 100
+
+
+class Action(enum.Enum):
+    """What :meth:`GoalManager.step` asks the caller to do."""
+
+    NEW_GOAL = "new_goal"    # send ``goal``
+    KEEP = "keep"            # keep driving to the current goal
+    WAIT = "wait"            # nothing to do now (no reachable frontier yet, bad input)
+    DONE = "done"            # exploration finished
+
+
+@dataclass(frozen=True)
+class Goal:
+    """A navigation goal in the map frame."""
+
+    xy_m: tuple[float, float]
+    yaw_rad: float
+    rc: tuple[int, int]
+    frontier_size_cells: int
+    cost: float
+    is_return: bool = False
+    frontier_gap_m: float = 0.0
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """Outcome of one :meth:`GoalManager.step`."""
+
+    action: Action
+    goal: Goal | None
+    reason: str
+    selection: Selection | None = None
+
+
+def goal_yaw(frontier: Frontier, robot_xy_m: tuple[float, float]) -> float:
+    """Heading at a frontier's cPoint toward the unknown side: cPoint -> group centroid
+    (robot -> cPoint when the two coincide)."""
+    px, py = frontier.point_xy_m
+    gx, gy = frontier.centroid_xy_m
+    if math.hypot(gx - px, gy - py) > 1e-9:
+        return math.atan2(gy - py, gx - px)
+    return math.atan2(py - robot_xy_m[1], px - robot_xy_m[0])
+
+
+class GoalManager:
+    """Goal keeping, blacklisting and termination around :func:`select_goal` (ROS-free).
+
+    Per call of :meth:`step` (one decision tick):
+
+    1. With a current goal: progress is a decrease of the robot-goal distance by at least
+       ``progress_min_m``; none for ``progress_timeout_s`` blacklists the goal. Reaching
+       it (``goal_reached_tolerance_m``) while its frontier (a frontier with a cell
+       within ``frontier_match_radius_m`` + the goal's gap to its frontier) is still
+       there after a newer map (or ``arrival_wait_s``) blacklists it too; reaching a
+       return-to-start goal ends exploration (DONE).
+    2. Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted goal
+       are excluded. When no reachable frontier is detected but the current goal's
+       frontier cells are still unknown (a thin frontier seen at a grazing angle comes and
+       goes), the goal is kept. When no reachable frontier remains for
+       ``done_confirmations`` consecutive ticks: the blacklist is cleared and its
+       frontiers retried (``blacklist_retries`` times), then DONE (or first a
+       return-to-start goal).
+    3. The current goal is kept unless its frontier vanished or another frontier is
+       cheaper than the current goal's frontier by ``hysteresis_margin * |cost|``; a
+       new goal within ``goal_change_min_m`` of the current one is not sent. Observed
+       cells do not become unknown again, so a frontier that vanishes before the robot
+       arrives with its cells still unknown (so not cleared by sensing: its free
+       neighbours turned occupied or were covered by an object) and keeps coming back at
+       the same place (within ``flicker_radius_m`` of where it first vanished) is map
+       flicker: after ``flicker_vanish_count`` such vanishings its goals are blacklisted.
+
+    DONE is final until :meth:`reset`. The blacklist keeps the newest ``blacklist_max``
+    goals.
+    """
+
+    def __init__(self, params: SelectionParams = SelectionParams()) -> None:
+        self.params = params
+        self._blacklist: deque[tuple[float, float]] = deque(maxlen=params.blacklist_max)
+        #: Entries ever added to the blacklist (callers count new ones by difference).
+        self.blacklist_added = 0
+        self._blacklist_version = 0
+        # Areas where a goal's frontier vanished before arrival: [count, goal points].
+        self._vanished: list[tuple[list[int], list[tuple[float, float]]]] = []
+        self.reset()
+
+    def reset(self, clear_blacklist: bool = False) -> None:
+        """Forget the goal and the DONE state (and the blacklist when asked)."""
+        self.goal: Goal | None = None
+        self.done = False
+        self._best_dist = math.inf
+        self._best_path_dist = math.inf
+        self._last_progress_s = 0.0
+        self._arrived_s: float | None = None
+        self._arrived_stamp_ns = 0
+        self._empty_ticks = 0
+        self._goal_cells_xy: npt.NDArray[np.float64] | None = None
+        self._retries_left = self.params.blacklist_retries
+        self.start_xy_m: tuple[float, float] | None = None
+        self._start_yaw = 0.0
+        if clear_blacklist:
+            self._clear_blacklist()
+            self._vanished.clear()
+
+    def _clear_blacklist(self) -> None:
+        self._blacklist.clear()
+        self._blacklist_version += 1
+
+    def set_params(self, params: SelectionParams) -> None:
+        """Apply new parameters (the blacklist keeps its newest entries)."""
+        self.params = params
+        self._blacklist = deque(self._blacklist, maxlen=params.blacklist_max)
+        self._blacklist_version += 1
+
+    @property
+    def blacklist(self) -> tuple[tuple[float, float], ...]:
+        """Blacklisted goal positions (x, y) in metres, oldest first."""
+        return tuple(self._blacklist)
+
+    def add_to_blacklist(self, xy_m: tuple[float, float]) -> None:
+        """Blacklist a position (e.g. after the navigator reported a failure)."""
+        self._blacklist.append((float(xy_m[0]), float(xy_m[1])))
+        self.blacklist_added += 1
+        self._blacklist_version += 1
+
+    def abandon_goal(self, blacklist: bool = True) -> None:
+        """Drop the current goal (blacklisting it unless told not to)."""
+        if self.goal is not None and blacklist and not self.goal.is_return:
+            self.add_to_blacklist(self.goal.xy_m)
+        self.goal = None
+
+    def set_start(self, xy_m: tuple[float, float], yaw_rad: float) -> None:
+        """Remember the pose to return to (first pose, unless set again)."""
+        self.start_xy_m = (float(xy_m[0]), float(xy_m[1]))
+        self._start_yaw = float(yaw_rad)
+
+    def _note_vanished(self, xy_m: tuple[float, float]) -> bool:
+        """Count a goal whose frontier vanished before arrival; True when its area reached
+        ``flicker_vanish_count`` (its goal points are then blacklisted)."""
+        p = self.params
+        if p.flicker_vanish_count < 1:
+            return False
+        x, y = float(xy_m[0]), float(xy_m[1])
+        for count, pts in self._vanished:
+            if math.hypot(x - pts[0][0], y - pts[0][1]) <= p.flicker_radius_m:
+                count[0] += 1
+                pts.append((x, y))
+                del pts[1:-_FLICKER_POINTS]
+                break
+        else:
+            count, pts = [1], [(x, y)]
+            self._vanished.append((count, pts))
+            del self._vanished[:-_FLICKER_AREAS]
+        if count[0] < p.flicker_vanish_count:
+            return False
+        for pt in pts:
+            self.add_to_blacklist(pt)
+        return True
+
+    def excluded(self, frontiers: Sequence[Frontier]) -> npt.NDArray[np.bool_]:
+        """Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted
+        goal (not candidates now)."""
+        if not self._blacklist or not frontiers:
+            return np.zeros(len(frontiers), dtype=bool)
+        pts = np.asarray([f.point_xy_m for f in frontiers])
+        bl = np.asarray(self._blacklist)
+        d2 = ((pts[:, None, :] - bl[None, :, :]) ** 2).sum(axis=2)
+        return (d2 <= self.params.blacklist_radius_m ** 2).any(axis=1)
+
+    def _matching(self, grid: GridMap, frontiers: Sequence[Frontier]) -> int | None:
+        """Index of the frontier owning the current goal (closest cell within radius)."""
+        if self.goal is None or not frontiers:
+            return None
+        gx, gy = self.goal.xy_m
+        best, best_d = None, math.inf
+        for i, f in enumerate(frontiers):
+            x, y = grid.cells_to_world(f.cells[:, 0], f.cells[:, 1])
+            d = float(np.min(np.hypot(x - gx, y - gy)))
+            if d < best_d:
+                best, best_d = i, d
+        radius = self.params.frontier_match_radius_m + self.goal.frontier_gap_m
+        return best if best_d <= radius else None
+
+    def _remember_cells(self, grid: GridMap, f: Frontier) -> None:
+        """Keep the (world) positions of the current goal's frontier cells."""
+        x, y = grid.cells_to_world(f.cells[:, 0], f.cells[:, 1])
+        self._goal_cells_xy = np.column_stack([x, y])
+
+    def _still_unknown(self, grid: GridMap) -> float:
+        """Share of the goal frontier's last cells that are still unknown in ``grid``
+        (a frontier that vanished with its cells unexplored was not cleared by sensing)."""
+        xy = self._goal_cells_xy
+        if xy is None or len(xy) == 0:
+            return 0.0
+        r, c = grid.world_to_cells(xy[:, 0], xy[:, 1])
+        inside = (r >= 0) & (r < grid.height) & (c >= 0) & (c < grid.width)
+        unknown = ~inside
+        unknown[inside] = grid.data[r[inside], c[inside]] < 0
+        return float(unknown.mean())
+
+    def _new_goal(self, f: Frontier, cost: float, robot_xy_m: tuple[float, float],
+                  now_s: float) -> Goal:
+        gap = float(np.min(np.hypot(f.cells[:, 0] - f.point_rc[0],
+                                    f.cells[:, 1] - f.point_rc[1]))) * f.length_m / f.size_cells
+        self.goal = Goal(f.point_xy_m, goal_yaw(f, robot_xy_m), f.point_rc, f.size_cells,
+                         float(cost), frontier_gap_m=gap)
+        self._start_progress(self.goal, robot_xy_m, now_s)
+        return self.goal
+
+    def _start_progress(self, goal: Goal, robot_xy_m: tuple[float, float], now_s: float
+                        ) -> None:
+        """Progress is measured from the robot-goal distance when the goal was set."""
+        self._best_dist = math.hypot(robot_xy_m[0] - goal.xy_m[0],
+                                     robot_xy_m[1] - goal.xy_m[1])
+        self._best_path_dist = math.inf
+        self._last_progress_s = now_s
+        self._arrived_s = None
+
+    def step(self, now_s: float, robot_xy_m: tuple[float, float], grid: GridMap,
+             frontiers: Sequence[Frontier], dist_m: npt.ArrayLike | None,
+             labels: npt.NDArray[np.integer] | None = None,
+             robot_rc: tuple[int, int] | None = None,
+             excluded: npt.NDArray[np.bool_] | None = None) -> StepResult:
+        """One decision: progress on the current goal, then candidates, then keep or switch.
+
+        Parameters
+        ----------
+        now_s : float
+            Current time in seconds (monotonic, e.g. the node clock).
+        robot_xy_m : (float, float)
+            Robot position in the map frame.
+        grid : GridMap
+            The map the frontiers were detected on.
+        frontiers : sequence of Frontier
+        dist_m : array_like of float, shape (N,), or None
+            Path lengths robot -> cPoints; None when they could not be computed (robot
+            outside the map or enclosed): only progress is checked, no selection.
+        labels : ndarray of int, shape (H, W), optional
+            Region labels aligned with ``grid``.
+        robot_rc : (int, int), optional
+            Robot cell (computed from ``robot_xy_m`` when None).
+        excluded : ndarray of bool, shape (N,), optional
+            :meth:`excluded` of ``frontiers`` computed by the caller before this call (for
+            the path distances); recomputed here when the blacklist changed since.
+
+        Returns
+        -------
+        StepResult
+        """
+        if self.done:
+            return StepResult(Action.DONE, None, "exploration done")
+        if self.start_xy_m is None:
+            self.set_start(robot_xy_m, 0.0)
+        if robot_rc is None:
+            robot_rc = grid.world_to_cell(*robot_xy_m)
+        version = self._blacklist_version
+        # 1. progress and arrival on the current goal
+        early, reason = self._check_progress(now_s, robot_xy_m, grid, frontiers, dist_m)
+        if early is not None:
+            return early
+        if dist_m is None:
+            action = Action.KEEP if self.goal is not None else Action.WAIT
+            return StepResult(action, self.goal, reason or "no path distances")
+        # 2. candidates
+        if excluded is None or self._blacklist_version != version:
+            excluded = self.excluded(frontiers)
+        sel = select_goal(frontiers, dist_m, labels, robot_rc, self.params, grid.resolution_m,
+                          excluded)
+        if sel.index is None:
+            return self._no_candidate(now_s, robot_xy_m, grid, reason, sel)
+        self._empty_ticks = 0
+        # 3. keep or switch
+        return self._keep_or_switch(now_s, robot_xy_m, grid, frontiers, sel, excluded, reason)
+
+    def _check_progress(self, now_s: float, robot_xy_m: tuple[float, float], grid: GridMap,
+                        frontiers: Sequence[Frontier], dist_m: npt.ArrayLike | None
+                        ) -> tuple[StepResult | None, str]:
+        """Progress and arrival on the current goal: (a final result or None, reason)."""
+        p = self.params
+        if self.goal is None:
+            return None, ""
+        d_goal = math.hypot(robot_xy_m[0] - self.goal.xy_m[0],
+                            robot_xy_m[1] - self.goal.xy_m[1])
+        if d_goal <= self._best_dist - p.progress_min_m:
+            self._best_dist = d_goal
+            self._last_progress_s = now_s
+        # Progress along the path counts too: the way to a goal often leads away
+        # from it first (around a wall, through a corridor).
+        cur_goal = (self._matching(grid, frontiers)
+                    if dist_m is not None and not self.goal.is_return else None)
+        if cur_goal is not None and np.isfinite(dist_m[cur_goal]):
+            d_path = float(dist_m[cur_goal])
+            if d_path <= self._best_path_dist - p.progress_min_m:
+                if math.isfinite(self._best_path_dist):
+                    self._last_progress_s = now_s
+                self._best_path_dist = d_path
+        if d_goal <= p.goal_reached_tolerance_m:
+            if self.goal.is_return:
+                self.goal = None
+                self.done = True
+                return StepResult(Action.DONE, None, "returned to start"), ""
+            if self._arrived_s is None:
+                self._arrived_s, self._arrived_stamp_ns = now_s, grid.stamp_ns
+            if (grid.stamp_ns == self._arrived_stamp_ns
+                    and now_s - self._arrived_s < p.arrival_wait_s):
+                return StepResult(Action.KEEP, self.goal,
+                                  "goal reached: waiting for the map to update"), ""
+            self._arrived_s = None
+            if self._matching(grid, frontiers) is not None:
+                self.abandon_goal(blacklist=True)
+                return None, "goal reached but its frontier remains: blacklisted"
+            self.goal = None
+            return None, "goal reached"
+        if now_s - self._last_progress_s > p.progress_timeout_s:
+            if self.goal.is_return:
+                self.goal = None
+                self.done = True
+                return StepResult(Action.DONE, None, "no progress returning to start"), ""
+            self.abandon_goal(blacklist=True)
+            return None, f"no progress for {p.progress_timeout_s:.0f} s: blacklisted"
+        return None, ""
+
+    def _no_candidate(self, now_s: float, robot_xy_m: tuple[float, float], grid: GridMap,
+                      reason: str, sel: Selection) -> StepResult:
+        """No selectable frontier: keep a goal whose cells are still unknown, wait for
+        ``done_confirmations`` ticks, return to start, retry the blacklist, then DONE."""
+        p = self.params
+        self._empty_ticks += 1
+        if self.goal is not None and self.goal.is_return:
+            return StepResult(Action.KEEP, self.goal, "returning to start", sel)
+        if self.goal is not None and self._still_unknown(grid) >= 0.5:
+            # A thin frontier seen at a grazing angle (a doorway from the side) comes
+            # and goes: its cells are still unknown, so drive on and look.
+            return StepResult(Action.KEEP, self.goal, reason or "no frontier detected now, "
+                              "but the goal's cells are still unknown: keeping goal", sel)
+        self.goal = None
+        if self._empty_ticks < p.done_confirmations:
+            return StepResult(Action.WAIT, None, reason or "no reachable frontier", sel)
+        if p.return_to_start and self.start_xy_m is not None:
+            d0 = math.hypot(robot_xy_m[0] - self.start_xy_m[0],
+                            robot_xy_m[1] - self.start_xy_m[1])
+            if d0 > p.goal_reached_tolerance_m:
+                srow, scol = grid.world_to_cell(*self.start_xy_m)
+                self.goal = Goal(self.start_xy_m, self._start_yaw, (srow, scol), 0, 0.0,
+                                 is_return=True)
+                self._start_progress(self.goal, robot_xy_m, now_s)
+                return StepResult(Action.NEW_GOAL, self.goal,
+                                  "no reachable frontier: returning to start", sel)
+        if self._retries_left > 0 and self._blacklist:
+            # The map changed since those goals failed (a doorway seen, a false
+            # obstacle cleared): give the blacklisted frontiers another chance.
+            self._retries_left -= 1
+            self._clear_blacklist()
+            self._empty_ticks = 0
+            return StepResult(Action.WAIT, None, "no reachable frontier: blacklist "
+                              "cleared, retrying its frontiers", sel)
+        self.done = True
+        return StepResult(Action.DONE, None, "no reachable frontier", sel)
+
+    def _keep_or_switch(self, now_s: float, robot_xy_m: tuple[float, float], grid: GridMap,
+                        frontiers: Sequence[Frontier], sel: Selection,
+                        excluded: npt.NDArray[np.bool_], reason: str) -> StepResult:
+        """Keep the current goal unless a cheaper frontier wins by the hysteresis margin
+        or its frontier is gone; a switch to a goal next to the current one is not made."""
+        p = self.params
+        best = sel.index
+        assert best is not None
+        best_cost = float(sel.costs[best])
+        if self.goal is not None and not self.goal.is_return:
+            cur = self._matching(grid, frontiers)
+            if cur is not None:
+                self._remember_cells(grid, frontiers[cur])
+            if cur is not None and not excluded[cur] and np.isfinite(sel.costs[cur]):
+                cur_cost = float(sel.costs[cur])
+                if best == cur or best_cost >= cur_cost - p.hysteresis_margin * abs(cur_cost):
+                    return StepResult(Action.KEEP, self.goal, reason or "keeping goal", sel)
+            bx, by = frontiers[best].point_xy_m
+            if math.hypot(bx - self.goal.xy_m[0], by - self.goal.xy_m[1]) < p.goal_change_min_m:
+                return StepResult(Action.KEEP, self.goal, reason or "new goal next to the old",
+                                  sel)
+            if cur is not None and not excluded[cur] and np.isfinite(sel.costs[cur]):
+                reason = reason or "a better frontier appeared"
+            elif (cur is None and self._still_unknown(grid) >= 0.5
+                  and self._note_vanished(self.goal.xy_m)):
+                reason = (f"goal frontier vanished {p.flicker_vanish_count} times here before "
+                          "arrival (flickering): area blacklisted")
+            else:
+                reason = reason or "goal frontier gone or unreachable"
+        goal = self._new_goal(frontiers[best], best_cost, robot_xy_m, now_s)
+        self._remember_cells(grid, frontiers[best])
+        return StepResult(Action.NEW_GOAL, goal, reason or "new goal", sel)

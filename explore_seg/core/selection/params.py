@@ -1,0 +1,154 @@
+"""Parameters of target selection and goal handling, and of the ``target_selector`` node.
+
+:class:`SelectionParams` holds the algorithm's parameters (the strategy, its weights, the
+goal manager's rules). :class:`SelectorNodeParams` adds the node's own settings (rate,
+pose source, republishing). Frontier detection has its own
+:class:`~explore_seg.core.frontiers.FrontierParams` (the ``frontier.*`` parameters).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from explore_seg.core.fields import INT_MAX, param_meta
+from explore_seg.core.paths import MAX_BLOCK_CELLS
+from explore_seg.core.selection.strategies import STRATEGIES
+
+POSE_TOPIC_TYPES = ("odom", "pose")
+_INF = math.inf
+
+
+def _non_negative(doc: str, unit: str | None = None, default: float = 0.0) -> float:
+    """A float field >= 0 (finite)."""
+    return field(default=default, metadata=param_meta(doc, unit, range=(0.0, _INF)))
+
+
+@dataclass(frozen=True)
+class SelectionParams:
+    """Parameters of target selection (the strategy's cost) and of the goal manager."""
+
+    strategy: str = field(default="paper", metadata=param_meta(
+        "cost function: " + " | ".join(STRATEGIES)))
+    alpha: float = _non_negative("paper: weight of distGain", default=1.0)
+    beta: float = _non_negative("paper: weight of 1/sizeGain", default=0.001)
+    gamma: float = _non_negative(
+        "paper: regionGain of a frontier outside the robot's region", default=1.0)
+    potential_scale: float = _non_negative(
+        "explore_lite: weight of the path length", "1/m", default=3.0)
+    gain_scale: float = _non_negative(
+        "explore_lite: weight of the frontier length", "1/m", default=1.0)
+    region_search_radius_m: float = _non_negative(
+        "a cell without region takes the nearest labelled cell's within this radius", "m",
+        default=0.3)
+    path_block_cells: int = field(default=4, metadata=param_meta(
+        f"path lengths on blocks of this many cells per side (1 = exact, "
+        f"max {MAX_BLOCK_CELLS})", "cells", range=(1, MAX_BLOCK_CELLS)))
+    start_search_radius_m: float = _non_negative(
+        "a robot on a non-passable cell starts from the nearest passable cell within this "
+        "radius", "m", default=0.5)
+    hysteresis_margin: float = _non_negative(
+        "switch goals only when the new cost < current - margin * |current|", default=0.1)
+    progress_timeout_s: float = field(default=30.0, metadata=param_meta(
+        "blacklist a goal whose distance did not decrease for this long", "s",
+        range=(0.0, _INF)))
+    progress_min_m: float = _non_negative(
+        "decrease of the distance to the goal that counts as progress", "m", default=0.1)
+    goal_reached_tolerance_m: float = _non_negative(
+        "robot closer than this to its goal has reached it", "m", default=0.3)
+    frontier_match_radius_m: float = _non_negative(
+        "a frontier with a cell this close to the goal (plus the goal's distance to its "
+        "frontier when set) is the goal's frontier", "m", default=0.5)
+    arrival_wait_s: float = _non_negative(
+        "after reaching a goal, wait this long (or for a newer map) before judging whether "
+        "its frontier was cleared", "s", default=2.0)
+    goal_change_min_m: float = _non_negative(
+        "a new goal closer than this to the current one is not sent", "m", default=0.3)
+    blacklist_radius_m: float = _non_negative(
+        "frontiers whose cPoint lies this close to a blacklisted goal are skipped", "m",
+        default=0.5)
+    blacklist_max: int = field(default=50, metadata=param_meta(
+        "blacklist length (oldest entries dropped)", range=(1, INT_MAX)))
+    unknown_path_factor: float = field(default=1.5, metadata=param_meta(
+        "when no cPoint is reachable through known free space, distances through unknown "
+        "cells are used, multiplied by this factor (>= 1)", range=(1.0, _INF)))
+    blacklist_retries: int = field(default=1, metadata=param_meta(
+        "times the blacklist is cleared to retry its frontiers before DONE",
+        range=(0, INT_MAX)))
+    flicker_vanish_count: int = field(default=3, metadata=param_meta(
+        "blacklist a goal area once its frontier vanished this many times before the robot "
+        "got there with its cells still unknown (it came back in between: a wall edge "
+        "flickering between occupied and free next to unknown space pulls the robot back "
+        "and forth otherwise); 0 = never", range=(0, INT_MAX)))
+    flicker_radius_m: float = _non_negative(
+        "goals within this distance of the first vanished goal of an area count as that "
+        "area for flicker_vanish_count", "m", default=1.0)
+    done_confirmations: int = field(default=3, metadata=param_meta(
+        "consecutive decisions without a reachable frontier before DONE",
+        range=(1, INT_MAX)))
+    return_to_start: bool = field(default=False, metadata=param_meta(
+        "drive back to the start pose when exploration is done"))
+    use_regions: bool = field(default=True, metadata=param_meta(
+        "use the regions labels for regionGain (paper strategy)"))
+
+    def __post_init__(self) -> None:
+        if self.strategy not in STRATEGIES:
+            raise ValueError(f"strategy must be one of {STRATEGIES}, got {self.strategy!r}")
+        for name in ("alpha", "beta", "gamma", "potential_scale", "gain_scale",
+                     "region_search_radius_m", "start_search_radius_m", "hysteresis_margin",
+                     "progress_min_m", "goal_reached_tolerance_m", "frontier_match_radius_m",
+                     "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
+                     "flicker_radius_m"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be finite and >= 0, got {v}")
+        if not (math.isfinite(self.progress_timeout_s) and self.progress_timeout_s > 0):
+            raise ValueError(f"progress_timeout_s must be finite and > 0, "
+                             f"got {self.progress_timeout_s}")
+        if not 1 <= self.path_block_cells <= MAX_BLOCK_CELLS:
+            raise ValueError(f"path_block_cells must be in 1..{MAX_BLOCK_CELLS}, "
+                             f"got {self.path_block_cells}")
+        if self.blacklist_max < 1:
+            raise ValueError(f"blacklist_max must be >= 1, got {self.blacklist_max}")
+        if not self.unknown_path_factor >= 1.0:
+            raise ValueError(f"unknown_path_factor must be >= 1, got {self.unknown_path_factor}")
+        if self.blacklist_retries < 0:
+            raise ValueError(f"blacklist_retries must be >= 0, got {self.blacklist_retries}")
+        if self.flicker_vanish_count < 0:
+            raise ValueError(f"flicker_vanish_count must be >= 0, got "
+                             f"{self.flicker_vanish_count}")
+        if self.done_confirmations < 1:
+            raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
+
+
+@dataclass(frozen=True)
+class SelectorNodeParams(SelectionParams):
+    """Parameters of the ``target_selector`` node: the algorithm's plus the node's own."""
+
+    rate_hz: float = field(default=1.0, metadata=param_meta(
+        "decision rate", "Hz", range=(0.0, _INF)))
+    pose_topic_type: str = field(default="odom", metadata=param_meta(
+        "robot pose source: " + " | ".join(POSE_TOPIC_TYPES) + " (odom: Odometry on "
+        "'odom', pose in the map frame; pose: PoseWithCovarianceStamped on 'pose')"))
+    pose_timeout_s: float = field(default=5.0, metadata=param_meta(
+        "a pose older than this is not used", "s", range=(0.0, _INF)))
+    goal_republish_s: float = _non_negative(
+        "re-publish the current goal this often (0 = only when it changes)", "s")
+    autostart: bool = field(default=True, metadata=param_meta(
+        "start exploring without a call to ~/start"))
+    map_transient_local: bool = field(default=True, metadata=param_meta(
+        "transient-local map/object_costmap/regions subscriptions (false for volatile "
+        "publishers)"))
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.pose_topic_type not in POSE_TOPIC_TYPES:
+            raise ValueError(f"pose_topic_type must be one of {POSE_TOPIC_TYPES}, "
+                             f"got {self.pose_topic_type!r}")
+        for name in ("rate_hz", "pose_timeout_s"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be finite and > 0, got {v}")
+        if not (math.isfinite(self.goal_republish_s) and self.goal_republish_s >= 0):
+            raise ValueError(f"goal_republish_s must be finite and >= 0, "
+                             f"got {self.goal_republish_s}")
