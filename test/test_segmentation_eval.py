@@ -1,4 +1,5 @@
-"""Bormann et al. (IPA) recall / precision of a segmentation (explore_seg.core.segmentation.eval)."""
+"""Bormann et al. (IPA) recall / precision of a segmentation
+(explore_seg.core.segmentation.eval)."""
 
 from __future__ import annotations
 

@@ -1,10 +1,10 @@
 """Room segmentation of an occupancy grid by (incremental) Dual-Space Decomposition.
 
-Implements DuDe spec shared/docs/dude.md: cleaning of the grid into a free-space mask (§4), DuDe on every
-free component (§5-§9, in :mod:`.dude`, raster shortcut), labelling back onto the true
-free cells with gap filling and small-region merging (§10, §15), the incremental update
-that redoes only the pieces touched by newly seen free space (§11) and region ids that
-persist between updates (§12).
+Implements DuDe spec shared/docs/dude.md: cleaning of the grid into a free-space mask
+(§4), DuDe on every free component (§5-§9, in :mod:`.dude`, raster shortcut), labelling
+back onto the true free cells with gap filling and small-region merging (§10, §15), the
+incremental update that redoes only the pieces touched by newly seen free space (§11)
+and region ids that persist between updates (§12).
 
 Label images follow :class:`~explore_seg.core.grid.GridMap`: int32 ``(H, W)``, row = y,
 ``0`` = no region (obstacle, unknown, undecided occupancy, or a free speck smaller than

@@ -27,7 +27,8 @@ def _square(r: int) -> npt.NDArray[np.uint8]:
 
 def clean_free_space(grid: GridMap, params: SegmentationParams
                      ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
-    """Raw free cells and the cleaned free-space mask F of a grid (DuDe spec shared/docs/dude.md §4).
+    """Raw free cells and the cleaned free-space mask F of a grid (DuDe spec
+    shared/docs/dude.md §4).
 
     Parameters
     ----------

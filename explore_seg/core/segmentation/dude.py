@@ -1,9 +1,9 @@
 """Dual-Space Decomposition (DuDe) of a free-space mask into nearly convex pieces.
 
-Polygon stage of the room segmentation (DuDe spec shared/docs/dude.md §5-§9), with the raster shortcut of
-§9.5: the cuts chosen for a piece are drawn into its mask as 4-connected lines of
-"wall" cells, the mask is split into its 4-connected components, and every component is
-decomposed again until it yields no cut.
+Polygon stage of the room segmentation (DuDe spec shared/docs/dude.md §5-§9), with the
+raster shortcut of §9.5: the cuts chosen for a piece are drawn into its mask as
+4-connected lines of "wall" cells, the mask is split into its 4-connected components, and
+every component is decomposed again until it yields no cut.
 
 All geometry here is in pixel units of the cropped mask: points are ``(x, y) = (col,
 row)`` pixel centres, treated as a right-handed plane (the outer ring has positive

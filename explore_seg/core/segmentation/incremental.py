@@ -212,7 +212,8 @@ class IncrementalSegmenter:
 
     def _fill_iters(self, res: float) -> int:
         p = self.params
-        return 2 * (length_to_cells(p.obstacle_inflation_m, res) + length_to_cells(p.free_close_m, res)) + 4
+        return 2 * (length_to_cells(p.obstacle_inflation_m, res)
+                    + length_to_cells(p.free_close_m, res)) + 4
 
     def _decompose(self, free_clean: npt.NDArray[np.bool_], res: float,
                    labels: npt.NDArray[np.int32], area: npt.NDArray[np.bool_] | None,

@@ -8,9 +8,6 @@ from dataclasses import dataclass, field
 
 from explore_seg.core.fields import param_meta
 
-#: Largest value of an int parameter without an upper bound (ROS integer range).
-INT_MAX = 2**31 - 1
-
 
 @dataclass(frozen=True)
 class SegmentationParams:
@@ -57,7 +54,8 @@ class SegmentationParams:
         "merged into a neighbour", "m", range=(0.0, math.inf)))
     corridor_merge: bool = field(default=False, metadata=param_meta(
         "merge two adjacent regions whose shared border is longer than "
-        "max_door_width_m and whose union stays convex enough (DuDe spec shared/docs/dude.md §15)"))
+        "max_door_width_m and whose union stays convex enough (DuDe spec "
+        "shared/docs/dude.md §15)"))
     max_door_width_m: float = field(default=1.2, metadata=param_meta(
         "corridor merge: borders at most this long are doors and never merged", "m",
         range=(0.0, math.inf)))
@@ -65,16 +63,16 @@ class SegmentationParams:
         "corridor merge: the union's deepest concavity must stay below this times tau",
         range=(0.0, math.inf)))
     max_rounds: int = field(default=16, metadata=param_meta(
-        "bound on decomposition rounds per piece", range=(1, INT_MAX)))
+        "bound on decomposition rounds per piece", range=(1, 2**31 - 1)))
     max_cut_candidates: int = field(default=24, metadata=param_meta(
         "per notch, how many nearest boundary points are tested as cut ends",
-        range=(1, INT_MAX)))
+        range=(1, 2**31 - 1)))
     inc_min_blob_m2: float = field(default=0.25, metadata=param_meta(
         "incremental: newly seen free blobs of at most this area are only gap-filled",
         "m^2", range=(0.0, math.inf)))
     inc_touch_cells: int = field(default=2, metadata=param_meta(
         "incremental: a piece within this many cells of a new blob is redone", "cells",
-        range=(0, INT_MAX)))
+        range=(0, 2**31 - 1)))
     inc_lost_frac: float = field(default=0.05, metadata=param_meta(
         "incremental: a piece that lost more than this fraction of its cells is redone",
         range=(0.0, 1.0)))
