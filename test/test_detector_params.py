@@ -7,6 +7,7 @@ import dataclasses
 import pytest
 
 from explore_seg.core.detector import DetectorParams
+from param_ranges import assert_range_enforced, ranged_fields
 
 
 @pytest.mark.parametrize("kwargs, match", [
@@ -33,24 +34,9 @@ def test_params_validation(kwargs, match):
 
 
 def test_params_fields_are_documented():
-    import dataclasses
-
     assert all(f.metadata.get("doc") for f in dataclasses.fields(DetectorParams))
 
 
-
-
-RANGED = {f.name: f.metadata["range"] for f in dataclasses.fields(DetectorParams)
-          if "range" in f.metadata}
-
-
-@pytest.mark.parametrize("name", sorted(RANGED))
+@pytest.mark.parametrize("name", sorted(ranged_fields(DetectorParams)))
 def test_range_holds_the_default_and_its_ends_are_enforced(name):
-    lo, hi = RANGED[name]
-    assert lo <= getattr(DetectorParams(), name) <= hi
-    step = 1 if isinstance(lo, int) else 0.5
-    with pytest.raises(ValueError, match=name):
-        DetectorParams(**{name: lo - step})
-    if hi < 2**31 - 1:
-        with pytest.raises(ValueError, match=name):
-            DetectorParams(**{name: hi + step})
+    assert_range_enforced(DetectorParams, name)

@@ -9,6 +9,7 @@ import pytest
 from explore_seg.core.segmentation import (DudeSettings, SegmentationNodeParams,
                                            SegmentationParams)
 from explore_seg.core.segmentation.params import dude_settings
+from param_ranges import assert_range_enforced, ranged_fields
 
 
 @pytest.mark.parametrize("field, value, match", [
@@ -31,8 +32,7 @@ def test_node_params_validation_and_docs():
         assert f.metadata.get("doc"), f.name
 
 
-RANGED = {f.name: f.metadata["range"] for f in dataclasses.fields(SegmentationNodeParams)
-          if "range" in f.metadata}
+RANGED = ranged_fields(SegmentationNodeParams)
 
 
 def test_every_bounded_number_has_a_range():
@@ -42,14 +42,7 @@ def test_every_bounded_number_has_a_range():
 
 @pytest.mark.parametrize("name", sorted(RANGED))
 def test_range_holds_the_default_and_its_ends_are_enforced(name):
-    lo, hi = RANGED[name]
-    assert lo <= getattr(SegmentationNodeParams(), name) <= hi
-    step = 1 if isinstance(lo, int) else 0.5
-    with pytest.raises(ValueError, match=name):
-        SegmentationNodeParams(**{name: lo - step})
-    if hi < 100:
-        with pytest.raises(ValueError, match=name):
-            SegmentationNodeParams(**{name: hi + step})
+    assert_range_enforced(SegmentationNodeParams, name)
 
 
 @pytest.mark.parametrize("field, value, match", [

@@ -112,7 +112,7 @@ def decode(raw: npt.NDArray[np.float32], geometry: Letterbox, params: DetectorPa
     ----------
     raw : ndarray of float32, shape (N, 5 + C)
         Rows ``cx, cy, w, h`` (network-input pixels), objectness, class scores already
-        multiplied by the objectness (the :mod:`explore_seg.core.darknet` layout).
+        multiplied by the objectness (the :mod:`explore_seg.core.detector.darknet` layout).
     geometry : Letterbox
         Of the frame the rows come from.
     params : DetectorParams
