@@ -37,7 +37,7 @@ for p in (ROOT, ROOT / "bench"):
 from eval_segmentation import run_houses  # noqa: E402
 
 from explore_seg.core.grid import GridMap  # noqa: E402
-from explore_seg.core.seg_eval import evaluate  # noqa: E402
+from explore_seg.core.segmentation.eval import evaluate  # noqa: E402
 from explore_seg.core.segmentation import (IncrementalSegmenter,  # noqa: E402
                                            SegmentationParams, segment)
 

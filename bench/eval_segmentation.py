@@ -31,7 +31,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from explore_seg.core.seg_eval import evaluate  # noqa: E402
+from explore_seg.core.segmentation.eval import evaluate  # noqa: E402
 from explore_seg.core.segmentation import SegmentationParams, segment  # noqa: E402
 
 

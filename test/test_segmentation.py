@@ -6,14 +6,11 @@ are shared with the other ``test_segmentation_*`` files.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 
 from explore_seg.core.grid import GridMap, grid_from_ascii
-from explore_seg.core.segmentation import (IncrementalSegmenter, SegmentationNodeParams,
-                                           SegmentationParams, clean_free_space, segment)
+from explore_seg.core.segmentation import IncrementalSegmenter, SegmentationParams, segment
 
 RES = 0.05
 WALL_M = 0.2
@@ -214,7 +211,7 @@ def test_segment_rejects_a_non_grid():
         IncrementalSegmenter().update(np.zeros((3, 3)))
 
 
-# ------------------------------------------------------------------ ascii + clean
+# ------------------------------------------------------------------------- ascii
 
 
 def test_ascii_rooms_at_coarse_resolution():
@@ -240,48 +237,6 @@ def test_ascii_rooms_at_coarse_resolution():
     assert_coverage(g, lab, p)
 
 
-def test_clean_free_space_inflates_walls_and_grows_free():
-    g, _ = grid_from_ascii("""
-    ??????????
-    ?........?
-    ?....#...?
-    ?........?
-    ??????????
-    """, resolution_m=0.05)
-    p = SegmentationParams(obstacle_inflation_m=0.05, free_close_m=0.05,
-                           obstacle_speck_area_m2=0.0)
-    free_raw, free_clean = clean_free_space(g, p)
-    assert free_raw.sum() == 23
-    assert not free_clean[1:4, 4:7].any()       # the wall cell and its 1-cell inflation
-    assert free_clean[0, 0] and free_clean[4, 9]  # free grown 1 cell into unknown
-    speckless = dataclasses.replace(p, obstacle_speck_area_m2=0.0025)
-    _, clean2 = clean_free_space(g, speckless)
-    assert clean2[2, 5]                          # a 1-cell obstacle is a speck
-
-
-# ----------------------------------------------------------------------- params
-
-
-@pytest.mark.parametrize("field, value, match", [
-    ("tau_m", 0.0, "tau_m"), ("tau_m", float("nan"), "tau_m"),
-    ("obstacle_inflation_m", -0.1, "obstacle_inflation_m"),
-    ("free_max_occupancy", 0, "free_max_occupancy"),
-    ("occupied_min_occupancy", 100, "occupied_min_occupancy"),
-    ("max_rounds", 0, "max_rounds"), ("inc_touch_cells", -1, "inc_touch_cells"),
-    ("id_keep_frac", 1.5, "id_keep_frac"), ("max_door_width_m", 0.0, "max_door_width_m"),
-])
-def test_params_validation(field, value, match):
-    with pytest.raises(ValueError, match=match):
-        SegmentationParams(**{field: value})
-
-
-def test_node_params_validation_and_docs():
-    with pytest.raises(ValueError, match="process_period_s"):
-        SegmentationNodeParams(process_period_s=0.0)
-    for f in dataclasses.fields(SegmentationNodeParams):
-        assert f.metadata.get("doc"), f.name
-
-
 # -------------------------------------------------------------------- invariants
 
 
@@ -301,26 +256,3 @@ def test_random_maps_invariants(seed):
     lab = segment(g, p)
     assert_coverage(g, lab, p)
     assert region_ids(lab) == list(range(1, len(region_ids(lab)) + 1))
-
-
-def test_cut_sets_no_duplicate_when_nothing_resolves_a_notch(monkeypatch):
-    """A notch whose cuts to two other notches resolve nothing keeps its best single cut
-    once: it is among the single cuts already (this used to compare the cut sets' numpy
-    end points with ``in`` and raise "truth value of an array is ambiguous" in a maze)."""
-    from explore_seg.core import dude
-
-    ring = dude._Ring(np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]]),
-                      np.zeros((4, 1, 2), np.int32), False)
-    notches = [dude._Notch(0, k, np.array(p, float), 1.0)
-               for k, p in enumerate([(0.0, 0.0), (10.0, 0.0), (10.0, 10.0)])]
-    far = [dude._End(np.array([10.0, 0.0]), 0, 10.0, 1, 10.0),    # weight 1/10
-           dude._End(np.array([10.0, 10.0]), 0, 20.0, 2, 5.0)]    # weight 1/5: the best
-    monkeypatch.setattr(dude, "_far_ends",
-                        lambda v, vi, *a: (list(far), []) if vi == 0 else ([], []))
-    monkeypatch.setattr(dude, "_segments_clear", lambda vis, border, P0, P1, w:
-                        np.ones(len(P1), bool))
-    monkeypatch.setattr(dude, "_resolves", lambda v, ends, tau: False)
-    st = dude.DudeSettings(tau_px=2.0, simplify_eps_px=1.0, min_hole_area_px=1.0,
-                           min_component_px=1, max_rounds=1)
-    sets = dude._cut_sets(notches, [ring], np.ones((12, 12), bool), np.zeros((12, 12), bool), st)
-    assert [(s.owner, s.far, round(s.weight, 3)) for s in sets] == [(0, {1}, 0.1), (0, {2}, 0.2)]

@@ -1,4 +1,5 @@
-"""Bormann et al. (IPA) recall / precision of a segmentation (explore_seg.core.seg_eval)."""
+"""Bormann et al. (IPA) recall / precision of a segmentation
+(explore_seg.core.segmentation.eval)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from explore_seg.core.seg_eval import evaluate
+from explore_seg.core.segmentation.eval import evaluate
 
 
 def _blocks(*widths: int, height: int = 20) -> np.ndarray:

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.seg_eval import evaluate
+from explore_seg.core.segmentation.eval import evaluate
 from explore_seg.core.segmentation import IncrementalSegmenter, SegmentationParams, segment
 from test_segmentation import (RES, Canvas, assert_coverage, corridor_with_rooms, region_ids,
                                two_rooms)

@@ -127,7 +127,7 @@ def parse_cfg(text: str) -> list[CfgSection]:
     return sections
 
 
-class _Conv(nn.Module):
+class Conv(nn.Module):
     """Convolution (BN folded in at load time) followed by a Darknet activation."""
 
     def __init__(self, sec: CfgSection, in_channels: int) -> None:
@@ -162,7 +162,7 @@ class _Conv(nn.Module):
         return x
 
 
-class _MaxPool(nn.Module):
+class MaxPool(nn.Module):
     """Darknet max pooling: padding ``size - 1`` split left/top ``p // 2``, rest right/bottom.
 
     Darknet ignores out-of-image samples, which for a max is the same as replicating the
@@ -184,7 +184,7 @@ class _MaxPool(nn.Module):
         return F.max_pool2d(x, self.size, self.stride, ceil_mode=True)
 
 
-class _Upsample(nn.Module):
+class Upsample(nn.Module):
     def __init__(self, sec: CfgSection) -> None:
         super().__init__()
         self.stride = sec.get_int("stride", 2)
@@ -193,7 +193,7 @@ class _Upsample(nn.Module):
         return F.interpolate(x, scale_factor=float(self.stride), mode="nearest")
 
 
-class _Yolo(nn.Module):
+class Yolo(nn.Module):
     """Decodes one YOLO head: sigmoid xy + grid offset, exp wh * anchor, scores."""
 
     def __init__(self, sec: CfgSection, in_channels: int) -> None:
@@ -274,15 +274,15 @@ class DarknetNet(nn.Module):
                 raise ValueError(f"line {sec.line}: unsupported section [{sec.kind}], "
                                  f"expected one of {_SUPPORTED[1:]}")
             if sec.kind == "convolutional":
-                module: nn.Module = _Conv(sec, prev)
+                module: nn.Module = Conv(sec, prev)
                 out = module.filters
                 downsample *= sec.get_int("stride", 1)
             elif sec.kind == "maxpool":
-                module = _MaxPool(sec)
+                module = MaxPool(sec)
                 out = prev
                 downsample *= module.stride
             elif sec.kind == "upsample":
-                module = _Upsample(sec)
+                module = Upsample(sec)
                 out = prev
                 downsample //= module.stride
             elif sec.kind == "route":
@@ -302,7 +302,7 @@ class DarknetNet(nn.Module):
                 module = nn.Identity()
                 out = prev
             else:  # yolo
-                module = _Yolo(sec, prev)
+                module = Yolo(sec, prev)
                 out = prev
             self.layers.append(module)
             self.kinds.append(sec.kind)
@@ -320,9 +320,9 @@ class DarknetNet(nn.Module):
                              f"expected 0..{index - 1}")
         return j
 
-    def conv_layers(self) -> list[_Conv]:
+    def conv_layers(self) -> list[Conv]:
         """The convolution modules, in file (= weights) order."""
-        return [m for m in self.layers if isinstance(m, _Conv)]
+        return [m for m in self.layers if isinstance(m, Conv)]
 
     def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, ...]:
         """Run the network; see the module docstring for the output layout."""

@@ -1,0 +1,78 @@
+"""Cleaning of an occupancy grid into free-space masks (DuDe spec shared/docs/dude.md §4).
+
+Raw free cells, and the cleaned free space F: free cells grown into unknown space,
+minus the obstacles (scan specks dropped) grown by the inflation radius.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.grid import GridMap
+from explore_seg.core.segmentation.params import SegmentationParams
+
+
+def length_to_cells(length_m: float, res: float) -> int:
+    return int(round(length_m / res))
+
+
+
+def _square(r: int) -> npt.NDArray[np.uint8]:
+    return np.ones((2 * r + 1, 2 * r + 1), dtype=np.uint8)
+
+
+def clean_free_space(grid: GridMap, params: SegmentationParams
+                     ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
+    """Raw free cells and the cleaned free-space mask F of a grid (DuDe spec
+    shared/docs/dude.md §4).
+
+    Parameters
+    ----------
+    grid : GridMap
+    params : SegmentationParams
+
+    Returns
+    -------
+    free_raw : ndarray of bool, shape (H, W)
+        ``0 <= occupancy < free_max_occupancy``.
+    free_clean : ndarray of bool, shape (H, W)
+        Free cells grown by ``free_close_m`` into non-obstacle cells, minus the obstacles
+        (occupancy > ``occupied_min_occupancy``, specks dropped) grown by
+        ``obstacle_inflation_m``.
+    """
+    return clean_masks(grid.data, params, grid.resolution_m)
+
+
+def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: float
+           ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
+    free_raw = (data >= 0) & (data < params.free_max_occupancy)
+    if data.size == 0:
+        return free_raw, free_raw.copy()
+    occ = data > params.occupied_min_occupancy
+    occ_u8 = occ.astype(np.uint8)
+    speck_px = math.floor(params.obstacle_speck_area_m2 / (res * res) + 1e-6)
+    if speck_px >= 1 and occ.any():
+        n, lab, stats, _ = cv2.connectedComponentsWithStats(occ_u8, connectivity=8)
+        small = stats[:, cv2.CC_STAT_AREA] <= speck_px
+        small[0] = False
+        if small.any():
+            occ_u8 = np.where(small[lab], 0, occ_u8).astype(np.uint8)
+    r_inf = length_to_cells(params.obstacle_inflation_m, res)
+    obst = cv2.dilate(occ_u8, _square(r_inf)) if r_inf > 0 else occ_u8
+    r_close = length_to_cells(params.free_close_m, res)
+    grown = cv2.dilate(free_raw.astype(np.uint8), _square(r_close)) if r_close > 0 \
+        else free_raw.astype(np.uint8)
+    free_clean = (grown > 0) & (obst == 0)
+    return free_raw, free_clean
+
+
+def clean_influence_cells(params: SegmentationParams, res: float) -> int:
+    """How far (cells) a changed grid cell can change the cleaned mask."""
+    speck = int(math.ceil(params.obstacle_speck_area_m2 / (res * res)))
+    return max(length_to_cells(params.obstacle_inflation_m, res),
+               length_to_cells(params.free_close_m, res)) + speck + 2
+

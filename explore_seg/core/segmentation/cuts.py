@@ -1,0 +1,313 @@
+"""Cut candidates, their weights and the greedy choice of cuts (DuDe spec
+shared/docs/dude.md §8-§9)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.segmentation.params import DudeSettings
+from explore_seg.core.segmentation.polygon import crosses_any, seg_dist
+from explore_seg.core.segmentation.rings import Notch, Ring
+
+_TWO_PI = 2.0 * math.pi
+#: Angular slack (rad) when testing whether a cut direction lies inside a wedge.
+_ANGLE_EPS = 1e-6
+#: Sample spacing (px) of the raster visibility test of a cut.
+_SAMPLE_STEP_PX = 0.5
+#: A cut whose interior samples are on the piece border for more than this fraction
+#: runs along the boundary and separates nothing.
+_MAX_BORDER_FRACTION = 0.5
+
+
+def wedge(notch: Notch, ring: Ring, feats: list[int]) -> bool:
+    """Set the feature wedge p-v-n of a notch; False when it is not reflex."""
+    n = len(ring.pts)
+    if len(feats) >= 3:
+        arr = np.asarray(feats)
+        pos = int(np.searchsorted(arr, notch.idx))
+        nxt = int(arr[(pos + 1) % len(arr)]) if pos < len(arr) and arr[pos] == notch.idx \
+            else int(arr[pos % len(arr)])
+        prv = int(arr[pos - 1])
+    else:
+        nxt, prv = (notch.idx + 1) % n, (notch.idx - 1) % n
+    notch.p = ring.pts[prv]
+    notch.n = ring.pts[nxt]
+    dn = notch.n - notch.pt
+    dp = notch.p - notch.pt
+    notch.a_n = math.atan2(dn[1], dn[0])
+    notch.interior = (math.atan2(dp[1], dp[0]) - notch.a_n) % _TWO_PI
+    return notch.interior > math.pi + _ANGLE_EPS
+
+
+def resolves(v: Notch, ends: list[npt.NDArray[np.float64]], tau: float) -> bool:
+    """True when cuts from ``v`` to ``ends`` (one or two points) resolve ``v`` (§8.2)."""
+    rel = []
+    for u in ends:
+        d = u - v.pt
+        w = (math.atan2(d[1], d[0]) - v.a_n) % _TWO_PI
+        if w <= _ANGLE_EPS or w >= v.interior - _ANGLE_EPS:
+            return False
+        rel.append((w, u))
+    rel.sort(key=lambda t: t[0])
+    bounds = [(0.0, v.n)] + rel + [(v.interior, v.p)]
+    for (w0, q0), (w1, q1) in zip(bounds[:-1], bounds[1:]):
+        if w1 - w0 >= math.pi and seg_dist(v.pt, q0, q1) > tau:
+            return False
+    return True
+
+
+def segments_clear(vis: npt.NDArray[np.bool_], border: npt.NDArray[np.bool_],
+                    p0: npt.NDArray[np.float64], p1: npt.NDArray[np.float64],
+                    min_len: float) -> npt.NDArray[np.bool_]:
+    """Raster test of segments p0-p1 (N, 2): inside ``vis`` and not along its border."""
+    n = len(p0)
+    if n == 0:
+        return np.zeros(0, dtype=bool)
+    d = p1 - p0
+    length = np.hypot(d[:, 0], d[:, 1])
+    ns = np.maximum(2, np.ceil(length / _SAMPLE_STEP_PX).astype(np.int64))
+    seg = np.repeat(np.arange(n), ns)
+    start = np.cumsum(ns) - ns
+    k = np.arange(int(ns.sum())) - np.repeat(start, ns)
+    t = (k + 0.5) / ns[seg]
+    xy = p0[seg] + t[:, None] * d[seg]
+    c = np.clip(np.rint(xy[:, 0]).astype(np.int64), 0, vis.shape[1] - 1)
+    r = np.clip(np.rint(xy[:, 1]).astype(np.int64), 0, vis.shape[0] - 1)
+    outside = np.bincount(seg, weights=~vis[r, c], minlength=n)
+    onb = np.bincount(seg, weights=border[r, c], minlength=n) / ns
+    return (outside == 0) & (onb <= _MAX_BORDER_FRACTION) & (length >= min_len)
+
+
+@dataclass
+class End:
+    pt: npt.NDArray[np.float64]
+    ring: int
+    arc: float                 # arc position on its ring
+    notch: int                 # index into the notch list, -1 for a plain point
+    length: float = 0.0
+
+
+@dataclass
+class CutSet:
+    owner: int
+    cuts: list[tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]]
+    resolves: set[int]
+    weight: float
+    far: set[int] = field(default_factory=set)     # notches at the far ends
+
+
+class _Boundary:
+    """All ring vertices and edges of a piece in flat arrays (built once per round)."""
+
+    def __init__(self, rings: list[Ring]) -> None:
+        self.pts = np.concatenate([r.pts for r in rings])
+        self.ring = np.concatenate([np.full(len(r.pts), k) for k, r in enumerate(rings)])
+        self.idx = np.concatenate([np.arange(len(r.pts)) for r in rings])
+        self.arc = np.concatenate([r.arc for r in rings])
+        self.size = np.concatenate([np.full(len(r.pts), len(r.pts)) for r in rings])
+        nxt = np.concatenate([np.roll(r.pts, -1, axis=0) for r in rings])
+        self.ab = nxt - self.pts
+        self.den = np.einsum("ij,ij->i", self.ab, self.ab)
+        self.len = np.sqrt(self.den)
+        self.perimeter = np.array([r.perimeter for r in rings])
+
+
+def far_ends(v: Notch, vi: int, notches: list[Notch], rings: list[Ring],
+              bd: _Boundary, st: DudeSettings) -> tuple[list[End], list[End]]:
+    """Candidate far ends of cuts from notch ``v``: other notches and plain points.
+
+    Plain points are the ring vertices and the feet of the perpendiculars from ``v`` on
+    the ring edges that face it; the ``max_tip_candidates`` nearest are returned. Ends
+    whose cut would be a sliver cut (§9.2) are skipped.
+    """
+    tau = st.tau_px
+    per = float(rings[v.ring].perimeter)
+    va = float(rings[v.ring].arc[v.idx])
+    limit = st.sliver_factor * tau
+
+    def not_sliver(ring: npt.NDArray[np.intp], arc: npt.NDArray[np.float64]
+                   ) -> npt.NDArray[np.bool_]:
+        dd = np.abs(arc - va) % per if per > 0 else np.zeros_like(arc)
+        return (ring != v.ring) | (np.minimum(dd, per - dd) > limit)
+
+    notch_ends = []
+    for j, u in enumerate(notches):
+        if j == vi or (u.ring == v.ring and u.idx == v.idx):
+            continue
+        notch_ends.append(End(u.pt, u.ring, float(rings[u.ring].arc[u.idx]), j,
+                               float(np.hypot(*(u.pt - v.pt)))))
+    notch_ends.sort(key=lambda e: e.length)
+    notch_ends = [e for e in notch_ends[:st.max_notch_candidates]
+                  if not_sliver(np.array([e.ring]), np.array([e.arc]))[0]]
+    # ring vertices, not v itself nor its ring neighbours
+    same = bd.ring == v.ring
+    near_v = same & (((bd.idx - v.idx) % bd.size <= 1) | ((v.idx - bd.idx) % bd.size <= 1))
+    # perpendicular feet on edges facing v (v on the interior = left side)
+    rel = v.pt - bd.pts
+    ok = bd.den > 1e-12
+    t = np.where(ok, np.einsum("ij,ij->i", rel, bd.ab) / np.where(ok, bd.den, 1.0), -1.0)
+    cross = bd.ab[:, 0] * rel[:, 1] - bd.ab[:, 1] * rel[:, 0]
+    own_edge = same & ((bd.idx == v.idx) | ((bd.idx + 1) % bd.size == v.idx))
+    sel = ok & (t > 0.0) & (t < 1.0) & (cross > 0) & ~own_edge
+    P = np.concatenate([bd.pts[~near_v], bd.pts[sel] + t[sel, None] * bd.ab[sel]])
+    R = np.concatenate([bd.ring[~near_v], bd.ring[sel]])
+    A = np.concatenate([bd.arc[~near_v], bd.arc[sel] + t[sel] * bd.len[sel]])
+    L = np.hypot(P[:, 0] - v.pt[0], P[:, 1] - v.pt[1])
+    keep = (L >= 1.0) & not_sliver(R, A)
+    P, R, A, L = P[keep], R[keep], A[keep], L[keep]
+    k = st.max_tip_candidates
+    if len(L) > k:
+        part = np.argpartition(L, k)[:k]
+        P, R, A, L = P[part], R[part], A[part], L[part]
+    order = np.argsort(L, kind="stable")
+    tips = [End(P[i], int(R[i]), float(A[i]), -1, float(L[i])) for i in order]
+    return notch_ends, tips
+
+
+def cut_sets(notches: list[Notch], rings: list[Ring], vis: npt.NDArray[np.bool_],
+              border: npt.NDArray[np.bool_], st: DudeSettings) -> list[CutSet]:
+    """Cut sets of every notch with their weights (§8.2)."""
+    tau = st.tau_px
+    sets: list[CutSet] = []
+    bd = _Boundary(rings)
+    for vi, v in enumerate(notches):
+        notch_ends, tips = far_ends(v, vi, notches, rings, bd, st)
+        ends = notch_ends + tips
+        if not ends:
+            continue
+        P1 = np.array([e.pt for e in ends])
+        P0 = np.repeat(v.pt[None, :], len(ends), axis=0)
+        clear = segments_clear(vis, border, P0, P1, 1.5)
+        vis_ends = [e for e, c in zip(ends, clear) if c]
+        if not vis_ends:
+            continue
+
+        def weight_of(cut_ends: list[End], res_v: bool) -> tuple[set[int], float]:
+            resolved = {vi} if res_v else set()
+            total = v.conc if res_v else 0.5 * v.conc
+            length = 0.0
+            for e in cut_ends:
+                length += max(e.length, 1.0)
+                if e.notch >= 0:
+                    u = notches[e.notch]
+                    if resolves(u, [v.pt], tau):
+                        resolved.add(e.notch)
+                        total += u.conc
+                    else:
+                        total += 0.5 * u.conc
+            return resolved, total / length
+
+        singles_res = [(resolves(v, [e.pt], tau), e) for e in vis_ends]
+        best_tip = None
+        any_res = False
+        for res, e in singles_res:
+            if e.notch >= 0:
+                resolved, w = weight_of([e], res)
+                sets.append(CutSet(vi, [(v.pt, e.pt)], resolved, w, {e.notch}))
+                any_res |= res
+            elif res and (best_tip is None or e.length < best_tip.length):
+                best_tip = e
+        if best_tip is not None:
+            resolved, w = weight_of([best_tip], True)
+            sets.append(CutSet(vi, [(v.pt, best_tip.pt)], resolved, w))
+            any_res = True
+        if any_res:
+            continue
+        # pairs of cuts: the shortest pair that resolves v jointly
+        short = sorted(vis_ends, key=lambda e: e.length)[:8]
+        best_pair = None
+        for i in range(len(short)):
+            for j in range(i + 1, len(short)):
+                e1, e2 = short[i], short[j]
+                tot = e1.length + e2.length
+                if best_pair is not None and tot >= best_pair[0]:
+                    continue
+                if resolves(v, [e1.pt, e2.pt], tau):
+                    best_pair = (tot, e1, e2)
+        if best_pair is not None:
+            resolved, w = weight_of([best_pair[1], best_pair[2]], True)
+            far = {e.notch for e in best_pair[1:] if e.notch >= 0}
+            sets.append(CutSet(vi, [(v.pt, best_pair[1].pt), (v.pt, best_pair[2].pt)],
+                                resolved, w, far))
+            continue
+        # nothing resolves v: keep the single cut with the best weight anyway (a cut to a
+        # notch is in ``sets`` already, with this weight: every single resolved nothing)
+        best, best_end = None, None
+        for res, e in singles_res:
+            resolved, w = weight_of([e], False)
+            if best is None or w > best.weight:
+                best = CutSet(vi, [(v.pt, e.pt)], resolved, w,
+                               {e.notch} if e.notch >= 0 else set())
+                best_end = e
+        if best is not None and best_end is not None and best_end.notch < 0:
+            sets.append(best)
+    return sets
+
+
+def choose_cuts(sets: list[CutSet]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Greedy choice of cut sets (§8.3, the recommended simplification of the knapsack).
+
+    Highest weight first, a set is accepted when it resolves a still unresolved notch,
+    is not a second set of an accepted owner and crosses no accepted cut; then every
+    notch still unresolved gets its best non-crossing set; finally sets whose notches
+    are all resolved by others are removed, lowest weight first.
+    """
+    order = sorted(range(len(sets)), key=lambda i: -sets[i].weight)
+    accepted: list[int] = []
+    resolved: set[int] = set()
+
+    acc_cuts: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def conflicts(i: int) -> bool:
+        # same owner; a cut ending at the notch of an accepted set (that cut is one of
+        # that notch's own sets too); crossing cuts
+        si = sets[i]
+        for j in accepted:
+            sj = sets[j]
+            if si.owner == sj.owner or sj.owner in si.far or si.owner in sj.far:
+                return True
+        if not acc_cuts:
+            return False
+        b0 = np.array([c[0] for c in acc_cuts])
+        b1 = np.array([c[1] for c in acc_cuts])
+        return any(crosses_any(a0, a1, b0, b1) for a0, a1 in si.cuts)
+
+    def accept(i: int) -> None:
+        accepted.append(i)
+        acc_cuts.extend(sets[i].cuts)
+
+    for i in order:
+        s = sets[i]
+        if not (s.resolves - resolved) or conflicts(i):
+            continue
+        accept(i)
+        resolved |= s.resolves
+    for i in order:
+        s = sets[i]
+        if s.owner in resolved or conflicts(i):
+            continue
+        accept(i)
+        resolved |= s.resolves | {s.owner}
+    for i in sorted(accepted, key=lambda k: sets[k].weight):
+        others = set()
+        for j in accepted:
+            if j != i:
+                others |= sets[j].resolves
+        if sets[i].resolves and sets[i].resolves <= others:
+            accepted.remove(i)
+    cuts: list[tuple[np.ndarray, np.ndarray]] = []
+    seen: set[tuple] = set()
+    for i in accepted:
+        for a, b in sets[i].cuts:
+            key = tuple(sorted([(round(a[0], 3), round(a[1], 3)),
+                                (round(b[0], 3), round(b[1], 3))]))
+            if key in seen:
+                continue
+            seen.add(key)
+            cuts.append((a, b))
+    return cuts
+

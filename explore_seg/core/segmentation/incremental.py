@@ -1,0 +1,449 @@
+"""The stateful segmenter: incremental DuDe updates and persistent region ids
+(DuDe spec shared/docs/dude.md §11-§12), and the one-shot :func:`segment`."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.grid import GridMap
+from explore_seg.core.segmentation.cleaning import (clean_influence_cells, clean_masks,
+                                                    length_to_cells)
+from explore_seg.core.segmentation.dude import decompose_mask, find_cuts
+from explore_seg.core.segmentation.labels import (apply_mapping, bbox, fill_gaps,
+                                                  label_counts, match_ids, pair_counts,
+                                                  renumber, resample_labels, shift_into)
+from explore_seg.core.segmentation.merging import max_concavity, merge_regions
+from explore_seg.core.segmentation.params import SegmentationParams, dude_settings
+
+#: Bounds on the DuDe checks of one incremental update: seams between new and clean
+#: pieces, and clean pieces whose shape changed.
+_MAX_SEAM_TESTS = 6
+_MAX_SHAPE_TESTS = 4
+
+
+@dataclass(frozen=True)
+class UpdateInfo:
+    """What the last :meth:`IncrementalSegmenter.update` did."""
+
+    mode: str                  # "full", "incremental", "unchanged" or "empty"
+    time_s: float              # wall time of the update
+    work_areas: int            # number of work areas redone (0 for full/unchanged)
+    work_cells: int            # cells in the work areas (all domain cells for full)
+    regions: int               # number of regions in the result
+    reason: str = ""           # why a full run was done
+
+
+
+# ------------------------------------------------------------------------- segmenter
+
+
+class IncrementalSegmenter:
+    """DuDe room segmentation with state: incremental updates and persistent ids.
+
+    Parameters
+    ----------
+    params : SegmentationParams, optional
+
+    Examples
+    --------
+    >>> from explore_seg.core.grid import grid_from_ascii
+    >>> g, _ = grid_from_ascii("#####\\n#...#\\n#####", resolution_m=0.5)
+    >>> seg = IncrementalSegmenter(SegmentationParams(
+    ...     min_region_area_m2=0.1, obstacle_inflation_m=0.0, free_close_m=0.0))
+    >>> seg.update(g).tolist()
+    [[0, 0, 0, 0, 0], [0, 1, 1, 1, 0], [0, 0, 0, 0, 0]]
+    >>> seg.last_update_info.mode
+    'full'
+    """
+
+    def __init__(self, params: SegmentationParams | None = None) -> None:
+        self.params = params if params is not None else SegmentationParams()
+        self._labels: npt.NDArray[np.int32] | None = None   # domain labels
+        self._geom: GridMap | None = None
+        self._data: npt.NDArray[np.int8] | None = None
+        self._free_raw: npt.NDArray[np.bool_] | None = None
+        self._free_clean: npt.NDArray[np.bool_] | None = None
+        self._next_id = 1
+        self._force_full = False
+        self.last_update_info: UpdateInfo | None = None
+
+    # --------------------------------------------------------------- public API
+    def reset(self) -> None:
+        """Forget the state (the id counter keeps counting: ids are never reused)."""
+        self._labels = None
+        self._geom = None
+        self._data = None
+        self._free_raw = None
+        self._free_clean = None
+
+    def set_params(self, params: SegmentationParams) -> None:
+        """Use new parameters; the next update is a full run whose ids are matched."""
+        self.params = params
+        self._data = None
+        self._force_full = True
+
+    @property
+    def next_id(self) -> int:
+        """The id the next new region will get (ids are never reused)."""
+        return self._next_id
+
+    def update(self, grid: GridMap) -> npt.NDArray[np.int32]:
+        """Segment ``grid``, reusing the previous result where nothing changed.
+
+        Parameters
+        ----------
+        grid : GridMap
+
+        Returns
+        -------
+        ndarray of int32, shape (grid.height, grid.width)
+            Region ids (0 = no region), stable between calls for regions that did not
+            change (DuDe spec shared/docs/dude.md §11-§12).
+
+        Raises
+        ------
+        TypeError
+            When ``grid`` is not a GridMap.
+        """
+        if not isinstance(grid, GridMap):
+            raise TypeError(f"grid must be a GridMap, got {type(grid).__name__}")
+        t0 = time.perf_counter()
+        res = grid.resolution_m
+        if grid.data.size == 0:
+            self.reset()
+            self.last_update_info = UpdateInfo("empty", time.perf_counter() - t0, 0, 0, 0)
+            return np.zeros(grid.shape, dtype=np.int32)
+        shift = self._aligned_shift(grid)
+        prev_known_f = None
+        if shift is not None and self._free_raw is not None and self._free_clean is not None:
+            # cells that were known free and in the cleaned free space before
+            prev_known_f = shift_into(self._free_raw & self._free_clean, grid.shape, *shift)
+        free_raw, free_clean = self._clean_update(grid, shift)
+        domain = free_raw | free_clean
+        prev = None
+        if shift is not None and self._labels is not None:
+            prev = shift_into(self._labels, grid.shape, *shift)
+        reason = ""
+        if prev is None:
+            reason = "no compatible previous state"
+        elif self._force_full:
+            reason = "parameters changed"
+        if reason:
+            if prev is None and self._labels is not None and self._geom is not None:
+                prev = resample_labels(self._labels, self._geom, grid)
+            labels = self._full(free_raw, free_clean, domain, res, prev)
+            mode, n_areas, n_cells = "full", 0, int(domain.sum())
+        else:
+            assert prev is not None and prev_known_f is not None
+            labels, mode, n_areas, n_cells, reason = self._incremental(
+                free_raw, free_clean, domain, res, prev, prev_known_f)
+        self._force_full = False
+        self._labels = labels
+        self._geom = grid
+        self._data = grid.data.copy()
+        self._free_raw, self._free_clean = free_raw, free_clean
+        out = np.where(free_raw, labels, 0).astype(np.int32)
+        self.last_update_info = UpdateInfo(mode, time.perf_counter() - t0, n_areas,
+                                           n_cells, len(label_counts(out)), reason)
+        return out
+
+    # ---------------------------------------------------------------- internals
+    def _aligned_shift(self, grid: GridMap) -> tuple[int, int] | None:
+        """Whole-cell shift (drow, dcol) from the previous grid to ``grid``, or None."""
+        g0 = self._geom
+        if self._labels is None or g0 is None:
+            return None
+        if (abs(g0.resolution_m - grid.resolution_m) > 1e-9 * grid.resolution_m
+                or g0.frame_id != grid.frame_id
+                or abs(g0.origin_yaw_rad - grid.origin_yaw_rad) > 1e-9):
+            return None
+        r, c = grid.world_to_cell_float(*g0.cells_to_world(np.array([0]), np.array([0])))
+        fr, fc = float(r[0]) - 0.5, float(c[0]) - 0.5
+        ir, ic = round(fr), round(fc)
+        if abs(fr - ir) > 1e-3 or abs(fc - ic) > 1e-3:
+            return None
+        return int(ir), int(ic)
+
+    def _clean_update(self, grid: GridMap, shift: tuple[int, int] | None
+                      ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
+        """Cleaned masks of ``grid``, recomputed only around changed cells when possible."""
+        p = self.params
+        res = grid.resolution_m
+        if (shift is None or self._data is None or self._free_raw is None
+                or self._free_clean is None):
+            return clean_masks(grid.data, p, res)
+        old = shift_into(self._data, grid.shape, *shift, fill=-1, reuse=True)
+        changed = old != grid.data
+        infl = clean_influence_cells(p, res)
+        box = bbox(changed, infl)
+        # cells the old masks did not cover (grown area) are recomputed too
+        # the old masks are replaced by the result, so they may be updated in place
+        free_raw = shift_into(self._free_raw, grid.shape, *shift, reuse=True)
+        free_clean = shift_into(self._free_clean, grid.shape, *shift, reuse=True)
+        if shift != (0, 0) or self._data.shape != grid.shape:
+            cover = shift_into(np.ones(self._data.shape, dtype=bool), grid.shape, *shift)
+            edge = bbox(~cover, infl)
+            if edge is not None:
+                box = edge if box is None else (
+                    slice(min(box[0].start, edge[0].start), max(box[0].stop, edge[0].stop)),
+                    slice(min(box[1].start, edge[1].start), max(box[1].stop, edge[1].stop)))
+        if box is None:
+            return free_raw, free_clean
+        h, w = grid.shape
+        wr = slice(max(0, box[0].start - infl), min(h, box[0].stop + infl))
+        wc = slice(max(0, box[1].start - infl), min(w, box[1].stop + infl))
+        fr, fc = clean_masks(grid.data[wr, wc], p, res)
+        ir = slice(box[0].start - wr.start, box[0].stop - wr.start)
+        ic = slice(box[1].start - wc.start, box[1].stop - wc.start)
+        free_raw[box] = fr[ir, ic]
+        free_clean[box] = fc[ir, ic]
+        return free_raw, free_clean
+
+    def _fresh(self) -> int:
+        k = self._next_id
+        self._next_id += 1
+        return k
+
+    def _fill_iters(self, res: float) -> int:
+        p = self.params
+        return 2 * (length_to_cells(p.obstacle_inflation_m, res)
+                    + length_to_cells(p.free_close_m, res)) + 4
+
+    def _decompose(self, free_clean: npt.NDArray[np.bool_], res: float,
+                   labels: npt.NDArray[np.int32], area: npt.NDArray[np.bool_] | None,
+                   temp_next: int) -> tuple[list[int], int]:
+        """Decompose ``free_clean`` (inside ``area``), writing temporary ids into labels."""
+        st = dude_settings(self.params, res)
+        if area is None:
+            pieces, n = decompose_mask(free_clean, st)
+            sel = pieces > 0
+            labels[sel] = pieces[sel] + (temp_next - 1)
+            return list(range(temp_next, temp_next + n)), temp_next + n
+        box = bbox(area, 2)
+        if box is None:
+            return [], temp_next
+        sub = free_clean[box] & area[box]
+        pieces, n = decompose_mask(sub, st)
+        sel = pieces > 0
+        labels[box][sel] = pieces[sel] + (temp_next - 1)
+        return list(range(temp_next, temp_next + n)), temp_next + n
+
+    def _finish(self, labels: npt.NDArray[np.int32], free_raw: npt.NDArray[np.bool_],
+                domain: npt.NDArray[np.bool_], res: float, temp_ids: list[int],
+                old: npt.NDArray[np.int32] | None, old_area: dict[int, int],
+                merge_all: bool) -> set[int]:
+        """Gap filling, new free components, merging, id matching (in place).
+
+        The arrays may be crops (views) of the full images; ``temp_ids`` are the ids of
+        the new pieces, which get old ids by overlap with ``old`` or fresh ids. Returns
+        the final ids of the new pieces.
+        """
+        p = self.params
+        fill_gaps(labels, domain, self._fill_iters(res))
+        temp_next = (max(temp_ids) + 1) if temp_ids else self._next_id
+        # free components still unlabelled (touching no region): new regions or specks
+        rest = domain & (labels == 0)
+        if rest.any():
+            n, lab = cv2.connectedComponents(rest.astype(np.uint8), connectivity=8)
+            labels[rest] = lab[rest] + (temp_next - 1)
+            temp_ids = temp_ids + list(range(temp_next, temp_next + n - 1))
+        merge_regions(labels, free_raw, None if merge_all else set(temp_ids), p, res)
+        present = label_counts(labels)
+        live = [t for t in temp_ids if t in present]
+        mapping: dict[int, int] = {}
+        if old is not None and live:
+            mapping.update(match_ids(labels, old, live, p.id_keep_frac, old_area))
+        for t in live:
+            if t not in mapping:
+                mapping[t] = self._fresh()
+        apply_mapping(labels, mapping)
+        return set(mapping.values())
+
+    def _leftovers(self, labels: npt.NDArray[np.int32], free_raw: npt.NDArray[np.bool_],
+                   domain: npt.NDArray[np.bool_], res: float) -> None:
+        """Label domain cells no piece covers yet (small new blobs), in place."""
+        if not (domain & (labels == 0)).any():
+            return
+        fill_gaps(labels, domain, self._fill_iters(res))
+        rest = domain & (labels == 0)
+        if not rest.any():
+            return
+        box = bbox(rest, 1)
+        n, lab = cv2.connectedComponents(rest[box].astype(np.uint8), connectivity=8)
+        if n <= 1:
+            return
+        area = np.bincount(lab[free_raw[box]].ravel(), minlength=n)
+        min_px = self.params.min_region_area_m2 / (res * res)
+        sub = labels[box]
+        for k in np.flatnonzero(area >= min_px).tolist():
+            if k > 0:
+                sub[lab == k] = self._fresh()
+
+    def _full(self, free_raw, free_clean, domain, res, prev) -> npt.NDArray[np.int32]:
+        labels = np.zeros(domain.shape, dtype=np.int32)
+        temp_ids, _ = self._decompose(free_clean, res, labels, None, self._next_id)
+        old_area = label_counts(prev) if prev is not None else {}
+        self._finish(labels, free_raw, domain, res, temp_ids, prev, old_area, True)
+        return labels
+
+    def _incremental(self, free_raw, free_clean, domain, res, prev, prev_known_f):
+        p = self.params
+        cell_area = res * res
+        labels = prev.copy()
+        old_area = label_counts(labels)
+        dirty: set[int] = set()
+        # known free cells that left the cleaned free space: new obstacles, map fixes
+        blocked = (labels > 0) & prev_known_f & ~free_clean
+        lost = (labels > 0) & ~domain
+        labels[lost] = 0
+        new_free = free_clean & (labels == 0)
+        blobs = None
+        box_new = bbox(new_free, 0)
+        if box_new is not None:
+            nf = new_free[box_new].astype(np.uint8)
+            n, lab, stats, _ = cv2.connectedComponentsWithStats(nf, connectivity=8)
+            big = stats[:, cv2.CC_STAT_AREA] * cell_area > p.inc_min_blob_m2
+            big[0] = False
+            if big.any():
+                blobs = np.zeros(domain.shape, dtype=bool)
+                blobs[box_new] = big[lab]
+                t = p.inc_touch_cells
+                bb = bbox(blobs, t + 1)
+                near = cv2.dilate(blobs[bb].astype(np.uint8),
+                                  np.ones((2 * t + 1, 2 * t + 1), np.uint8)) > 0
+                dirty.update(label_counts(labels[bb][near]))
+        if blocked.any():
+            bl_cnt = label_counts(prev[blocked])
+            for i, c in bl_cnt.items():
+                if c > p.inc_lost_frac * old_area[i]:
+                    dirty.add(i)
+            check = sorted((i for i in bl_cnt if i not in dirty), key=lambda i: -bl_cnt[i])
+            if check:
+                from scipy import ndimage
+                objs = ndimage.find_objects(labels, max_label=max(check))
+                st = dude_settings(p, res)
+                tau_cells = p.tau_m / res
+                tests = 0
+                for i in check:
+                    sl = objs[i - 1]
+                    if sl is None:
+                        continue
+                    piece = labels[sl] == i
+                    # split by a new obstacle, or a new structure DuDe would now cut
+                    if cv2.connectedComponents(piece.astype(np.uint8), connectivity=8)[0] > 2:
+                        dirty.add(i)
+                    elif bl_cnt[i] >= tau_cells and tests < _MAX_SHAPE_TESTS:
+                        tests += 1
+                        sub = np.pad((piece & free_clean[sl]).astype(np.uint8), 1)
+                        n_sub = cv2.connectedComponents(sub, connectivity=4)[0]
+                        if n_sub > 2 or (n_sub == 2 and find_cuts(sub, st)):
+                            dirty.add(i)
+        if not dirty and blobs is None:
+            self._leftovers(labels, free_raw, domain, res)
+            return labels, "unchanged", 0, 0, ""
+        lut = np.zeros(max(max(old_area, default=0), max(dirty, default=0)) + 2, dtype=bool)
+        lut[list(dirty)] = True
+        work = lut[labels]
+        if blobs is not None:
+            work |= blobs
+        n_work = int(work.sum())
+        n_dom = max(1, int(domain.sum()))
+        if n_work > p.inc_full_frac * n_dom:
+            full = self._full(free_raw, free_clean, domain, res, prev)
+            return full, "full", 0, n_dom, (
+                f"work areas {n_work} cells > {p.inc_full_frac:.2f} of {n_dom}")
+        box = bbox(work, self._fill_iters(res) + p.inc_touch_cells + 2)
+        if box is None:
+            self._leftovers(labels, free_raw, domain, res)
+            return labels, "unchanged", 0, 0, ""
+        lab_c = labels[box]
+        work_c = work[box]
+        old_c = np.where(work_c, lab_c, 0)
+        lab_c[work_c] = 0
+        n_areas, alab = cv2.connectedComponents(work_c.astype(np.uint8), connectivity=8)
+        temp_ids: list[int] = []
+        temp_next = self._next_id
+        fc = free_clean[box]
+        for a in range(1, n_areas):
+            ids, temp_next = self._decompose(fc, res, lab_c, alab == a, temp_next)
+            temp_ids += ids
+        redone = self._finish(lab_c, free_raw[box], domain[box], res, temp_ids, old_c,
+                              old_area, False)
+        self._heal_seams(labels, free_clean, box, redone, res)
+        self._leftovers(labels, free_raw, domain, res)
+        return labels, "incremental", n_areas - 1, n_work, ""
+
+    def _heal_seams(self, labels: npt.NDArray[np.int32], free_clean: npt.NDArray[np.bool_],
+                    box: tuple[slice, slice], redone: set[int], res: float) -> None:
+        """Merge a new piece into a clean neighbour when their union is convex enough.
+
+        Pieces outside the work areas are kept as they are (§11.7), so a cut made at an
+        old frontier (across a corridor that was only half seen, say) would stay forever.
+        For every pair (new piece, clean neighbour) sharing a border of at least half a
+        door width, the deepest concavity of the union's outer ring (convexity defects,
+        the top-level concavity of §6) is measured inside a window around the work area;
+        below tau DuDe would not cut the union, and the new piece takes the neighbour's
+        id. Longest borders first; at most one merge per piece and update.
+        """
+        p = self.params
+        pairs = pair_counts(labels[box])
+        min_border = 0.5 * p.max_door_width_m / res
+        cand = sorted(((c, a, b) for (a, b), c in pairs.items()
+                       if c >= min_border and ((a in redone) != (b in redone))), reverse=True)
+        if not cand:
+            return
+        tau_px = p.tau_m / res
+        m = int(math.ceil(2 * tau_px))
+        h, w = labels.shape
+        win = (slice(max(0, box[0].start - m), min(h, box[0].stop + m)),
+               slice(max(0, box[1].start - m), min(w, box[1].stop + m)))
+        lab_w = labels[win]
+        fc_w = free_clean[win]
+        used: set[int] = set()
+        for _c, a, b in cand[:_MAX_SEAM_TESTS]:
+            new, old = (a, b) if a in redone else (b, a)
+            if new in used or old in used:
+                continue
+            both = (lab_w == new) | (lab_w == old)
+            bb = bbox(both, 1)
+            union = np.pad((both[bb] & fc_w[bb]).astype(np.uint8), 1)
+            if cv2.connectedComponents(union, connectivity=4)[0] != 2:
+                continue
+            if max_concavity(union) < tau_px:
+                lab_w[both & (lab_w == new)] = old
+                used |= {new, old}
+
+
+
+def segment(grid: GridMap, params: SegmentationParams | None = None
+            ) -> npt.NDArray[np.int32]:
+    """Batch DuDe room segmentation of one grid.
+
+    Parameters
+    ----------
+    grid : GridMap
+    params : SegmentationParams, optional
+
+    Returns
+    -------
+    ndarray of int32, shape (grid.height, grid.width)
+        0 = no region; ids 1..n numbered in raster order of their first cell.
+
+    Examples
+    --------
+    >>> from explore_seg.core.grid import grid_from_ascii
+    >>> g, _ = grid_from_ascii("####\\n#..#\\n####", resolution_m=0.5)
+    >>> segment(g, SegmentationParams(min_region_area_m2=0.1, obstacle_inflation_m=0.0,
+    ...                               free_close_m=0.0)).max().item()
+    1
+    """
+    seg = IncrementalSegmenter(params)
+    labels = seg.update(grid)
+    return renumber(labels)
+

@@ -1,0 +1,171 @@
+"""Label-image helpers of the segmentation: boxes, counts, gap filling, id mapping.
+
+Label images are int32 ``(H, W)``, ``0`` = no region, ``k > 0`` a region id.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.grid import GridMap
+
+
+def bbox(mask: npt.NDArray[np.bool_], margin: int
+          ) -> tuple[slice, slice] | None:
+    """Bounding box of the true cells grown by ``margin`` (clipped), or None."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(mask.any(axis=0))
+    h, w = mask.shape
+    return (slice(max(0, rows[0] - margin), min(h, rows[-1] + 1 + margin)),
+            slice(max(0, cols[0] - margin), min(w, cols[-1] + 1 + margin)))
+
+
+def fill_gaps(labels: npt.NDArray[np.int32], domain: npt.NDArray[np.bool_],
+               max_iter: int) -> None:
+    """Give unlabelled domain cells the label of a labelled neighbour, in place (§10.3).
+
+    Geodesic label dilation restricted to the domain, limited to the bounding box of the
+    cells to fill, at most ``max_iter`` rounds (each round grows labels by one cell).
+    """
+    todo = domain & (labels == 0)
+    if not todo.any():
+        return
+    rows = np.flatnonzero(todo.any(axis=1))
+    cols = np.flatnonzero(todo.any(axis=0))
+    r0, r1 = max(0, rows[0] - 1), min(labels.shape[0], rows[-1] + 2)
+    c0, c1 = max(0, cols[0] - 1), min(labels.shape[1], cols[-1] + 2)
+    lab = labels[r0:r1, c0:c1]
+    tgt = todo[r0:r1, c0:c1].copy()
+    # grey dilation on ranks (float32 is exact below 2**24; ids may be larger)
+    uniq, inv = np.unique(lab, return_inverse=True)
+    rank = inv.reshape(lab.shape).astype(np.float32)
+    k = np.ones((3, 3), np.uint8)
+    for _ in range(max_iter):
+        grown = cv2.dilate(rank, k)
+        put = tgt & (grown > 0)
+        if not put.any():
+            break
+        rank[put] = grown[put]
+        tgt &= ~put
+        if not tgt.any():
+            break
+    filled = todo[r0:r1, c0:c1] & (rank > 0)
+    lab[filled] = uniq[rank[filled].astype(np.int64)]
+
+
+def label_counts(values: npt.NDArray[np.integer]) -> dict[int, int]:
+    """{id: count} of the ids > 0 in ``values`` (ids are bounded by the id counter)."""
+    v = values.ravel()
+    if v.size == 0:
+        return {}
+    c = np.bincount(v)          # labels are never negative
+    c[0] = 0
+    nz = np.flatnonzero(c)
+    return dict(zip(nz.tolist(), c[nz].tolist()))
+
+
+def pair_counts(lab: npt.NDArray[np.int32]) -> dict[tuple[int, int], int]:
+    """Number of 4-neighbour cell pairs between every two different non-zero labels."""
+    out: dict[tuple[int, int], int] = {}
+    for a, b in ((lab[:, :-1], lab[:, 1:]), (lab[:-1, :], lab[1:, :])):
+        m = (a != b) & (a > 0) & (b > 0)
+        if not m.any():
+            continue
+        x = np.minimum(a[m], b[m]).astype(np.int64)
+        y = np.maximum(a[m], b[m]).astype(np.int64)
+        keys, cnt = np.unique(x * (1 << 32) + y, return_counts=True)
+        for key, c in zip(keys.tolist(), cnt.tolist()):
+            pair = (key >> 32, key & 0xFFFFFFFF)
+            out[pair] = out.get(pair, 0) + c
+    return out
+
+
+
+def apply_mapping(labels: npt.NDArray[np.int32], mapping: dict[int, int]) -> None:
+    """Replace ids in place, all at once (``mapping``: old id -> new id)."""
+    if not mapping:
+        return
+    top = max(int(labels.max()), max(mapping)) + 1
+    lut = np.arange(top, dtype=np.int64)
+    lut[np.fromiter(mapping.keys(), np.int64)] = np.fromiter(mapping.values(), np.int64)
+    labels[...] = lut[labels].astype(np.int32)
+
+
+def match_ids(new: npt.NDArray[np.int32], old: npt.NDArray[np.int32],
+               new_ids: list[int], keep_frac: float,
+               old_area: dict[int, int]) -> dict[int, int]:
+    """Temporary new id -> old id it inherits (§12.3); missing keys get fresh ids.
+
+    Old pieces are processed in order of decreasing overlap; old id ``i`` passes to the
+    new piece ``j`` holding the largest share of i's cells when that share is at least
+    ``keep_frac`` of i (cells counted in ``old_area``) and ``j`` has no id yet.
+    """
+    m = (new > 0) & (old > 0)
+    if not m.any():
+        return {}
+    a = old[m].astype(np.int64)
+    b = new[m].astype(np.int64)
+    keys, cnt = np.unique(a * (1 << 32) + b, return_counts=True)
+    best: dict[int, tuple[int, int]] = {}
+    for key, c in zip(keys.tolist(), cnt.tolist()):
+        i, j = key >> 32, key & 0xFFFFFFFF
+        if i not in best or c > best[i][1] or (c == best[i][1] and j < best[i][0]):
+            best[i] = (j, c)
+    out: dict[int, int] = {}
+    taken: set[int] = set()
+    valid = set(new_ids)
+    for i, (j, c) in sorted(best.items(), key=lambda t: (-t[1][1], t[0])):
+        if j in taken or j not in valid:
+            continue
+        if c >= keep_frac * max(1, old_area.get(i, c)):
+            out[j] = i
+            taken.add(j)
+    return out
+
+
+def shift_into(old: npt.NDArray, shape: tuple[int, int], drow: int, dcol: int,
+                fill: int = 0, reuse: bool = False) -> npt.NDArray:
+    """Old array placed into a new array of ``shape`` with old (r, c) -> (r+drow, c+dcol).
+
+    With ``reuse`` and no shift nor resize, ``old`` itself is returned (no copy).
+    """
+    if reuse and drow == 0 and dcol == 0 and old.shape == tuple(shape):
+        return old
+    out = np.full(shape, fill, dtype=old.dtype)
+    h, w = old.shape
+    r0, c0 = max(0, drow), max(0, dcol)
+    r1, c1 = min(shape[0], h + drow), min(shape[1], w + dcol)
+    if r1 > r0 and c1 > c0:
+        out[r0:r1, c0:c1] = old[r0 - drow:r1 - drow, c0 - dcol:c1 - dcol]
+    return out
+
+
+
+def resample_labels(old: npt.NDArray[np.int32], g0: GridMap, g1: GridMap
+                     ) -> npt.NDArray[np.int32]:
+    """Old labels at the cell centres of ``g1`` (nearest cell; 0 outside ``g0``)."""
+    rows, cols = np.indices(g1.shape)
+    x, y = g1.cells_to_world(rows.ravel(), cols.ravel())
+    r, c = g0.world_to_cells(x, y)
+    ok = (r >= 0) & (r < g0.height) & (c >= 0) & (c < g0.width)
+    out = np.zeros(g1.shape[0] * g1.shape[1], dtype=np.int32)
+    out[ok] = old[r[ok], c[ok]]
+    return out.reshape(g1.shape)
+
+
+
+def renumber(labels: npt.NDArray[np.int32]) -> npt.NDArray[np.int32]:
+    """Ids 1..n in raster order of each region's first cell."""
+    flat = labels.ravel()
+    ids, first = np.unique(flat, return_index=True)
+    keep = ids > 0
+    ids, first = ids[keep], first[keep]
+    order = ids[np.argsort(first)]
+    lut = {int(i): k + 1 for k, i in enumerate(order.tolist())}
+    out = labels.copy()
+    apply_mapping(out, lut)
+    return out

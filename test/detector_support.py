@@ -1,0 +1,50 @@
+"""Shared by the test_detector_* files: model and frame locations, the torch network
+fixture and the oracle's class table. Tests that need the YOLOv3-tiny files skip when they
+are absent (fetch them with ``python scripts/fetch_weights.py``); tests on real frames skip
+when ``/work/shared`` (or ``$EXPLORE_SEG_SHARED``) is absent."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from explore_seg.core.detector import TorchBackend, default_model_dir
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED = Path(os.environ.get("EXPLORE_SEG_SHARED", ROOT.parent / "shared"))
+FRAMES = SHARED / "data" / "rgbd"
+MODEL_DIR = default_model_dir()
+HAVE_WEIGHTS = all(p.is_file() for p in (MODEL_DIR / "yolov3-tiny.cfg",
+                                         MODEL_DIR / "yolov3-tiny.weights",
+                                         MODEL_DIR / "coco.names"))
+needs_weights = pytest.mark.skipif(
+    not HAVE_WEIGHTS, reason=f"YOLOv3-tiny files absent from {MODEL_DIR} "
+                             "(run scripts/fetch_weights.py)")
+
+
+def frame(name: str) -> np.ndarray:
+    path = FRAMES / f"{name}_color.png"
+    if not path.is_file():
+        pytest.skip(f"shared frame {path} absent")
+    return cv2.cvtColor(cv2.imread(str(path), cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
+
+
+def frame_or_noise(name: str) -> np.ndarray:
+    path = FRAMES / f"{name}_color.png"
+    if path.is_file():
+        return frame(name)
+    return np.random.default_rng(0).integers(0, 256, (480, 640, 3), dtype=np.uint8)
+
+
+@pytest.fixture(scope="module")
+def torch_backend():
+    if not HAVE_WEIGHTS:
+        pytest.skip("YOLOv3-tiny files absent")
+    return TorchBackend(MODEL_DIR, 416, num_threads=2)
+
+
+SIM_IDS = {"floor": 1, "wall": 2, "chair": 3, "table": 4, "lamp": 5}
