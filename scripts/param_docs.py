@@ -30,7 +30,7 @@ from explore_seg.params import field_doc, ros_fields  # noqa: E402
 NODE_PARAMS: dict[str, list[tuple[str, str]]] = {
     "frontier_detector": [("", "explore_seg.core.frontiers:FrontierParams")],
     "segmentation": [("", "explore_seg.core.segmentation:SegmentationNodeParams")],
-    "object_costmap": [("", "explore_seg.core.objects:ObjectParams"),
+    "object_costmap": [("", "explore_seg.core.objects:ObjectCostmapNodeParams"),
                        ("detector.", "explore_seg.core.detector:DetectorParams")],
     "target_selector": [("", "explore_seg.core.selection:SelectionParams")],
     "sim_bridge": [("", "sim_bridge.engine:SimParams")],
