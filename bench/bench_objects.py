@@ -36,9 +36,9 @@ for extra in (ROOT, ROOT / "test"):
 from explore_seg.core.grid import GridMap  # noqa: E402
 from explore_seg.core.objects import (DepthFrame, ObjectMap, ObjectParams,  # noqa: E402
                                       load_priors, process_frame)
-# Scene helpers of the object tests (ray caster, leg scan, 2D box projection).
-from test_objects import (K, Det, box_parts, camera_pose, leg_scan,  # noqa: E402
-                          project_box, render_depth, table_parts)
+# Scene helpers of the object tests (ray caster, leg scan, 2D box projection, real frames).
+from objects_scene import (K, Det, box_parts, camera_pose, leg_scan,  # noqa: E402
+                           project_box, real_frames, render_depth, table_parts)
 
 SHARED = Path(os.environ.get("EXPLORE_SEG_SHARED", ROOT.parent / "shared"))
 
@@ -63,10 +63,8 @@ def real_case():
     root = SHARED / "data" / "rgbd"
     if not (root / "frames.yaml").is_file():
         return None
-    import test_objects
-
     names = {"chair": "chair", "desk": "dining table", "table": "dining table"}
-    for f, frame in test_objects._real_frames(SHARED):
+    for f, frame in real_frames(SHARED):
         if f["name"] == "tum_fr3_office":
             dets = [Det(names[o["class"]], o["bbox_px"]) for o in f["objects"]]
             return frame, dets, None

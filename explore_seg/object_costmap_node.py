@@ -35,9 +35,9 @@ from explore_seg import convert
 from explore_seg.core.camera import base_from_optical, map_from_base
 from explore_seg.core.detector import Detector, DetectorParams
 from explore_seg.core.grid import GridMap, quaternion_from_yaw
-from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D, ObjectMap,
-                                      ObjectParams, load_priors, parse_class_ids,
-                                      process_frame, WallMask, wall_mask)
+from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D,
+                                      ObjectCostmapNodeParams, ObjectMap, WallMask,
+                                      load_priors, parse_class_ids, process_frame, wall_mask)
 from explore_seg.node_util import WarnThrottle, config_file, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, POSE_QOS, SENSOR_QOS, map_qos
@@ -82,7 +82,7 @@ class ObjectCostmapNode(Node):
                  node_name: str = "object_costmap", namespace: str = "") -> None:
         super().__init__(node_name, context=context,
                          parameter_overrides=parameter_overrides or [], namespace=namespace)
-        self._p = ParamBinding(self, ObjectParams())
+        self._p = ParamBinding(self, ObjectCostmapNodeParams())
         self._dp = ParamBinding(self, DetectorParams(), prefix="detector.")
         p = self._p.params
         # the installed share's priors when no file is given (the core knows only the
@@ -147,7 +147,7 @@ class ObjectCostmapNode(Node):
 
     # ---------------------------------------------------------------- helpers
     @property
-    def params(self) -> ObjectParams:
+    def params(self) -> ObjectCostmapNodeParams:
         """Current parameters."""
         return self._p.params
 
@@ -166,7 +166,8 @@ class ObjectCostmapNode(Node):
         self.last_drop[reason] = detail
         self._warn(reason, f"dropped {reason}: {detail}")
 
-    def _params_changed(self, old: ObjectParams, new: ObjectParams) -> None:
+    def _params_changed(self, old: ObjectCostmapNodeParams,
+                        new: ObjectCostmapNodeParams) -> None:
         self._objects.params = new
         self._walls = None                      # wall_min_length_m / wall_margin_m
         if new.rate_hz != old.rate_hz:

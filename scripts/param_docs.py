@@ -32,7 +32,7 @@ NODE_PARAMS: dict[str, list[tuple[str, str]]] = {
     "/**": [("frontier.", "explore_seg.core.frontiers:FrontierParams")],
     "frontier_detector": [("", "explore_seg.core.frontiers:FrontierNodeParams")],
     "segmentation": [("", "explore_seg.core.segmentation:SegmentationNodeParams")],
-    "object_costmap": [("", "explore_seg.core.objects:ObjectParams"),
+    "object_costmap": [("", "explore_seg.core.objects:ObjectCostmapNodeParams"),
                        ("detector.", "explore_seg.core.detector:DetectorParams")],
     "target_selector": [("", "explore_seg.core.selection:SelectorNodeParams")],
     "sim_bridge": [("", "sim_bridge.engine:SimParams")],

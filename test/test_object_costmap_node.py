@@ -15,7 +15,7 @@ from explore_seg.core.camera import CameraIntrinsics
 from explore_seg.core.grid import GridMap
 from explore_seg.object_costmap_node import ObjectCostmapNode, State
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS, SENSOR_QOS
-from test_objects import box_parts, camera_pose, leg_scan, render_depth, table_parts
+from objects_scene import box_parts, camera_pose, leg_scan, render_depth, table_parts
 
 K = CameraIntrinsics(fx=525.0, fy=525.0, cx=319.5, cy=239.5, width=640, height=480)
 CAM_Z_M = 0.6

@@ -37,8 +37,8 @@ from explore_seg.core.detector import Detector, DetectorParams
 from explore_seg.core.frontiers import (Frontier, find_frontiers, object_obstacles,
                                         traversable_mask)
 from explore_seg.core.grid import GridMap
-from explore_seg.core.objects import (DepthFrame, Object3D, ObjectMap, ObjectParams,
-                                      load_priors, points_in_rect, process_frame,
+from explore_seg.core.objects import (DepthFrame, Object3D, ObjectCostmapNodeParams, ObjectMap,
+                                      ObjectParams, load_priors, points_in_rect, process_frame,
                                       wall_mask)
 from explore_seg.core.paths import BlockGraph
 from explore_seg.core.selection import SelectionParams, frontier_distances, select_goal
@@ -354,9 +354,10 @@ def test_layer_of_overlapping_objects_covers_their_union():
 
 
 def test_camera_mount_of_the_node_matches_the_simulator(small):
-    """The node's default extrinsics (ObjectParams) give the sim frame's own transform."""
+    """The node's default extrinsics (ObjectCostmapNodeParams) give the sim frame's own
+    transform."""
     world, _ = small
-    p = ObjectParams()
+    p = ObjectCostmapNodeParams()
     pose = (1.0, -2.0, 0.7)
     fr = DepthCamera(world, CameraParams(width=32, height=24, fx=26.25, fy=26.25,
                                          cx=15.5, cy=11.5)).render(pose)

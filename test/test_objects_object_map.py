@@ -1,0 +1,173 @@
+"""The object map: matching, misses, bounds, the robot's disk and path, and its outputs
+(explore_seg.core.objects.object_map)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from explore_seg.core.grid import grid_from_ascii
+from explore_seg.core.objects import (MAX_SURFACE_POINTS, UNKNOWN_CLASS, DepthFrame, ObjectMap,
+                                      ObjectParams)
+from objects_scene import (K, PRIORS, box_parts, camera_pose, make_obj, measured_table,
+                           render_depth)
+
+
+def test_classified_detection_replaces_unknown_object():
+    omap = ObjectMap(ObjectParams(), PRIORS)
+    omap.update([make_obj(2.0, 0.0, UNKNOWN_CLASS, (1.0, 0.8, 0.75))])
+    omap.update([make_obj(2.1, 0.0, "dining table", (1.2, 0.8, 0.75))])
+    assert [o.cls for o in omap.objects()] == ["dining table"]
+    # different known classes never merge
+    omap.update([make_obj(2.1, 0.0, "chair")])
+    assert sorted(o.cls for o in omap.objects()) == ["chair", "dining table"]
+
+
+def test_object_removed_after_misses_when_the_camera_sees_through_it():
+    params = ObjectParams(clear_after_misses=3)
+    omap = ObjectMap(params, PRIORS)
+    pose = camera_pose()
+    chair = [box_parts((2.0, 0.0), (0.5, 0.5, 0.9))]
+    present = DepthFrame(render_depth(chair, pose), K, pose)
+    omap.update([make_obj(2.0, 0.0, size=(0.5, 0.5, 0.9))], present)
+    omap.update([], present)               # still there, just not detected: no miss
+    assert omap.tracked[0].misses == 0
+    gone = DepthFrame(render_depth([], pose), K, pose)
+    for expected in (1, 2):
+        omap.update([], gone)
+        assert omap.tracked[0].misses == expected
+    omap.update([], gone)
+    assert len(omap) == 0
+
+
+@pytest.mark.parametrize("robot", [(0.3, 0.0, 0.0), (2.0, -1.8, 0.5 * math.pi)])
+def test_table_seen_under_its_top_is_not_missed_but_a_removed_one_is(robot):
+    """A top above the camera's view line: the camera sees under it, through most of the
+    box. Misses are judged on the measured surface (top and legs), not the box faces
+    (which would drop the table while it stands there, undetected)."""
+    params = ObjectParams(clear_after_misses=2)
+    table, obj = measured_table(0.95, params)
+    assert obj.surface is not None and 20 <= len(obj.surface) <= MAX_SURFACE_POINTS
+    pose = camera_pose(*robot)
+    present = DepthFrame(render_depth(table, pose), K, pose)
+    faces = ObjectMap(params, PRIORS)             # judged on the box faces: missed
+    faces.update([replace(obj, surface=None)], present)
+    faces.update([], present)
+    assert faces.tracked[0].misses == 1
+    omap = ObjectMap(params, PRIORS)
+    omap.update([obj], present)
+    for _ in range(4):
+        omap.update([], present)
+    assert len(omap) == 1 and omap.tracked[0].misses == 0
+    gone = DepthFrame(render_depth([], pose), K, pose)
+    omap.update([], gone)
+    assert omap.tracked[0].misses == 1
+    omap.update([], gone)
+    assert len(omap) == 0
+
+
+def test_object_not_missed_when_occluded_or_out_of_view():
+    omap = ObjectMap(ObjectParams(clear_after_misses=1), PRIORS)
+    pose = camera_pose()
+    omap.update([make_obj(3.0, 0.0, size=(0.5, 0.5, 0.9)), make_obj(-3.0, 0.0, size=(0.5, 0.5, 0.9))])
+    wall = [box_parts((1.5, 0.0), (0.1, 6.0, 3.0))]   # hides the chair in front
+    omap.update([], DepthFrame(render_depth(wall, pose), K, pose))
+    assert len(omap) == 2                  # occluded one and the one behind the camera stay
+
+
+def test_object_map_is_bounded():
+    omap = ObjectMap(ObjectParams(max_objects=5), PRIORS)
+    for i in range(12):
+        omap.update([make_obj(2.0 * i, 0.0)])
+    assert len(omap) == 5
+
+
+@pytest.mark.parametrize("robot_xy, fraction, kept", [
+    ((0.0, -0.52), 0.5, True),      # disk (R 0.22) touches the chair's side: kept
+    ((0.456, -0.456), 0.5, True),   # touches a corner diagonally (0.22 away): kept
+    ((0.385, -0.385), 0.5, True),   # 0.12 from the corner (0.10 in): kept, by distance
+    ((0.0, -0.40), 0.5, False),     # 0.12 m into the disk (> 0.5 R): a wrong box
+    ((0.0, -0.45), 0.5, True),      # 0.07 m into it: within the estimate's error
+    ((0.0, -0.45), 1.0, True),      # 1 = only boxes over the robot's centre
+    ((0.0, -0.25), 1.0, False),
+    ((0.0, 0.0), 0.0, True),        # 0 = never
+])
+def test_boxes_on_the_robot_are_dropped_by_how_deep_they_reach(robot_xy, fraction, kept):
+    """A box the robot merely touches (it bumped into the chair) must stay, else the
+    planner drives into the seat again; one that reaches deep into the robot's body
+    cannot be right (a chair of 0.6 m at the origin, robot radius 0.22 m)."""
+    omap = ObjectMap(ObjectParams(robot_clear_fraction=fraction), PRIORS)
+    omap.update([make_obj(0.0, 0.0)])
+    omap.update([], robot_xy=robot_xy)
+    assert (len(omap) == 1) == kept
+    fresh = ObjectMap(ObjectParams(robot_clear_fraction=fraction), PRIORS)
+    fresh.update([make_obj(0.0, 0.0)], robot_xy=robot_xy)     # observations alike
+    assert (len(fresh) == 1) == kept
+
+
+def test_rasterize_fills_rotated_footprint_on_the_map_grid():
+    grid, _ = grid_from_ascii("\n".join(["." * 40] * 30), resolution_m=0.1,
+                              origin_xy_m=(-1.0, -1.0))
+    omap = ObjectMap(ObjectParams(), PRIORS)
+    omap.update([make_obj(1.0, 0.5, "dining table", (1.0, 0.5, 0.75), yaw=math.pi / 4)])
+    layer = omap.rasterize(grid)
+    assert layer.same_geometry(grid)
+    occ = layer.data == 100
+    assert set(np.unique(layer.data)) == {0, 100}
+    # the centre cell and cells along the long (45 deg) axis are inside, off-axis are not
+    assert occ[grid.world_to_cell(1.0, 0.5)]
+    assert occ[grid.world_to_cell(1.3, 0.8)] and not occ[grid.world_to_cell(1.3, 0.2)]
+    # every cell whose centre is inside is set; set cells touch the rectangle
+    x, y = grid.cells_to_world(*np.indices(grid.shape))
+    c, s = math.cos(math.pi / 4), math.sin(math.pi / 4)
+    u, v = (x - 1.0) * c + (y - 0.5) * s, -(x - 1.0) * s + (y - 0.5) * c
+    inside = (np.abs(u) <= 0.5) & (np.abs(v) <= 0.25)
+    touching = (np.abs(u) <= 0.5 + 0.071) & (np.abs(v) <= 0.25 + 0.071)
+    assert np.all(occ[inside]) and np.all(touching[occ])
+
+
+def test_virtual_cloud_fills_boxes_and_is_bounded():
+    omap = ObjectMap(ObjectParams(max_cloud_points=5000), PRIORS)
+    omap.update([make_obj(1.0, 0.0, size=(0.5, 0.5, 1.0)), make_obj(4.0, 0.0, "dining table",
+                                                           (2.0, 1.0, 0.75))])
+    cloud = omap.virtual_cloud(0.05)
+    assert 0 < len(cloud) <= 5000
+    assert cloud[:, 2].min() >= 0.0 and cloud[:, 2].max() <= 1.0
+    near = cloud[cloud[:, 0] < 2.5]
+    assert np.abs(near[:, 0] - 1.0).max() <= 0.25 and np.abs(near[:, 1]).max() <= 0.25
+    with pytest.raises(ValueError, match="spacing_m"):
+        omap.virtual_cloud(0.0)
+
+
+def test_layer_and_cloud_are_cleared_along_the_path_the_robot_drove():
+    """A box grown over the robot's own path (the robot drove there, so nothing stands
+    there) is cut out of the layer and the cloud along a robot-wide corridor; the rest of
+    the box stays, and without the path (or with the radius 0) nothing is cleared."""
+    grid, _ = grid_from_ascii("\n".join(["." * 60] * 30), resolution_m=0.05,
+                              origin_xy_m=(0.0, 0.0))
+    table = make_obj(1.5, 0.75, "dining table", (1.6, 1.0, 0.75))   # x 0.7..2.3, y 0.25..1.25
+    plain = ObjectMap(ObjectParams(), PRIORS)
+    plain.update([table])
+    omap = ObjectMap(ObjectParams(), PRIORS)
+    omap.update([table])
+    off = ObjectMap(ObjectParams(swept_clear_radius_m=0.0), PRIORS)
+    off.update([table])
+    for x in np.arange(0.2, 2.81, 0.02):            # drove along y = 0.4 through the box
+        omap.note_robot_position(float(x), 0.4)
+        off.note_robot_position(float(x), 0.4)
+    full = plain.rasterize(grid).data == 100
+    cut = omap.rasterize(grid).data == 100
+    assert np.array_equal(off.rasterize(grid).data == 100, full)
+    x, y = grid.cells_to_world(*np.indices(grid.shape))
+    near = np.abs(y - 0.4) <= 0.22 - grid.resolution_m
+    far = np.abs(y - 0.4) > 0.22 + grid.resolution_m
+    assert full[near].any() and not cut[near].any()
+    assert np.array_equal(cut[far], full[far]) and cut.any()
+    cloud = omap.virtual_cloud(0.05)
+    assert len(cloud) and np.abs(cloud[:, 1] - 0.4).min() > 0.22 - 0.05
+    assert len(off.virtual_cloud(0.05)) == len(plain.virtual_cloud(0.05)) > len(cloud)
+    with pytest.raises(ValueError, match="swept_clear_radius_m"):
+        ObjectParams(swept_clear_radius_m=-0.1)
