@@ -41,12 +41,12 @@ class HouseOptions:
     wall_thickness_m: float = field(default=0.15, metadata=param_meta(
         "wall thickness", "m", range=(0.0, 1.0)))
     wall_height_m: float = field(default=2.5, metadata=param_meta(
-        "wall height (above lintel_z_m)", "m", range=(0.0, float("inf"))))
+        "wall height (above lintel_z_m)", "m", range=(0.0, math.inf)))
     door_width_m: tuple[float, float] = field(
         default=(0.8, 1.0), metadata=param_meta("door gap width range", "m"))
     lintels: bool = field(default=True, metadata=param_meta("door lintels from lintel_z_m"))
     lintel_z_m: float = field(default=2.0, metadata=param_meta(
-        "lintel bottom height (below wall_height_m)", "m", range=(0.0, float("inf"))))
+        "lintel bottom height (below wall_height_m)", "m", range=(0.0, math.inf)))
     corridor_width_m: tuple[float, float] = field(
         default=(1.4, 1.8), metadata=param_meta("corridor width range", "m"))
     room_width_m: tuple[float, float] = field(
