@@ -38,7 +38,8 @@ This package re-exports their public names.
 """
 
 from explore_seg.core.paths import cost_distance_field
-from sim_bridge.navigation.navigator import ARC_FREE_START_M, NavState, NavStatus, Navigator, wrap_angle
+from sim_bridge.navigation.navigator import (ARC_FREE_START_M, NavState, NavStatus, Navigator,
+                                            wrap_angle)
 from sim_bridge.navigation.params import NavParams
 from sim_bridge.navigation.planner import coarsen, cost_grid, path_cost, plan_path
 

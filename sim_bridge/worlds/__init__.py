@@ -15,7 +15,8 @@ rasters in grid layout (row = y). This package re-exports the public names of it
 """
 
 from sim_bridge.world import CELL_OVERLAP_M, raster_geometry, rasterize
-from sim_bridge.worlds.catalog import SMALL_HOUSE_SIZE_M, SMALL_ROOM_WIDTH_M, WORLD_NAMES, default_world
+from sim_bridge.worlds.catalog import (SMALL_HOUSE_SIZE_M, SMALL_ROOM_WIDTH_M, WORLD_NAMES,
+                                       default_world)
 from sim_bridge.worlds.files import (KNOWN_CLASSES, MAP_WALL_HEIGHT_M, WORLD_FORMAT, load_world,
                                      save_world, world_to_dict)
 from sim_bridge.worlds.furniture import Rect
