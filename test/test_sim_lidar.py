@@ -11,7 +11,7 @@ import pytest
 from sensor_scenes import random_free_poses, room_4x4, table_with_legs
 from sim_bridge.sensors import Lidar, LidarParams
 from sim_bridge.world import Primitive, World
-from sim_bridge.worlds import default_world
+from sim_bridge.worlds import default_world, load_world
 
 
 CENTRE = LidarParams(mount_xy_m=(0.0, 0.0))
@@ -177,7 +177,6 @@ def test_lidar_matches_brute_force_and_hits_lie_on_boundaries(name):
 @pytest.mark.parametrize("rel", ["house_cluttered_plus.world.yaml",
                                  "explore_bench/room_with_corridor.yaml"])
 def test_lidar_matches_brute_force_on_shared_worlds(shared, rel):
-    from sim_bridge.worlds import load_world
     world = load_world(shared / "worlds" / rel)
     params = LidarParams()
     lidar = Lidar(world, params)

@@ -11,7 +11,8 @@ import pytest
 from explore_seg.core.grid import GridMap, grid_from_ascii
 from sim_bridge import worlds
 from sim_bridge.engine import SimEngine, SimParams
-from sim_bridge.navigation import NavParams, NavState, cost_distance_field, cost_grid, plan_path
+from sim_bridge.navigation import (NavParams, NavState, Navigator, cost_distance_field,
+                                   cost_grid, plan_path)
 from sim_bridge.world import World
 from sim_scenes import FAST, WALL_H, WALL_T, box, room_world, walls_around
 
@@ -155,8 +156,6 @@ def test_windowed_plan_equals_full_grid_field_on_random_grids(seed):
 
 def test_pursuit_arc_check_rejects_a_lookahead_point_around_an_obstacle_corner():
     """The lookahead point is taken only if the arc to it stays out of the lethal zone."""
-    from sim_bridge.navigation import Navigator
-
     res = 0.05
     blocked = np.zeros((60, 60), bool)
     blocked[30:, :30] = True              # x < 1.5 and y > 1.5: a corner at (1.5, 1.5)
