@@ -1,6 +1,9 @@
 """ROS-free 2.5D simulator (worlds, sensors, engine) and its ROS node.
 
-``sim_bridge.world`` holds the data types, ``sim_bridge.worlds`` loading, generation and
-ground-truth rasters, ``sim_bridge.sensors`` the 2D lidar and the RGB-D camera. Importing
-the package imports nothing heavy; import the submodules you need.
+Layers, each importing only those above it: ``sim_bridge.world`` (data types and
+``rasterize``); ``sim_bridge.worlds`` (ground truth, world files, generated houses and
+mazes); ``sim_bridge.sensors`` (2D lidar, RGB-D camera), ``sim_bridge.mapping``,
+``sim_bridge.navigation`` (planner, navigator), ``sim_bridge.collision``;
+``sim_bridge.params`` (:class:`SimParams`); ``sim_bridge.engine``; ``sim_bridge.node``.
+Importing the package imports nothing heavy; import the submodules you need.
 """

@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from explore_seg.core.fields import param_meta
 from explore_seg.core.grid import OCCUPIED_THRESHOLD, GridMap
 from explore_seg.core.paths import distance_field, extract_path, inflate
 from sim_bridge import worlds
@@ -46,27 +47,28 @@ from sim_bridge.world import World
 class TourParams:
     """Parameters of :func:`coverage_tour`."""
 
-    sensor_range_m: float = field(default=5.0, metadata={
-        "doc": "range of the 360 degree sensor (the paper's lidar: 5 m)", "unit": "m"})
-    num_beams: int = field(default=360, metadata={"doc": "beams per viewpoint scan"})
-    candidate_spacing_m: float = field(default=0.5, metadata={
-        "doc": "lattice spacing of candidate viewpoints", "unit": "m"})
-    clearance_m: float = field(default=0.27, metadata={
-        "doc": "viewpoints and paths keep this distance to obstacles of the footprint "
-               "raster (robot radius + planner margin)", "unit": "m"})
-    target_stride_cells: int = field(default=2, metadata={
-        "doc": "targets: inside cells on every n-th row and column"})
-    ray_step_cells: float = field(default=0.5, metadata={
-        "doc": "sampling step along a beam", "unit": "cells"})
-    two_opt_max_sweeps: int = field(default=50, metadata={
-        "doc": "bound on the 2-opt improvement sweeps"})
-    prune_passes: int = field(default=3, metadata={
-        "doc": "bound on the passes of the viewpoint pruning"})
-    sample_spacing_m: float = field(default=0.25, metadata={
-        "doc": "the sensor also scans every this far along the tour", "unit": "m"})
-    coverage_fraction: float = field(default=0.99, metadata={
-        "doc": "the tour ends once this share of the coverable targets was in view "
-               "(the benchmark's completion rule)"})
+    sensor_range_m: float = field(default=5.0, metadata=param_meta(
+        "range of the 360 degree sensor (the paper's lidar: 5 m)", "m", range=(0.0, math.inf)))
+    num_beams: int = field(default=360, metadata=param_meta(
+        "beams per viewpoint scan", range=(3, 2**31 - 1)))
+    candidate_spacing_m: float = field(default=0.5, metadata=param_meta(
+        "lattice spacing of candidate viewpoints", "m", range=(0.0, math.inf)))
+    clearance_m: float = field(default=0.27, metadata=param_meta(
+        "viewpoints and paths keep this distance to obstacles of the footprint raster (robot "
+        "radius + planner margin)", "m", range=(0.0, math.inf)))
+    target_stride_cells: int = field(default=2, metadata=param_meta(
+        "targets: inside cells on every n-th row and column", range=(1, 2**31 - 1)))
+    ray_step_cells: float = field(default=0.5, metadata=param_meta(
+        "sampling step along a beam", "cells", range=(0.0, math.inf)))
+    two_opt_max_sweeps: int = field(default=50, metadata=param_meta(
+        "bound on the 2-opt improvement sweeps", range=(1, 2**31 - 1)))
+    prune_passes: int = field(default=3, metadata=param_meta(
+        "bound on the passes of the viewpoint pruning", range=(1, 2**31 - 1)))
+    sample_spacing_m: float = field(default=0.25, metadata=param_meta(
+        "the sensor also scans every this far along the tour", "m", range=(0.0, math.inf)))
+    coverage_fraction: float = field(default=0.99, metadata=param_meta(
+        "the tour ends once this share of the coverable targets was in view (the benchmark's "
+        "completion rule)", range=(0.0, 1.0)))
 
     def __post_init__(self) -> None:
         if not 0.0 < self.coverage_fraction <= 1.0:
@@ -133,7 +135,7 @@ def _visible_cells(lidar: Lidar, xy: tuple[float, float], geom: GridMap,
     return np.unique(r[inb] * geom.width + c[inb])
 
 
-def _greedy_cover(sets: list[npt.NDArray[np.int64]], n_targets: int) -> list[int]:
+def greedy_cover(sets: list[npt.NDArray[np.int64]], n_targets: int) -> list[int]:
     """Lazy greedy set cover of every coverable target; returns chosen set indices."""
     covered = np.zeros(n_targets, dtype=bool)
     heap = [(-len(s), i) for i, s in enumerate(sets) if len(s)]
@@ -157,7 +159,7 @@ def _greedy_cover(sets: list[npt.NDArray[np.int64]], n_targets: int) -> list[int
     return chosen
 
 
-def _tour_order(dist: npt.NDArray[np.float64], max_sweeps: int) -> list[int]:
+def tour_order(dist: npt.NDArray[np.float64], max_sweeps: int) -> list[int]:
     """Open tour from node 0 through all nodes: nearest neighbour, then 2-opt."""
     n = dist.shape[0]
     order = [0]
@@ -247,7 +249,7 @@ def coverage_tour(world: World, start_xy: tuple[float, float] | None = None,
     for s in sets:
         coverable[s] = True
     # 3. set cover
-    chosen = _greedy_cover(sets, tflat.size)
+    chosen = greedy_cover(sets, tflat.size)
     pts_rc = [s_rc] + [tuple(int(v) for v in cand_rc[i]) for i in chosen]
     # 4. geodesic distances and tour
     n = len(pts_rc)
@@ -267,14 +269,14 @@ def coverage_tour(world: World, start_xy: tuple[float, float] | None = None,
 
     # 5. prune viewpoints that the path to the others already brings into view
     keep = list(range(1, n))
-    order = _tour_order(dist[np.ix_([0] + keep, [0] + keep)], p.two_opt_max_sweeps)
+    order = tour_order(dist[np.ix_([0] + keep, [0] + keep)], p.two_opt_max_sweeps)
     best_len, best_order = walker.length([([0] + keep)[i] for i in order])
     for _ in range(p.prune_passes):
         removed = False
         for v in sorted(keep, key=lambda i: len(sets[chosen[i - 1]])):
             trial = [i for i in keep if i != v]
             sub = [0] + trial
-            o = _tour_order(dist[np.ix_(sub, sub)], p.two_opt_max_sweeps)
+            o = tour_order(dist[np.ix_(sub, sub)], p.two_opt_max_sweeps)
             length, ordered = walker.length([sub[i] for i in o])
             if math.isfinite(length) and length <= best_len + 1e-9:
                 keep, best_len, best_order = trial, length, ordered

@@ -22,235 +22,27 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.grid import OCCUPIED_THRESHOLD, GridMap
-from explore_seg.core.fields import param_meta as _doc
+from explore_seg.core.grid import GridMap
 from sim_bridge import worlds
-from sim_bridge.mapping import MappingParams, ScanMapper
+from sim_bridge.collision import Collider
+from sim_bridge.mapping import ScanMapper
 from sim_bridge.metrics import CollisionEvent, SimMetrics
-from sim_bridge.navigation import NavParams, NavState, NavStatus, Navigator
+from sim_bridge.navigation import NavState, NavStatus, Navigator
 from sim_bridge.observable import with_observable
-from sim_bridge.sensors import CameraParams, DepthCamera, Lidar, LidarParams
+from sim_bridge.params import DEPTH_ENCODINGS, SimParams
+from sim_bridge.sensors import DepthCamera, Lidar
 from sim_bridge.world import World
 
-#: Encodings the node can publish depth images in.
-DEPTH_ENCODINGS = ("16UC1", "32FC1")
-
-
-@dataclass(frozen=True)
-class SimParams:
-    """All simulator parameters (one ROS parameter each in :mod:`sim_bridge.node`).
-
-    Fields marked read-only take effect only when the engine is built.
-    """
-
-    world: str = field(default="small_house", metadata=_doc(
-        "world name (house, house_cluttered, maze, small_house, small_cluttered) or a "
-        "path to a *.world.yaml / map_server *.yaml", read_only=True))
-    seed: int = field(default=0, metadata=_doc("seed of the sensor and pose noise", read_only=True))
-    physics_dt_s: float = field(default=0.02, metadata=_doc(
-        "fixed physics step", "s", read_only=True))
-    real_time_factor: float = field(default=1.0, metadata=_doc(
-        "sim seconds per wall second when the node owns the clock"))
-    startup_real_time_factor: float = field(default=1.0, metadata=_doc(
-        "real-time factor until the first goal_pose arrives, while the explorer's nodes "
-        "discover the topics and start up (at a high real_time_factor those wall seconds "
-        "would cost many sim seconds, which the lock-step runs do not lose); 0 = "
-        "real_time_factor from the start"))
-    # --- robot
-    robot_radius_m: float = field(default=NavParams.robot_radius_m, metadata=_doc(
-        "collision disk radius (waffle 281 x 306 mm -> 0.21 m circumscribed)", "m",
-        read_only=True))
-    robot_height_m: float = field(default=1.1, metadata=_doc(
-        "parts whose zmin is below this collide (seats and table tops included)", "m",
-        read_only=True))
-    collision_backup_m: float = field(default=0.15, metadata=_doc(
-        "after a collision the robot backs off this far (Nav2 BackUp recovery; 0 = stay)",
-        "m"))
-    collision_backup_speed_mps: float = field(default=0.1, metadata=_doc(
-        "speed of that back-off", "m/s"))
-    max_linear_speed_mps: float = field(default=NavParams.max_linear_speed_mps, metadata=_doc(
-        "forward speed limit", "m/s"))
-    max_angular_speed_radps: float = field(default=NavParams.max_angular_speed_radps,
-                                           metadata=_doc("turn rate limit", "rad/s"))
-    # --- sensors
-    scan_rate_hz: float = field(default=LidarParams.rate_hz, metadata=_doc("lidar scan rate", "Hz"))
-    lidar_num_beams: int = field(default=LidarParams.num_beams, metadata=_doc(
-        "beams per 360 deg scan", read_only=True))
-    lidar_range_max_m: float = field(default=LidarParams.range_max_m, metadata=_doc(
-        "lidar maximum range (paper: 5 m; LDS-01: 3.5 m)", "m", read_only=True))
-    lidar_range_min_m: float = field(default=LidarParams.range_min_m, metadata=_doc(
-        "lidar minimum range", "m", read_only=True))
-    lidar_noise_std_m: float = field(default=0.01, metadata=_doc(
-        "Gaussian range noise", "m", read_only=True))
-    lidar_mount_x_m: float = field(default=0.0, metadata=_doc(
-        "lidar x in base_footprint (waffle: -0.064; 0 lets tf-less consumers treat "
-        "base_scan as base_footprint)", "m", read_only=True))
-    enable_camera: bool = field(default=False, metadata=_doc(
-        "render RGB-D + semantic frames", read_only=True))
-    camera_rate_hz: float = field(default=CameraParams.rate_hz, metadata=_doc(
-        "camera frame rate", "Hz"))
-    camera_width_px: int = field(default=CameraParams.width, metadata=_doc(
-        "image width", "px", read_only=True))
-    camera_height_px: int = field(default=CameraParams.height, metadata=_doc(
-        "image height", "px", read_only=True))
-    camera_fx_px: float = field(default=CameraParams.fx, metadata=_doc(
-        "focal length x", "px", read_only=True))
-    camera_fy_px: float = field(default=CameraParams.fy, metadata=_doc(
-        "focal length y", "px", read_only=True))
-    camera_cx_px: float = field(default=CameraParams.cx, metadata=_doc(
-        "principal point x", "px", read_only=True))
-    camera_cy_px: float = field(default=CameraParams.cy, metadata=_doc(
-        "principal point y", "px", read_only=True))
-    camera_mount_x_m: float = field(default=CameraParams.mount_x_m, metadata=_doc(
-        "camera x in base_footprint (forward)", "m", read_only=True))
-    camera_mount_z_m: float = field(default=CameraParams.mount_z_m, metadata=_doc(
-        "camera height above the floor", "m", read_only=True))
-    camera_pitch_rad: float = field(default=CameraParams.pitch_rad, metadata=_doc(
-        "camera pitch, positive looks down", "rad", read_only=True))
-    camera_range_max_m: float = field(default=CameraParams.range_max_m, metadata=_doc(
-        "depth beyond which pixels read NaN", "m", read_only=True))
-    camera_depth_encoding: str = field(default="16UC1", metadata=_doc(
-        "encoding of the published depth image: 16UC1 (millimetres, 0 = no reading; what "
-        "RealSense and Astra drivers publish, half the bytes) or 32FC1 (metres, NaN = no "
-        "reading)", read_only=True))
-    # --- mapping
-    map_resolution_m: float = field(default=MappingParams.resolution_m, metadata=_doc(
-        "occupancy map cell size", "m", read_only=True))
-    map_rate_hz: float = field(default=1.0, metadata=_doc("map publish rate (sim time)", "Hz"))
-    pose_noise_xy_m: float = field(default=0.0, metadata=_doc(
-        "std of the position error of the pose each scan is mapped at", "m"))
-    pose_noise_yaw_rad: float = field(default=0.0, metadata=_doc(
-        "std of the heading error of the pose each scan is mapped at", "rad"))
-    # --- navigation stand-in
-    nav_allow_unknown: bool = field(default=NavParams.allow_unknown, metadata=_doc(
-        "plan through unknown space (Nav2 allow_unknown)"))
-    nav_inflation_margin_m: float = field(default=NavParams.inflation_margin_m, metadata=_doc(
-        "clearance beyond the robot radius every plan keeps", "m"))
-    nav_inflation_radius_m: float = field(default=NavParams.inflation_radius_m, metadata=_doc(
-        "obstacle cost decays to zero at this distance (Nav2 inflation_radius)", "m"))
-    nav_unknown_cost: float = field(default=NavParams.unknown_cost, metadata=_doc(
-        "extra cost per metre through unknown cells"))
-    nav_replan_period_s: float = field(default=NavParams.replan_period_s, metadata=_doc(
-        "replan at most this often while the map changes", "s"))
-    nav_plan_downsample: int = field(default=NavParams.plan_downsample, metadata=_doc(
-        "plan on cells this many times coarser than the map"))
-    nav_goal_tolerance_xy_m: float = field(default=NavParams.goal_tolerance_xy_m,
-                                           metadata=_doc("goal position tolerance", "m"))
-    nav_goal_tolerance_yaw_rad: float = field(default=NavParams.goal_tolerance_yaw_rad,
-                                              metadata=_doc("goal heading tolerance", "rad"))
-    nav_progress_timeout_s: float = field(default=NavParams.progress_timeout_s, metadata=_doc(
-        "abort a goal without 0.5 m progress for this long (0 = off)", "s"))
-    nav_goal_timeout_s: float = field(default=NavParams.goal_timeout_s, metadata=_doc(
-        "abort a goal after this long (0 = off)", "s"))
-    nav_collision_retries: int = field(default=NavParams.collision_retries, metadata=_doc(
-        "after a collision and the back-up, replan and go on this many times per goal "
-        "before aborting it (0 = abort at the first)"))
-    # --- node (clock, publishing)
-    lockstep: bool = field(default=False, metadata=_doc(
-        "advance lockstep_dt_s of sim time per tick, as fast as ticks come, instead of "
-        "real_time_factor x wall time"))
-    lockstep_dt_s: float = field(default=0.05, metadata=_doc(
-        "sim time per tick in lock-step mode", "s"))
-    tick_period_s: float = field(default=0.02, metadata=_doc(
-        "wall-clock period of the simulation tick", "s", read_only=True))
-    max_sim_step_per_tick_s: float = field(default=1.0, metadata=_doc(
-        "cap on sim time advanced in one tick (the sim slows down rather than jump)", "s"))
-    publish_clock: bool = field(default=True, metadata=_doc(
-        "publish /clock (the sim owns time; other nodes run with use_sim_time)"))
-    costmap_layers: tuple[str, ...] = field(default=("object_costmap",), metadata=_doc(
-        "OccupancyGrid topics whose occupied cells the navigation stand-in avoids"))
-    output_dir: str = field(default="out/sim", metadata=_doc(
-        "where sim/save_metrics writes JSON and PNG"))
-    metrics_rate_hz: float = field(default=1.0, metadata=_doc(
-        "sim/metrics publish rate (sim time)", "Hz"))
-    # --- metrics
-    coverage_period_s: float = field(default=1.0, metadata=_doc(
-        "how often coverage is evaluated (sim time)", "s"))
-    compute_coverage: bool = field(default=True, metadata=_doc(
-        "rasterise the ground truth and track coverage", read_only=True))
-    coverage_observable: bool = field(default=True, metadata=_doc(
-        "measure coverage over the free cells a robot can observe from poses it can reach "
-        "(false: over every free cell connected to the start, gaps narrower than the robot "
-        "included)", read_only=True))
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.startup_real_time_factor)
-                and self.startup_real_time_factor >= 0):
-            raise ValueError(f"startup_real_time_factor must be finite and >= 0, got "
-                             f"{self.startup_real_time_factor}")
-        positive = ("physics_dt_s", "real_time_factor", "robot_radius_m", "robot_height_m",
-                    "max_linear_speed_mps", "max_angular_speed_radps", "map_resolution_m",
-                    "map_rate_hz", "coverage_period_s", "lockstep_dt_s", "tick_period_s",
-                    "max_sim_step_per_tick_s", "metrics_rate_hz",
-                    "collision_backup_speed_mps")
-        for name in positive:
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be finite and > 0, got {v}")
-        non_negative = ("pose_noise_xy_m", "pose_noise_yaw_rad", "collision_backup_m")
-        for name in non_negative:
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be finite and >= 0, got {v}")
-        if not self.world:
-            raise ValueError("world must name a world or a file, got ''")
-        if self.camera_depth_encoding not in DEPTH_ENCODINGS:
-            raise ValueError(f"camera_depth_encoding must be one of {DEPTH_ENCODINGS}, got "
-                             f"{self.camera_depth_encoding!r}")
-        for name in self.costmap_layers:
-            if not name or any(ch.isspace() for ch in name):
-                raise ValueError(f"costmap_layers entries must be topic names, got {name!r}")
-        if self.physics_dt_s > 0.1:
-            raise ValueError(f"physics_dt_s must be <= 0.1 s, got {self.physics_dt_s}")
-        # The sub-parameter classes validate their own fields.
-        self.nav_params()
-        self.mapping_params()
-        self.lidar_params()
-        self.camera_params()
-
-    def nav_params(self) -> NavParams:
-        """The navigation stand-in's parameters."""
-        return NavParams(
-            robot_radius_m=self.robot_radius_m,
-            inflation_margin_m=self.nav_inflation_margin_m,
-            inflation_radius_m=self.nav_inflation_radius_m,
-            unknown_cost=self.nav_unknown_cost,
-            allow_unknown=self.nav_allow_unknown,
-            replan_period_s=self.nav_replan_period_s,
-            plan_downsample=self.nav_plan_downsample,
-            goal_tolerance_xy_m=self.nav_goal_tolerance_xy_m,
-            goal_tolerance_yaw_rad=self.nav_goal_tolerance_yaw_rad,
-            max_linear_speed_mps=self.max_linear_speed_mps,
-            max_angular_speed_radps=self.max_angular_speed_radps,
-            progress_timeout_s=self.nav_progress_timeout_s,
-            goal_timeout_s=self.nav_goal_timeout_s,
-            collision_retries=self.nav_collision_retries)
-
-    def mapping_params(self) -> MappingParams:
-        """The mapper's parameters."""
-        return MappingParams(resolution_m=self.map_resolution_m)
-
-    def lidar_params(self) -> LidarParams:
-        """The lidar's parameters."""
-        return LidarParams(num_beams=self.lidar_num_beams, range_min_m=self.lidar_range_min_m,
-                           range_max_m=self.lidar_range_max_m,
-                           noise_std_m=self.lidar_noise_std_m, rate_hz=self.scan_rate_hz,
-                           mount_xy_m=(self.lidar_mount_x_m, 0.0))
-
-    def camera_params(self) -> CameraParams:
-        """The camera's parameters."""
-        return CameraParams(width=self.camera_width_px, height=self.camera_height_px,
-                            fx=self.camera_fx_px, fy=self.camera_fy_px, cx=self.camera_cx_px,
-                            cy=self.camera_cy_px, mount_x_m=self.camera_mount_x_m,
-                            mount_z_m=self.camera_mount_z_m, pitch_rad=self.camera_pitch_rad,
-                            range_max_m=self.camera_range_max_m, rate_hz=self.camera_rate_hz)
+#: Re-exported: SimParams and Collider moved to sim_bridge.params / sim_bridge.collision.
+__all__ = ["DEPTH_ENCODINGS", "CameraSample", "Collider", "ScanFrame", "ScanGeometry",
+           "SimEngine", "SimParams", "engine_from_params", "load_world"]
 
 
 @dataclass(frozen=True)
@@ -280,91 +72,6 @@ class CameraSample:
     stamp_s: float
     pose: tuple[float, float, float]
     frame: Any
-
-
-class Collider:
-    """Disk-vs-world overlap tests for the robot body.
-
-    Parameters
-    ----------
-    world : World
-    radius_m : float
-        Robot disk radius.
-    height_m : float
-        Primitives with ``zmin < height_m`` collide; a map-only world's occupied cells
-        (``base_grid``) always do.
-    """
-
-    def __init__(self, world: World, radius_m: float, height_m: float) -> None:
-        self.radius_m = float(radius_m)
-        prims = [p for p in world.primitives if p.zmin < height_m]
-        boxes = [p for p in prims if p.shape == "box"]
-        cyls = [p for p in prims if p.shape == "cylinder"]
-        self._boxes = boxes
-        self._cyls = cyls
-        self._bx = np.array([[p.x, p.y, math.cos(p.yaw), math.sin(p.yaw),
-                              p.size[0] / 2.0, p.size[1] / 2.0] for p in boxes],
-                            dtype=np.float64).reshape(-1, 6)
-        self._cy = np.array([[p.x, p.y, p.size[0]] for p in cyls],
-                            dtype=np.float64).reshape(-1, 3)
-        # Map-only worlds carry their occupied cells as wall boxes too; the raster is
-        # used only when a world has no primitives at all.
-        self._grid: GridMap | None = None
-        if world.base_grid is not None and not world.primitives:
-            self._grid = world.base_grid  # type: ignore[assignment]
-
-    def clearance(self, x: float, y: float) -> tuple[float, str, str, str]:
-        """Distance from (x, y) to the nearest solid, and that solid's object/class/part.
-
-        Returns ``(inf, "", "", "")`` in an empty world. Inside a solid the distance is 0.
-        """
-        best = (math.inf, "", "", "")
-        if len(self._bx):
-            b = self._bx
-            dx, dy = x - b[:, 0], y - b[:, 1]
-            u = np.abs(dx * b[:, 2] + dy * b[:, 3]) - b[:, 4]
-            v = np.abs(-dx * b[:, 3] + dy * b[:, 2]) - b[:, 5]
-            d = np.hypot(np.maximum(u, 0.0), np.maximum(v, 0.0))
-            i = int(np.argmin(d))
-            if d[i] < best[0]:
-                p = self._boxes[i]
-                best = (float(d[i]), p.object, p.cls, p.part)
-        if len(self._cy):
-            c = self._cy
-            d = np.maximum(np.hypot(x - c[:, 0], y - c[:, 1]) - c[:, 2], 0.0)
-            i = int(np.argmin(d))
-            if d[i] < best[0]:
-                p = self._cyls[i]
-                best = (float(d[i]), p.object, p.cls, p.part)
-        if self._grid is not None:
-            d = self._grid_clearance(x, y)
-            if d < best[0]:
-                best = (d, "map", "wall", "cell")
-        return best
-
-    def _grid_clearance(self, x: float, y: float) -> float:
-        """Distance to the nearest occupied cell square within the radius (inf if none)."""
-        g = self._grid
-        assert g is not None
-        res = g.resolution_m
-        rad = int(math.ceil(self.radius_m / res)) + 1
-        r, c = g.world_to_cell(x, y)
-        r0, r1 = max(0, r - rad), min(g.height, r + rad + 1)
-        c0, c1 = max(0, c - rad), min(g.width, c + rad + 1)
-        if r0 >= r1 or c0 >= c1:
-            return math.inf
-        rr, cc = np.nonzero(g.data[r0:r1, c0:c1] >= OCCUPIED_THRESHOLD)
-        if rr.size == 0:
-            return math.inf
-        # Point in the grid frame (cells), then distance to each unit square.
-        fr, fc = g.world_to_cell_float(x, y)
-        du = np.maximum(np.abs(float(fc) - (cc + c0 + 0.5)) - 0.5, 0.0)
-        dv = np.maximum(np.abs(float(fr) - (rr + r0 + 0.5)) - 0.5, 0.0)
-        return float(np.hypot(du, dv).min() * res)
-
-    def overlaps(self, x: float, y: float) -> bool:
-        """True when the robot disk at (x, y) overlaps a solid."""
-        return self.clearance(x, y)[0] < self.radius_m
 
 
 class SimEngine:

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from explore_seg.core.fields import param_meta
 from explore_seg.core.grid import FREE, OCCUPIED, UNKNOWN, GridMap
 
 
@@ -27,28 +28,30 @@ from explore_seg.core.grid import FREE, OCCUPIED, UNKNOWN, GridMap
 class MappingParams:
     """Parameters of :class:`ScanMapper` (log-odds sensor model and map growth)."""
 
-    resolution_m: float = field(default=0.05, metadata={
-        "doc": "map cell size", "unit": "m"})
-    log_odds_hit: float = field(default=2.2, metadata={
-        "doc": "log-odds added to a cell a beam ends in (ln(0.9/0.1); ~5x a miss, so a wall "
-               "seen once survives grazing beams, like slam_toolbox's 0.1 hit ratio)"})
-    log_odds_miss: float = field(default=-0.4, metadata={
-        "doc": "log-odds added to a cell a beam passes through (ln(0.4/0.6); < 0)"})
-    log_odds_min: float = field(default=-2.0, metadata={
-        "doc": "lower clamp of a cell's log-odds"})
-    log_odds_max: float = field(default=3.5, metadata={
-        "doc": "upper clamp of a cell's log-odds"})
-    occupied_threshold_log_odds: float = field(default=0.0, metadata={
-        "doc": "observed cells above this log-odds are published occupied (100), the rest "
-               "free (0)"})
-    ray_step_cells: float = field(default=0.5, metadata={
-        "doc": "sampling step along a beam, in cells (<= 1 so no cell is skipped along the axis)"})
-    initial_size_m: float = field(default=4.0, metadata={
-        "doc": "side of the square map around the first pose", "unit": "m"})
-    grow_chunk_m: float = field(default=4.0, metadata={
-        "doc": "the map grows by multiples of this on the side a scan leaves it", "unit": "m"})
-    max_size_m: float = field(default=200.0, metadata={
-        "doc": "largest map side; beams beyond are dropped", "unit": "m"})
+    resolution_m: float = field(default=0.05, metadata=param_meta(
+        "map cell size", "m", range=(0.0, math.inf)))
+    log_odds_hit: float = field(default=2.2, metadata=param_meta(
+        "log-odds added to a cell a beam ends in (ln(0.9/0.1); ~5x a miss, so a wall seen once "
+        "survives grazing beams, like slam_toolbox's 0.1 hit ratio)", range=(0.0, math.inf)))
+    log_odds_miss: float = field(default=-0.4, metadata=param_meta(
+        "log-odds added to a cell a beam passes through (ln(0.4/0.6); < 0)",
+        range=(-math.inf, 0.0)))
+    log_odds_min: float = field(default=-2.0, metadata=param_meta(
+        "lower clamp of a cell's log-odds"))
+    log_odds_max: float = field(default=3.5, metadata=param_meta(
+        "upper clamp of a cell's log-odds"))
+    occupied_threshold_log_odds: float = field(default=0.0, metadata=param_meta(
+        "observed cells above this log-odds are published occupied (100), the rest free (0)"))
+    ray_step_cells: float = field(default=0.5, metadata=param_meta(
+        "sampling step along a beam, in cells (<= 1 so no cell is skipped along the axis)",
+        range=(0.0, 1.0)))
+    initial_size_m: float = field(default=4.0, metadata=param_meta(
+        "side of the square map around the first pose", "m", range=(0.0, math.inf)))
+    grow_chunk_m: float = field(default=4.0, metadata=param_meta(
+        "the map grows by multiples of this on the side a scan leaves it",
+        "m", range=(0.0, math.inf)))
+    max_size_m: float = field(default=200.0, metadata=param_meta(
+        "largest map side; beams beyond are dropped", "m", range=(0.0, math.inf)))
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.resolution_m) and self.resolution_m > 0):

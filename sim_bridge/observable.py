@@ -67,8 +67,8 @@ def reachable_centres(gt, robot_radius_m: float) -> npt.NDArray[np.bool_]:
     return lab == k
 
 
-def _sample_cells(reach: npt.NDArray[np.bool_], step: int
-                  ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+def sample_cells(reach: npt.NDArray[np.bool_], step: int
+                 ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
     """Cells of ``reach`` on a lattice of ``step`` cells, plus enough cells of the strips
     the lattice misses (a corridor narrower than the spacing between two lattice lines)
     that every reachable cell has a sample within ``step - 1`` cells (Chebyshev)."""
@@ -121,7 +121,7 @@ def observable_region(world: World, gt, lidar_params: LidarParams | None = None,
     lidar = Lidar(world, lp)
     res = gt.lidar.resolution_m
     reach = reachable_centres(gt, robot_radius_m)
-    rows, cols = _sample_cells(reach, max(1, int(round(spacing_m / res))))
+    rows, cols = sample_cells(reach, max(1, int(round(spacing_m / res))))
     xs, ys = gt.lidar.cells_to_world(rows.astype(np.float64), cols.astype(np.float64))
     x0, y0 = (float(v) for v in world.start_pose[:2])
     xs, ys = np.append(xs, x0), np.append(ys, y0)

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from sim_bridge.engine import SimEngine, SimParams
-from sim_bridge.observable import observable_region, reachable_centres, with_observable
+from sim_bridge.observable import (observable_region, reachable_centres, sample_cells,
+                                   with_observable)
 from sim_bridge.sensors import LidarParams
 from sim_bridge.world import Primitive, World
 from sim_bridge.worlds import ground_truth
@@ -95,12 +96,10 @@ def test_bad_arguments():
 
 
 def test_samples_cover_strips_between_lattice_lines():
-    from sim_bridge.observable import _sample_cells
-
     reach = np.zeros((40, 40), bool)
     reach[5:35, 12:14] = True            # a 2-cell strip between lattice columns 10 and 15
     reach[20, 0:40] = True               # and a 1-cell row across
-    rows, cols = _sample_cells(reach, 5)
+    rows, cols = sample_cells(reach, 5)
     assert reach[rows, cols].all()
     for r, c in np.argwhere(reach):
         assert (np.maximum(abs(rows - r), abs(cols - c)) <= 4).any(), (r, c)

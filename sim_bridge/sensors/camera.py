@@ -1,22 +1,14 @@
-"""Simulated sensors of the 2.5D world: a planar lidar and an RGB-D camera.
+"""Simulated RGB-D camera with semantic and instance images.
 
-* :class:`Lidar` casts ``num_beams`` rays in the scan plane against the rectangles and
-  circles that the plane cuts out of the world's primitives (analytic ray/segment and
-  ray/circle intersection). Each scan first culls primitives beyond the range and then
-  tests every primitive only against the beams inside its angular extent, so the work
-  grows with what the robot sees, not with the size of the world.
-* :class:`DepthCamera` ray-casts every pixel against the upright boxes and cylinders in
-  3D (slab test) and the floor ``z = 0``. Primitives are culled by range and view
-  frustum, projected to a screen rectangle (exactly, with near-plane clipping) and
-  drawn front to back; only the pixels of that rectangle are tested, and a primitive
-  wholly behind what is already drawn in its rectangle is skipped.
+:class:`DepthCamera` ray-casts every pixel against the upright boxes and cylinders in 3D
+(slab test) and the floor ``z = 0``. Primitives are culled by range and view frustum,
+projected to a screen rectangle (exactly, with near-plane clipping) and drawn front to
+back; only the pixels of that rectangle are tested, and a primitive wholly behind what
+is already drawn in its rectangle is skipped.
 
-Conventions: robot poses are ``(x, y, yaw)`` of ``base_footprint`` in the world frame;
-mounts are given relative to ``base_footprint``. Beam ``k`` of a scan points at
-``angle_min + k * angle_increment`` from the robot heading with ``angle_min = -pi`` and
-``angle_increment = 2 pi / num_beams``. The camera optical frame is REP-103 optical
-(x right, y down, z forward); depth is the optical z, NaN where nothing is hit within
-``range_max_m``.
+The mount is given relative to ``base_footprint``. The camera optical frame is REP-103
+optical (x right, y down, z forward); depth is the optical z, NaN where nothing is hit
+within ``range_max_m``.
 """
 
 from __future__ import annotations
@@ -28,264 +20,11 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.camera import CameraIntrinsics, base_from_optical, map_from_base
+from explore_seg.core.fields import param_meta
+from sim_bridge.sensors.common import CLASS_IDS, CLASS_RGB, FLOOR_RGB, require_positive
 from sim_bridge.world import Primitive, World
 
-#: Semantic class ids of the camera's ``semantic`` image (0 = floor / nothing).
-CLASS_IDS: dict[str, int] = {"none": 0, "wall": 1, "chair": 2, "table": 3, "desk": 4,
-                             "cabinet": 5, "sofa": 6, "other": 7}
-#: Inverse of :data:`CLASS_IDS`.
-CLASS_NAMES: dict[int, str] = {v: k for k, v in CLASS_IDS.items()}
-#: RGB colour of each class id (floor = id 0 uses :data:`FLOOR_RGB` with a checker pattern).
-CLASS_RGB: dict[int, tuple[int, int, int]] = {
-    0: (40, 40, 48), 1: (205, 200, 185), 2: (200, 60, 40), 3: (150, 100, 50),
-    4: (90, 140, 60), 5: (60, 90, 170), 6: (120, 60, 140), 7: (140, 140, 140)}
-#: Floor colours of the two checker tiles.
-FLOOR_RGB = ((150, 150, 150), (120, 120, 120))
 
-
-def _pos(name: str, value: float) -> None:
-    if not (math.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be finite and > 0, got {value}")
-
-
-# ============================================================ lidar
-@dataclass(frozen=True)
-class LidarParams:
-    """Planar 360-degree lidar (TurtleBot3 LDS-like; the paper used a 5 m range)."""
-
-    num_beams: int = field(default=360, metadata={"doc": "beams per revolution"})
-    range_min_m: float = field(default=0.12, metadata={
-        "doc": "closer hits read -inf (REP 117 'too close')", "unit": "m"})
-    range_max_m: float = field(default=5.0, metadata={
-        "doc": "farther hits read +inf (LDS real: 3.5 m; the paper used 5 m)", "unit": "m"})
-    scan_height_m: float = field(default=0.17, metadata={
-        "doc": "height of the scan plane above the floor", "unit": "m"})
-    noise_std_m: float = field(default=0.0, metadata={
-        "doc": "std of Gaussian range noise (applied when an rng is given)", "unit": "m"})
-    rate_hz: float = field(default=10.0, metadata={"doc": "scan rate", "unit": "Hz"})
-    mount_xy_m: tuple[float, float] = field(default=(-0.064, 0.0), metadata={
-        "doc": "lidar position in base_footprint (TurtleBot3 waffle base_scan)", "unit": "m"})
-
-    def __post_init__(self) -> None:
-        if int(self.num_beams) != self.num_beams or self.num_beams < 3:
-            raise ValueError(f"num_beams must be an integer >= 3, got {self.num_beams}")
-        _pos("range_min_m", self.range_min_m)
-        _pos("rate_hz", self.rate_hz)
-        if not self.range_max_m > self.range_min_m or not math.isfinite(self.range_max_m):
-            raise ValueError(f"range_max_m must be finite and > range_min_m "
-                             f"{self.range_min_m}, got {self.range_max_m}")
-        if not (math.isfinite(self.scan_height_m) and self.scan_height_m >= 0):
-            raise ValueError(f"scan_height_m must be >= 0, got {self.scan_height_m}")
-        if not (math.isfinite(self.noise_std_m) and self.noise_std_m >= 0):
-            raise ValueError(f"noise_std_m must be >= 0, got {self.noise_std_m}")
-        if len(self.mount_xy_m) != 2 or not all(math.isfinite(v) for v in self.mount_xy_m):
-            raise ValueError(f"mount_xy_m must be 2 finite values, got {self.mount_xy_m}")
-
-    @property
-    def angle_min_rad(self) -> float:
-        """Angle of beam 0 from the robot heading."""
-        return -math.pi
-
-    @property
-    def angle_increment_rad(self) -> float:
-        """Angle between consecutive beams."""
-        return 2.0 * math.pi / self.num_beams
-
-    @property
-    def angle_max_rad(self) -> float:
-        """Angle of the last beam."""
-        return self.angle_min_rad + (self.num_beams - 1) * self.angle_increment_rad
-
-
-class Lidar:
-    """Analytic 2D ray caster of a world's scan-plane cross-section.
-
-    Parameters
-    ----------
-    world : World
-        Primitives with ``zmin <= scan_height_m <= zmax`` are seen (boxes as their four
-        edges, cylinders as circles).
-    params : LidarParams
-    """
-
-    def __init__(self, world: World, params: LidarParams | None = None) -> None:
-        self.params = params or LidarParams()
-        h = self.params.scan_height_m
-        seen = [(i, p) for i, p in enumerate(world.primitives) if p.zmin <= h <= p.zmax]
-        segs, seg_prim, circles, circ_prim = [], [], [], []
-        for i, p in seen:
-            if p.shape == "box":
-                c, s = math.cos(p.yaw), math.sin(p.yaw)
-                hx, hy = p.size[0] / 2, p.size[1] / 2
-                corners = [(p.x + c * u - s * v, p.y + s * u + c * v)
-                           for u, v in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))]
-                for k in range(4):
-                    (ax, ay), (bx, by) = corners[k], corners[(k + 1) % 4]
-                    segs.append((ax, ay, bx - ax, by - ay))
-                    seg_prim.append(i)
-            else:
-                circles.append((p.x, p.y, p.size[0]))
-                circ_prim.append(i)
-        self._seg = np.asarray(segs, np.float64).reshape(-1, 4)       # px, py, ex, ey
-        self._seg_prim = np.asarray(seg_prim, np.int64)
-        self._seg_mid = self._seg[:, :2] + 0.5 * self._seg[:, 2:]
-        self._seg_half = 0.5 * np.hypot(self._seg[:, 2], self._seg[:, 3])
-        self._circ = np.asarray(circles, np.float64).reshape(-1, 3)   # cx, cy, r
-        self._circ_prim = np.asarray(circ_prim, np.int64)
-        n = self.params.num_beams
-        self._rel = self.params.angle_min_rad + np.arange(n) * self.params.angle_increment_rad
-
-    @property
-    def num_segments(self) -> int:
-        """Number of segments (box edges) in the scan plane."""
-        return int(self._seg.shape[0])
-
-    @property
-    def num_circles(self) -> int:
-        """Number of circles (cylinders) in the scan plane."""
-        return int(self._circ.shape[0])
-
-    def origin(self, pose: tuple[float, float, float]) -> tuple[float, float]:
-        """World (x, y) of the lidar for a robot pose."""
-        x, y, yaw = pose
-        mx, my = self.params.mount_xy_m
-        c, s = math.cos(yaw), math.sin(yaw)
-        return x + c * mx - s * my, y + s * mx + c * my
-
-    def scan(self, pose: tuple[float, float, float],
-             rng: np.random.Generator | None = None) -> npt.NDArray[np.float32]:
-        """Ranges of one scan.
-
-        Parameters
-        ----------
-        pose : tuple of float
-            Robot (x, y, yaw) in the world.
-        rng : numpy.random.Generator, optional
-            Source of range noise (``noise_std_m``); no noise without it.
-
-        Returns
-        -------
-        ndarray of float32, shape (num_beams,)
-            Range of beam ``k`` (angle ``-pi + k * 2 pi / num_beams`` from the heading):
-            ``+inf`` when nothing lies within ``range_max_m``, ``-inf`` when the nearest
-            hit is closer than ``range_min_m``, else the distance in metres.
-        """
-        return self.scan_with_hits(pose, rng)[0]
-
-    def scan_with_hits(self, pose: tuple[float, float, float],
-                       rng: np.random.Generator | None = None
-                       ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.int64]]:
-        """:meth:`scan` plus the index (into ``world.primitives``) of what each beam hit.
-
-        Returns
-        -------
-        ranges : ndarray of float32, shape (num_beams,)
-        hit_index : ndarray of int64, shape (num_beams,)
-            -1 where the beam reads ``+inf``.
-        """
-        p = self.params
-        n = p.num_beams
-        inc = p.angle_increment_rad
-        ox, oy = self.origin(pose)
-        yaw = float(pose[2])
-        a0 = yaw + p.angle_min_rad
-        rmax = p.range_max_m
-        two_pi = 2.0 * math.pi
-        # ---- candidate (primitive, beam) pairs from the angular extents
-        firsts, counts, kinds, ids = [], [], [], []
-        if self._seg.shape[0]:
-            dmx = self._seg_mid[:, 0] - ox
-            dmy = self._seg_mid[:, 1] - oy
-            near = np.flatnonzero(dmx * dmx + dmy * dmy < (rmax + self._seg_half) ** 2)
-            if near.size:
-                sg = self._seg[near]
-                wx, wy = sg[:, 0] - ox, sg[:, 1] - oy
-                t0 = np.arctan2(wy, wx)
-                t1 = np.arctan2(wy + sg[:, 3], wx + sg[:, 2])
-                d = np.mod(t1 - t0 + math.pi, two_pi) - math.pi
-                lo = np.mod(np.where(d >= 0, t0, t1) - a0, two_pi)
-                k0 = np.floor(lo / inc).astype(np.int64)
-                k1 = np.floor((lo + np.abs(d)) / inc).astype(np.int64) + 1
-                firsts.append(k0)
-                counts.append(np.minimum(k1 - k0 + 1, n))
-                ids.append(near)
-                kinds.append(np.zeros(near.size, bool))
-        if self._circ.shape[0]:
-            cx = self._circ[:, 0] - ox
-            cy = self._circ[:, 1] - oy
-            r = self._circ[:, 2]
-            dist = np.hypot(cx, cy)
-            near = np.flatnonzero(dist < rmax + r)
-            if near.size:
-                dn, rn = dist[near], r[near]
-                half = np.where(dn > rn, np.arcsin(np.minimum(rn / np.maximum(dn, 1e-12), 1.0)),
-                                math.pi)
-                lo = np.mod(np.arctan2(cy[near], cx[near]) - half - a0, two_pi)
-                k0 = np.floor(lo / inc).astype(np.int64)
-                k1 = np.floor((lo + 2 * half) / inc).astype(np.int64) + 1
-                firsts.append(k0)
-                counts.append(np.minimum(k1 - k0 + 1, n))
-                ids.append(near)
-                kinds.append(np.ones(near.size, bool))
-        ranges = np.full(n, np.inf)
-        hit = np.full(n, -1, np.int64)
-        if firsts:
-            k0 = np.concatenate(firsts)
-            cnt = np.concatenate(counts)
-            idx = np.concatenate(ids)
-            is_circ = np.concatenate(kinds)
-            total = int(cnt.sum())
-            starts = np.cumsum(cnt) - cnt
-            owner = np.repeat(np.arange(cnt.size), cnt)
-            beam = (np.repeat(k0, cnt) + np.arange(total) - starts[owner]) % n
-            ang = a0 + beam * inc
-            dx, dy = np.cos(ang), np.sin(ang)
-            t = np.full(total, np.inf)
-            prim = np.empty(total, np.int64)
-            seg_pairs = ~is_circ[owner]
-            if seg_pairs.any():
-                sel = np.flatnonzero(seg_pairs)
-                s_id = idx[owner[sel]]
-                sg = self._seg[s_id]
-                wx, wy = sg[:, 0] - ox, sg[:, 1] - oy
-                ex, ey = sg[:, 2], sg[:, 3]
-                bx, by = dx[sel], dy[sel]
-                den = bx * ey - by * ex
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    tt = (wx * ey - wy * ex) / den
-                    ss = (wx * by - wy * bx) / den
-                ok = (den != 0) & (ss >= 0.0) & (ss <= 1.0) & (tt >= 0.0)
-                t[sel] = np.where(ok, tt, np.inf)
-                prim[sel] = self._seg_prim[s_id]
-            if (~seg_pairs).any():
-                sel = np.flatnonzero(~seg_pairs)
-                c_id = idx[owner[sel]]
-                cc = self._circ[c_id]
-                wx, wy = cc[:, 0] - ox, cc[:, 1] - oy
-                b = wx * dx[sel] + wy * dy[sel]
-                disc = b * b - (wx * wx + wy * wy - cc[:, 2] ** 2)
-                root = np.sqrt(np.maximum(disc, 0.0))
-                tin = b - root
-                tt = np.where(tin >= 0.0, tin, b + root)
-                ok = (disc >= 0.0) & (tt >= 0.0)
-                t[sel] = np.where(ok, tt, np.inf)
-                prim[sel] = self._circ_prim[c_id]
-            np.minimum.at(ranges, beam, t)
-            win = np.isfinite(t) & (t == ranges[beam])
-            hit[beam[win]] = prim[win]
-        if p.noise_std_m > 0 and rng is not None:
-            fin = np.isfinite(ranges)
-            ranges[fin] = np.maximum(ranges[fin] + rng.normal(0.0, p.noise_std_m, int(fin.sum())),
-                                     0.0)
-        too_close = ranges < p.range_min_m
-        beyond = ranges > rmax
-        ranges[too_close] = -np.inf
-        ranges[beyond] = np.inf
-        hit[beyond] = -1
-        return ranges.astype(np.float32), hit
-
-
-# ============================================================ camera
 @dataclass(frozen=True)
 class CameraParams:
     """Pinhole RGB-D camera (RealSense-like) on the robot.
@@ -295,29 +34,34 @@ class CameraParams:
     robot carried it 0.894 m up, pitched 0.1 rad down (set ``mount_z_m``/``pitch_rad``).
     """
 
-    width: int = field(default=640, metadata={"doc": "image width", "unit": "px"})
-    height: int = field(default=480, metadata={"doc": "image height", "unit": "px"})
-    fx: float = field(default=525.0, metadata={"doc": "focal length x", "unit": "px"})
-    fy: float = field(default=525.0, metadata={"doc": "focal length y", "unit": "px"})
-    cx: float = field(default=319.5, metadata={"doc": "principal point x", "unit": "px"})
-    cy: float = field(default=239.5, metadata={"doc": "principal point y", "unit": "px"})
-    mount_x_m: float = field(default=0.064, metadata={
-        "doc": "camera x in base_footprint (forward)", "unit": "m"})
-    mount_y_m: float = field(default=0.0, metadata={
-        "doc": "camera y in base_footprint (left)", "unit": "m"})
-    mount_z_m: float = field(default=0.2, metadata={
-        "doc": "camera height above the floor", "unit": "m"})
-    pitch_rad: float = field(default=0.0, metadata={
-        "doc": "camera pitch, positive looks down (REP 103)", "unit": "rad"})
-    range_min_m: float = field(default=0.05, metadata={
-        "doc": "near plane: closer surfaces are not drawn", "unit": "m"})
-    range_max_m: float = field(default=6.0, metadata={
-        "doc": "depth (optical z) beyond which pixels read NaN", "unit": "m"})
-    rate_hz: float = field(default=15.0, metadata={"doc": "frame rate", "unit": "Hz"})
-    depth_noise_std_m: float = field(default=0.0, metadata={
-        "doc": "std of Gaussian depth noise (applied when an rng is given)", "unit": "m"})
-    floor_tile_m: float = field(default=0.5, metadata={
-        "doc": "checker tile size of the floor colour", "unit": "m"})
+    width: int = field(default=640, metadata=param_meta(
+        "image width", "px", range=(1, 2**31 - 1)))
+    height: int = field(default=480, metadata=param_meta(
+        "image height", "px", range=(1, 2**31 - 1)))
+    fx: float = field(default=525.0, metadata=param_meta(
+        "focal length x", "px", range=(0.0, math.inf)))
+    fy: float = field(default=525.0, metadata=param_meta(
+        "focal length y", "px", range=(0.0, math.inf)))
+    cx: float = field(default=319.5, metadata=param_meta("principal point x", "px"))
+    cy: float = field(default=239.5, metadata=param_meta("principal point y", "px"))
+    mount_x_m: float = field(default=0.064, metadata=param_meta(
+        "camera x in base_footprint (forward)", "m"))
+    mount_y_m: float = field(default=0.0, metadata=param_meta(
+        "camera y in base_footprint (left)", "m"))
+    mount_z_m: float = field(default=0.2, metadata=param_meta(
+        "camera height above the floor", "m"))
+    pitch_rad: float = field(default=0.0, metadata=param_meta(
+        "camera pitch, positive looks down (REP 103)", "rad", range=(-math.pi / 2, math.pi / 2)))
+    range_min_m: float = field(default=0.05, metadata=param_meta(
+        "near plane: closer surfaces are not drawn", "m", range=(0.0, math.inf)))
+    range_max_m: float = field(default=6.0, metadata=param_meta(
+        "depth (optical z) beyond which pixels read NaN", "m", range=(0.0, math.inf)))
+    rate_hz: float = field(default=15.0, metadata=param_meta(
+        "frame rate", "Hz", range=(0.0, math.inf)))
+    depth_noise_std_m: float = field(default=0.0, metadata=param_meta(
+        "std of Gaussian depth noise (applied when an rng is given)", "m", range=(0.0, math.inf)))
+    floor_tile_m: float = field(default=0.5, metadata=param_meta(
+        "checker tile size of the floor colour", "m", range=(0.0, math.inf)))
 
     def __post_init__(self) -> None:
         for name in ("width", "height"):
@@ -325,7 +69,7 @@ class CameraParams:
             if int(v) != v or v < 1:
                 raise ValueError(f"{name} must be an integer >= 1, got {v}")
         for name in ("fx", "fy", "range_min_m", "rate_hz", "floor_tile_m"):
-            _pos(name, getattr(self, name))
+            require_positive(name, getattr(self, name))
         for name in ("cx", "cy", "mount_x_m", "mount_y_m", "mount_z_m", "pitch_rad"):
             if not math.isfinite(getattr(self, name)):
                 raise ValueError(f"{name} must be finite, got {getattr(self, name)}")

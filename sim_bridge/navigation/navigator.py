@@ -1,50 +1,26 @@
-"""Navigation stand-in: what Nav2's bt_navigator + planner + controller do, in a few lines.
+"""The navigation stand-in's goal state machine and path follower.
 
-:class:`Navigator` takes a goal (x, y, yaw) like ``goal_pose``, plans on the current map
-plus any extra occupancy layers (e.g. the object costmap) whose occupied cells are
-obstacles, follows the plan with a pure-pursuit controller within the speed limits,
-replans periodically and when the plan gets blocked, and reports ``ACTIVE`` /
-``SUCCEEDED`` / ``ABORTED`` with a reason.
-
-Planning mirrors Nav2's NavFn on an inflated costmap:
-
-* cells closer than ``robot_radius_m + inflation_margin_m`` to an obstacle are lethal
-  (obstacles inflated by the robot radius, :func:`explore_seg.core.paths.inflate`
-  semantics);
-* beyond that, out to ``inflation_radius_m``, a cell costs
-  ``1 + inflation_cost_weight * exp(-inflation_cost_scale * (d - lethal))`` (Nav2's
-  exponential inflation decay), which keeps plans off walls;
-* unknown cells are traversable (``allow_unknown: true``) at ``1 + unknown_cost``
-  (NavFn gives unknown cells a near-lethal cost, so known free space is preferred);
-* a goal inside a lethal cell moves to the nearest free cell within
-  ``planner_goal_tolerance_m``.
-
-The cost-weighted 8-connected Dijkstra runs on a window around start and goal that grows
-until it provably holds the cheapest path. A new plan replaces the current one only when
-it is clearly cheaper (``switch_cost_ratio``) or the current one got blocked, which
-avoids the back-and-forth a planner through unknown space otherwise shows as walls
-appear piece by piece.
-
-Following: pure pursuit towards the plan point ``lookahead_m`` ahead, pulled back along
-the plan while the arc to it would enter the lethal zone (so the robot does not cut
-obstacle corners). After a collision (the engine backs the robot off) the goal stays
-active and is replanned up to ``collision_retries`` times, like Nav2's recoveries, and is
-then aborted.
+:class:`Navigator` takes a goal (x, y, yaw) like ``goal_pose``, plans with
+:mod:`sim_bridge.navigation.planner` on the current map plus extra occupancy layers,
+follows the plan with a pure-pursuit controller within the speed limits, replans
+periodically and when the plan gets blocked, and reports ``ACTIVE`` / ``SUCCEEDED`` /
+``ABORTED`` / ``CANCELED`` like Nav2's ``navigate_to_pose`` action.
 """
 
 from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.grid import OCCUPIED_THRESHOLD, GridMap
-from explore_seg.core.paths import cost_distance_field, extract_path, inflate
+from explore_seg.core.grid import GridMap
+from explore_seg.core.paths import inflate
+from sim_bridge.navigation.params import NavParams
+from sim_bridge.navigation.planner import coarsen, cost_grid, path_cost, plan_path
 
 
 class NavState(enum.Enum):
@@ -66,108 +42,6 @@ class NavStatus:
     goal: tuple[float, float, float] | None = None
 
 
-@dataclass(frozen=True)
-class NavParams:
-    """Planner and controller parameters (defaults follow a TurtleBot3 waffle + Nav2)."""
-
-    robot_radius_m: float = field(default=0.22, metadata={
-        "doc": "radius of the robot's collision disk", "unit": "m"})
-    inflation_margin_m: float = field(default=0.0, metadata={
-        "doc": "clearance beyond the radius every plan keeps (lethal zone = radius + this)",
-        "unit": "m"})
-    inflation_radius_m: float = field(default=0.6, metadata={
-        "doc": "obstacle cost decays to zero at this distance (Nav2 inflation_radius)",
-        "unit": "m"})
-    inflation_cost_weight: float = field(default=3.0, metadata={
-        "doc": "extra cost per metre at the edge of the lethal zone"})
-    inflation_cost_scale: float = field(default=6.0, metadata={
-        "doc": "exponential decay rate of the inflation cost (Nav2 cost_scaling_factor)",
-        "unit": "1/m"})
-    allow_unknown: bool = field(default=True, metadata={
-        "doc": "plan through unknown cells (Nav2 planner allow_unknown)"})
-    unknown_cost: float = field(default=4.0, metadata={
-        "doc": "extra cost per metre through unknown cells (NavFn: near-lethal)"})
-    occupied_threshold: int = field(default=OCCUPIED_THRESHOLD, metadata={
-        "doc": "map/layer cells at or above this value are obstacles", "unit": "%"})
-    planner_goal_tolerance_m: float = field(default=0.5, metadata={
-        "doc": "a blocked goal is replaced by the nearest free cell within this", "unit": "m"})
-    plan_downsample: int = field(default=1, metadata={
-        "doc": "plan on cells this many times coarser (1 = map resolution)"})
-    plan_window_margin_m: float = field(default=3.0, metadata={
-        "doc": "first search window: path costs up to 1.5 x straight line + this", "unit": "m"})
-    replan_period_s: float = field(default=1.0, metadata={
-        "doc": "replan when the map changed, at most this often (sim time)", "unit": "s"})
-    switch_cost_ratio: float = field(default=0.8, metadata={
-        "doc": "a replan replaces a still-valid plan only when cheaper than this x its cost"})
-    blocked_check_period_s: float = field(default=0.2, metadata={
-        "doc": "how often the rest of the plan is checked against new obstacles", "unit": "s"})
-    goal_tolerance_xy_m: float = field(default=0.25, metadata={
-        "doc": "goal reached within this distance (Nav2 xy_goal_tolerance)", "unit": "m"})
-    goal_tolerance_yaw_rad: float = field(default=0.25, metadata={
-        "doc": "final heading tolerance (Nav2 yaw_goal_tolerance)", "unit": "rad"})
-    lookahead_m: float = field(default=0.4, metadata={
-        "doc": "pure-pursuit lookahead distance", "unit": "m"})
-    max_linear_speed_mps: float = field(default=0.26, metadata={
-        "doc": "forward speed limit (TurtleBot3 waffle)", "unit": "m/s"})
-    max_angular_speed_radps: float = field(default=1.82, metadata={
-        "doc": "turn rate limit (TurtleBot3 waffle)", "unit": "rad/s"})
-    rotate_in_place_angle_rad: float = field(default=0.8, metadata={
-        "doc": "turn on the spot first when the carrot is further off the heading", "unit": "rad"})
-    heading_gain: float = field(default=2.5, metadata={
-        "doc": "turn rate per rad of heading error when rotating on the spot", "unit": "1/s"})
-    approach_gain: float = field(default=1.0, metadata={
-        "doc": "speed per metre of remaining distance near the goal", "unit": "1/s"})
-    min_approach_speed_mps: float = field(default=0.05, metadata={
-        "doc": "speed floor while approaching the goal", "unit": "m/s"})
-    progress_radius_m: float = field(default=0.5, metadata={
-        "doc": "must move this far within progress_timeout_s (Nav2 progress checker)", "unit": "m"})
-    progress_timeout_s: float = field(default=10.0, metadata={
-        "doc": "abort when no progress for this long (0 = off)", "unit": "s"})
-    goal_timeout_s: float = field(default=600.0, metadata={
-        "doc": "abort a goal after this much sim time (0 = off)", "unit": "s"})
-    collision_retries: int = field(default=2, metadata={
-        "doc": "after a collision (and the engine's back-up) replan and go on, this many "
-               "times per goal, before aborting it (Nav2's navigate_to_pose tree retries "
-               "its planner/controller after recoveries); 0 = abort at the first"})
-
-    def __post_init__(self) -> None:
-        positive = ("robot_radius_m", "lookahead_m", "max_linear_speed_mps",
-                    "max_angular_speed_radps", "goal_tolerance_xy_m", "goal_tolerance_yaw_rad",
-                    "replan_period_s", "blocked_check_period_s", "heading_gain",
-                    "approach_gain", "progress_radius_m", "inflation_cost_scale")
-        for name in positive:
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be finite and > 0, got {v}")
-        non_negative = ("inflation_margin_m", "inflation_cost_weight", "unknown_cost",
-                        "planner_goal_tolerance_m", "plan_window_margin_m",
-                        "progress_timeout_s", "goal_timeout_s", "min_approach_speed_mps")
-        for name in non_negative:
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be finite and >= 0, got {v}")
-        if not self.inflation_radius_m >= self.robot_radius_m + self.inflation_margin_m:
-            raise ValueError(
-                f"inflation_radius_m ({self.inflation_radius_m}) must be >= robot_radius_m + "
-                f"inflation_margin_m ({self.robot_radius_m + self.inflation_margin_m})")
-        if not 0 < self.switch_cost_ratio <= 1:
-            raise ValueError(f"switch_cost_ratio must be in (0, 1], got {self.switch_cost_ratio}")
-        if not 0 < self.rotate_in_place_angle_rad <= math.pi:
-            raise ValueError(f"rotate_in_place_angle_rad must be in (0, pi], got "
-                             f"{self.rotate_in_place_angle_rad}")
-        if not 1 <= self.occupied_threshold <= 100:
-            raise ValueError(f"occupied_threshold must be in 1..100, got {self.occupied_threshold}")
-        if not 1 <= self.plan_downsample <= 8:
-            raise ValueError(f"plan_downsample must be in 1..8, got {self.plan_downsample}")
-        if not self.collision_retries >= 0:
-            raise ValueError(f"collision_retries must be >= 0, got {self.collision_retries}")
-
-    @property
-    def lethal_radius_m(self) -> float:
-        """Cells closer than this to an obstacle are never planned through."""
-        return self.robot_radius_m + self.inflation_margin_m
-
-
 #: The pure-pursuit arc check skips this much of the arc next to the robot (m).
 ARC_FREE_START_M = 0.1
 
@@ -175,96 +49,6 @@ ARC_FREE_START_M = 0.1
 def wrap_angle(a: float) -> float:
     """Angle wrapped to [-pi, pi)."""
     return (a + math.pi) % (2.0 * math.pi) - math.pi
-
-
-# ------------------------------------------------------------------ cost planning
-
-
-def cost_grid(blocked: npt.NDArray[np.bool_], unknown: npt.NDArray[np.bool_] | None,
-              resolution_m: float, params: NavParams) -> npt.NDArray[np.float64]:
-    """Per-cell traversal cost (per metre) of an inflated costmap; ``inf`` = lethal.
-
-    Parameters
-    ----------
-    blocked : ndarray of bool, shape (H, W)
-        Obstacle cells.
-    unknown : ndarray of bool, shape (H, W), or None
-        Unknown cells (extra ``unknown_cost``); None when unknown cells are not allowed
-        (the caller then marks them blocked).
-    resolution_m : float
-    params : NavParams
-
-    Returns
-    -------
-    ndarray of float64, shape (H, W)
-        ``>= 1`` for traversable cells, ``inf`` within the lethal radius of an obstacle.
-    """
-    lethal = inflate(blocked, params.lethal_radius_m, resolution_m)
-    cost = np.ones(blocked.shape, dtype=np.float64)
-    if blocked.any() and params.inflation_cost_weight > 0:
-        free = np.ascontiguousarray(~blocked, dtype=np.uint8)
-        d = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * resolution_m
-        band = ~lethal & (d < params.inflation_radius_m)
-        excess = np.maximum(d[band] - params.lethal_radius_m, 0.0)
-        cost[band] += params.inflation_cost_weight * np.exp(-params.inflation_cost_scale * excess)
-    if unknown is not None and params.unknown_cost > 0:
-        cost[unknown] += params.unknown_cost
-    cost[lethal] = np.inf
-    return cost
-
-
-def plan_path(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
-              goal_rc: tuple[int, int], resolution_m: float, window_margin_m: float
-              ) -> tuple[npt.NDArray[np.int64], float] | None:
-    """Cheapest path from start to goal over a cost grid, searched in a growing window.
-
-    Costs are >= 1 per metre, so a path of cost <= L is at most L long and lies in the
-    ellipse of points whose distances to start and goal sum to <= L. The search runs on
-    that ellipse's bounding box for ``L = 1.5 * |goal - start| + window_margin_m``; a
-    path found there with cost <= L is the global optimum. Otherwise L doubles, up to
-    the whole grid.
-
-    Returns
-    -------
-    (cells, cost) or None
-        cells: ndarray of int64, shape (N, 2), (row, col), start first; cost: its total
-        cost. None when the goal is unreachable.
-    """
-    h, w = cost.shape
-    (sr, sc), (gr, gc) = start_rc, goal_rc
-    budget = 1.5 * math.hypot(gr - sr, gc - sc) * resolution_m + window_margin_m
-    while True:
-        half = budget / resolution_m / 2.0 + 1.0
-        cr, cc = (sr + gr) / 2.0, (sc + gc) / 2.0
-        r0, r1 = max(0, int(cr - half)), min(h, int(math.ceil(cr + half)) + 1)
-        c0, c1 = max(0, int(cc - half)), min(w, int(math.ceil(cc + half)) + 1)
-        whole = r0 == 0 and c0 == 0 and r1 == h and c1 == w
-        dist = cost_distance_field(cost[r0:r1, c0:c1], (sr - r0, sc - c0), resolution_m,
-                                   math.inf if whole else budget)
-        g = float(dist[gr - r0, gc - c0])
-        if math.isfinite(g) and (g <= budget or whole):
-            cells = extract_path(dist, (gr - r0, gc - c0))
-            return cells + np.array([r0, c0], dtype=np.int64), g
-        if whole:
-            return None
-        budget *= 2.0
-
-
-def path_cost(xy: npt.NDArray[np.float64], cost: npt.NDArray[np.float64], grid: GridMap
-              ) -> float:
-    """Cost of a world polyline on a cost grid (``inf`` if it crosses a lethal cell or
-    leaves the grid); each segment is charged its length times its end cell's cost."""
-    if len(xy) < 2:
-        return 0.0
-    rows, cols = grid.world_to_cells(xy[:, 0], xy[:, 1])
-    if (rows.min() < 0 or cols.min() < 0 or rows.max() >= cost.shape[0]
-            or cols.max() >= cost.shape[1]):
-        return math.inf
-    seg = np.hypot(np.diff(xy[:, 0]), np.diff(xy[:, 1]))
-    return float((seg * cost[rows[1:], cols[1:]]).sum())
-
-
-# ---------------------------------------------------------------------- navigator
 
 
 class Navigator:
@@ -469,10 +253,10 @@ class Navigator:
         self._escape_start(cost, start, res)
         self._plan_cost, self._plan_grid = cost, grid
         k = p.plan_downsample
-        coarse, s_rc, g_rc = _coarsen(cost, start, goal, k)
+        coarse, s_rc, g_rc = coarsen(cost, start, goal, k)
         known = grid.data >= 0
         if k > 1:  # a coarse cell is known when all its fine cells are
-            known = np.isfinite(_coarsen(np.where(known, 0.0, np.inf), start, goal, k)[0])
+            known = np.isfinite(coarsen(np.where(known, 0.0, np.inf), start, goal, k)[0])
         g_rc = self._reachable_goal(coarse, g_rc, res * k, known)
         found = (plan_path(coarse, s_rc, g_rc, res * k, p.plan_window_margin_m)
                  if g_rc is not None else None)
@@ -681,21 +465,3 @@ class Navigator:
 
 def _clip(v: float, limit: float) -> float:
     return max(-limit, min(limit, v))
-
-
-def _coarsen(cost: npt.NDArray[np.float64], start: tuple[int, int], goal: tuple[int, int],
-             k: int) -> tuple[npt.NDArray[np.float64], tuple[int, int], tuple[int, int]]:
-    """Block-max downsampling by ``k`` (a coarse cell costs its worst fine cell; cells
-    past the border count as lethal)."""
-    if k == 1:
-        return cost, start, goal
-    h, w = cost.shape
-    hp, wp = -(-h // k) * k, -(-w // k) * k
-    pad = np.full((hp, wp), np.inf)
-    pad[:h, :w] = cost
-    coarse = pad[0::k, 0::k].copy()
-    for dr in range(k):
-        for dc in range(k):
-            if dr or dc:
-                np.maximum(coarse, pad[dr::k, dc::k], out=coarse)
-    return coarse, (start[0] // k, start[1] // k), (goal[0] // k, goal[1] // k)

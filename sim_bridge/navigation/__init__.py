@@ -1,0 +1,47 @@
+"""Navigation stand-in: what Nav2's bt_navigator + planner + controller do, in a few lines.
+
+:class:`Navigator` takes a goal (x, y, yaw) like ``goal_pose``, plans on the current map
+plus any extra occupancy layers (e.g. the object costmap) whose occupied cells are
+obstacles, follows the plan with a pure-pursuit controller within the speed limits,
+replans periodically and when the plan gets blocked, and reports ``ACTIVE`` /
+``SUCCEEDED`` / ``ABORTED`` with a reason.
+
+Planning mirrors Nav2's NavFn on an inflated costmap:
+
+* cells closer than ``robot_radius_m + inflation_margin_m`` to an obstacle are lethal
+  (obstacles inflated by the robot radius, :func:`explore_seg.core.paths.inflate`
+  semantics);
+* beyond that, out to ``inflation_radius_m``, a cell costs
+  ``1 + inflation_cost_weight * exp(-inflation_cost_scale * (d - lethal))`` (Nav2's
+  exponential inflation decay), which keeps plans off walls;
+* unknown cells are traversable (``allow_unknown: true``) at ``1 + unknown_cost``
+  (NavFn gives unknown cells a near-lethal cost, so known free space is preferred);
+* a goal inside a lethal cell moves to the nearest free cell within
+  ``planner_goal_tolerance_m``.
+
+The cost-weighted 8-connected Dijkstra runs on a window around start and goal that grows
+until it provably holds the cheapest path. A new plan replaces the current one only when
+it is clearly cheaper (``switch_cost_ratio``) or the current one got blocked, which
+avoids the back-and-forth a planner through unknown space otherwise shows as walls
+appear piece by piece.
+
+Following: pure pursuit towards the plan point ``lookahead_m`` ahead, pulled back along
+the plan while the arc to it would enter the lethal zone (so the robot does not cut
+obstacle corners). After a collision (the engine backs the robot off) the goal stays
+active and is replanned up to ``collision_retries`` times, like Nav2's recoveries, and is
+then aborted.
+
+Modules: :mod:`~sim_bridge.navigation.params` (:class:`NavParams`),
+:mod:`~sim_bridge.navigation.planner` (costmap and windowed Dijkstra),
+:mod:`~sim_bridge.navigation.navigator` (goal state machine and pure-pursuit following).
+This package re-exports their public names.
+"""
+
+from explore_seg.core.paths import cost_distance_field
+from sim_bridge.navigation.navigator import (ARC_FREE_START_M, NavState, NavStatus, Navigator,
+                                            wrap_angle)
+from sim_bridge.navigation.params import NavParams
+from sim_bridge.navigation.planner import coarsen, cost_grid, path_cost, plan_path
+
+__all__ = ["ARC_FREE_START_M", "NavParams", "NavState", "NavStatus", "Navigator", "coarsen",
+           "cost_distance_field", "cost_grid", "path_cost", "plan_path", "wrap_angle"]

@@ -1,0 +1,34 @@
+"""World loading, procedural generation and ground-truth rasters of the 2.5D simulator.
+
+* :mod:`~sim_bridge.worlds.files`: :func:`load_world` / :func:`save_world`
+  (``explore_seg_world/1`` YAML, map_server YAML + PGM/PNG, Explore-Bench layout).
+* :mod:`~sim_bridge.worlds.house`, :mod:`~sim_bridge.worlds.maze`: seeded worlds sized like
+  the paper's (20 x 20 m house, 40 x 40 m maze); :mod:`~sim_bridge.worlds.furniture` and
+  :mod:`~sim_bridge.worlds.walls` build their parts.
+* :mod:`~sim_bridge.worlds.catalog`: :func:`default_world` names the worlds the demo and the
+  tests use (:data:`WORLD_NAMES`).
+* :mod:`~sim_bridge.worlds.truth`: :func:`ground_truth` rasters and the explorable region;
+  :func:`rasterize` itself lives with the world model in :mod:`sim_bridge.world`.
+
+Everything here is ROS-free numpy. Coordinates: metres, radians, world x/y on the floor,
+rasters in grid layout (row = y). This package re-exports the public names of its modules.
+"""
+
+from sim_bridge.world import CELL_OVERLAP_M, raster_geometry, rasterize
+from sim_bridge.worlds.catalog import (SMALL_HOUSE_SIZE_M, SMALL_ROOM_WIDTH_M, WORLD_NAMES,
+                                       default_world)
+from sim_bridge.worlds.files import (KNOWN_CLASSES, MAP_WALL_HEIGHT_M, WORLD_FORMAT, load_world,
+                                     save_world, world_to_dict)
+from sim_bridge.worlds.furniture import Rect
+from sim_bridge.worlds.house import HouseOptions, generate_house
+from sim_bridge.worlds.maze import generate_maze
+from sim_bridge.worlds.truth import (FOOTPRINT_TALL_Z_M, FOOTPRINT_Z_M, GT_RESOLUTION_M,
+                                     LIDAR_PLANE_Z_M, GroundTruth, flood_inside, ground_truth)
+
+__all__ = [
+    "CELL_OVERLAP_M", "FOOTPRINT_TALL_Z_M", "FOOTPRINT_Z_M", "GT_RESOLUTION_M", "KNOWN_CLASSES",
+    "LIDAR_PLANE_Z_M", "MAP_WALL_HEIGHT_M", "SMALL_HOUSE_SIZE_M", "SMALL_ROOM_WIDTH_M",
+    "WORLD_FORMAT", "WORLD_NAMES", "GroundTruth", "HouseOptions", "Rect", "default_world",
+    "flood_inside", "generate_house", "generate_maze", "ground_truth", "load_world",
+    "raster_geometry", "rasterize", "save_world", "world_to_dict",
+]

@@ -1,0 +1,198 @@
+"""Navigation stand-in: planner pieces, goals across worlds, pursuit around corners."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from explore_seg.core.grid import GridMap, grid_from_ascii
+from sim_bridge import worlds
+from sim_bridge.engine import SimEngine, SimParams
+from sim_bridge.navigation import (NavParams, NavState, Navigator, cost_distance_field,
+                                   cost_grid, plan_path)
+from sim_bridge.world import World
+from sim_scenes import FAST, WALL_H, WALL_T, box, room_world, walls_around
+
+
+def _clear_goal_far_from_start(eng: SimEngine, clearance_m: float = 0.6):
+    gt = eng.ground_truth
+    free = (gt.inside & (gt.footprint_tall.data < 65)).astype(np.uint8)
+    clear = cv2.distanceTransform(free, cv2.DIST_L2, 5) * gt.resolution_m >= clearance_m
+    rows, cols = np.nonzero(clear)
+    xs, ys = gt.lidar.cells_to_world(rows, cols)
+    sx, sy, _ = eng.pose
+    i = int(np.argmax(np.hypot(xs - sx, ys - sy)))
+    return float(xs[i]), float(ys[i])
+
+
+def test_goal_across_the_small_house_is_reached_without_collision():
+    eng = SimEngine(worlds.default_world("small_house"), SimParams())
+    eng.step(0.2)
+    gx, gy = _clear_goal_far_from_start(eng)
+    straight = math.hypot(gx - eng.pose[0], gy - eng.pose[1])
+    assert straight > 5.0
+    eng.set_goal(gx, gy, 1.0)
+    eng.run_until(lambda e: e.nav_status.state is not NavState.ACTIVE, 300.0)
+    assert eng.nav_status.state is NavState.SUCCEEDED, eng.nav_status.reason
+    assert math.hypot(eng.pose[0] - gx, eng.pose[1] - gy) <= 0.25
+    assert abs(math.remainder(eng.pose[2] - 1.0, 2 * math.pi)) <= 0.25
+    assert eng.metrics.n_collisions == 0
+    assert eng.metrics.path_length_m >= straight - 0.25
+    assert eng.metrics.goals_reached == 1
+
+
+def closed_room_world() -> World:
+    """A 6 x 4 m room holding a closed 1.6 x 1.6 m box room (no door)."""
+    return room_world(walls_around(3.6, 1.2, 5.2, 2.8, name="closet"))
+
+
+def test_goal_inside_a_closed_room_is_aborted_without_unknown_space():
+    eng = SimEngine(closed_room_world(), SimParams(nav_allow_unknown=False, **FAST))
+    eng.step(0.2)
+    eng.set_goal(4.4, 2.0, 0.0)
+    eng.step(0.1)
+    assert eng.nav_status.state is NavState.ABORTED
+    assert "no path" in eng.nav_status.reason
+
+
+def test_goal_inside_a_closed_room_is_aborted_once_its_walls_are_seen():
+    eng = SimEngine(closed_room_world(), SimParams(**FAST))
+    eng.step(0.2)
+    eng.set_goal(4.4, 2.0, 0.0)
+    eng.run_until(lambda e: e.nav_status.state is not NavState.ACTIVE, 240.0)
+    assert eng.nav_status.state is NavState.ABORTED
+    assert eng.metrics.n_collisions == 0
+
+
+@pytest.mark.parametrize("goal, match", [
+    ((math.nan, 1.0, 0.0), "finite"),
+    ((1.0, 1.0, math.inf), "finite"),
+    ((100.0, 1.0, 0.0), "outside the map"),
+])
+def test_bad_goals_are_rejected_and_the_sim_keeps_running(goal, match):
+    eng = SimEngine(room_world([]), SimParams(**FAST))
+    eng.step(0.2)
+    with pytest.raises(ValueError, match=match):
+        eng.set_goal(*goal)
+    assert eng.metrics.goals_rejected == 1 and eng.metrics.goals_received == 0
+    assert eng.nav_status.state is NavState.IDLE
+    t = eng.time_s
+    eng.step(0.5)
+    assert eng.time_s == pytest.approx(t + 0.5)
+
+
+def test_costmap_layer_blocks_the_direct_route():
+    eng = SimEngine(room_world([]), SimParams(**FAST))
+    eng.step(0.3)
+    base = eng.map
+    layer = np.zeros(base.shape, np.int8)
+    r0, c0 = base.world_to_cell(3.0, 0.0)
+    r1, _ = base.world_to_cell(3.0, 3.0)
+    layer[r0:r1 + 1, c0:c0 + 2] = 100                    # a fence from y = 0 to 3 m
+    eng.add_costmap_layer("object_costmap", base.with_data(layer))
+    eng.set_goal(5.0, 1.0, 0.0)
+    eng.step(0.1)
+    plan = eng.plan
+    assert len(plan) > 2
+    assert plan[:, 1].max() > 3.0 + 0.2                  # goes round the end of the fence
+    eng.run_until(lambda e: e.nav_status.state is not NavState.ACTIVE, 120.0)
+    assert eng.nav_status.state is NavState.SUCCEEDED
+
+
+def test_cost_grid_lethal_zone_and_decay():
+    grid, _ = grid_from_ascii("""
+    ...........
+    .....#.....
+    ...........
+    """, resolution_m=0.1)
+    p = NavParams(robot_radius_m=0.1, inflation_margin_m=0.0, inflation_radius_m=0.4,
+                  inflation_cost_weight=2.0, inflation_cost_scale=10.0)
+    cost = cost_grid(grid.occupied_mask(), None, 0.1, p)
+    row = cost[1]
+    assert np.isinf(row[4:7]).all() and np.isfinite(row[:4]).all()
+    assert row[3] == pytest.approx(1 + 2.0 * math.exp(-10.0 * 0.1))
+    assert row[2] == pytest.approx(1 + 2.0 * math.exp(-10.0 * 0.2))
+    assert row[0] == row[1] == 1.0                       # at/after inflation_radius
+
+
+def test_unknown_cost_makes_the_planner_prefer_known_space():
+    grid, marks = grid_from_ascii("""
+    ...............
+    .?????????????.
+    .?????????????.
+    S?????????????G
+    """, resolution_m=0.1)
+    p = NavParams(robot_radius_m=0.01, inflation_margin_m=0.0, inflation_radius_m=0.01,
+                  unknown_cost=4.0)
+    cost = cost_grid(grid.occupied_mask(), grid.unknown_mask(), 0.1, p)
+    cells, c = plan_path(cost, marks["S"][0], marks["G"][0], 0.1, 1.0)
+    assert cells[:, 0].max() == 3                          # detours along the known top row
+    cheap = NavParams(robot_radius_m=0.01, inflation_margin_m=0.0, inflation_radius_m=0.01,
+                      unknown_cost=0.0)
+    cost0 = cost_grid(grid.occupied_mask(), grid.unknown_mask(), 0.1, cheap)
+    cells0, c0 = plan_path(cost0, marks["S"][0], marks["G"][0], 0.1, 1.0)
+    assert (cells0[:, 0] == 0).all() and c0 == pytest.approx(1.4)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_windowed_plan_equals_full_grid_field_on_random_grids(seed):
+    rng = np.random.default_rng(seed)
+    cost = np.where(rng.random((40, 60)) < 0.25, np.inf, 1.0 + rng.random((40, 60)))
+    cost[5, 5] = cost[35, 55] = 1.0
+    full = cost_distance_field(cost, (5, 5), 0.1)[35, 55]
+    found = plan_path(cost, (5, 5), (35, 55), 0.1, 0.5)
+    if not np.isfinite(full):
+        assert found is None
+    else:
+        cells, c = found
+        assert c == pytest.approx(full)
+        assert c >= 0.1 * math.hypot(30, 50) - 1e-9
+        assert tuple(cells[0]) == (5, 5) and tuple(cells[-1]) == (35, 55)
+        assert np.isfinite(cost[cells[1:-1, 0], cells[1:-1, 1]]).all()
+
+
+def test_pursuit_arc_check_rejects_a_lookahead_point_around_an_obstacle_corner():
+    """The lookahead point is taken only if the arc to it stays out of the lethal zone."""
+    res = 0.05
+    blocked = np.zeros((60, 60), bool)
+    blocked[30:, :30] = True              # x < 1.5 and y > 1.5: a corner at (1.5, 1.5)
+    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
+    nav = Navigator(NavParams())
+    assert nav._arc_clear((1.3, 1.25, 0.0), np.array([1.7, 1.62]))   # no plan yet: no check
+    nav._plan_cost = cost_grid(blocked, None, res, nav.params)
+    nav._plan_grid = grid
+    pose = (1.3, 1.25, 0.0)               # 0.25 m below the block, heading +x
+    # Around the corner: the arc passes ~0.1 m from it (robot radius 0.22).
+    assert not nav._arc_clear(pose, np.array([1.7, 1.62]))
+    # Straight on along the lane, or around the corner with room: clear.
+    assert nav._arc_clear(pose, np.array([1.7, 1.25]))
+    assert nav._arc_clear(pose, np.array([2.1, 1.62]))
+
+
+def _door_world(door_lo: float, door_hi: float, start) -> World:
+    """A 6 x 4 m room split at x = 3 by a wall with a door between door_lo and door_hi."""
+    t = WALL_T
+    return room_world([box("split_a", "wall", "wall", 3.0, door_lo / 2, t, door_lo, 0, WALL_H),
+                       box("split_b", "wall", "wall", 3.0, (door_hi + 4.0) / 2, t,
+                           4.0 - door_hi, 0, WALL_H)], start=start)
+
+
+@pytest.mark.parametrize("start, goal", [((1.2, 0.6, 0.0), (4.8, 0.6)),
+                                         ((1.5, 3.6, -0.5), (4.5, 0.5))])
+def test_robot_passes_a_door_at_a_sharp_angle_clear_of_its_jambs(start, goal):
+    """Through a 0.8 m door entered and left at sharp angles: no contact, and the robot's
+    centre keeps more than its radius from every jamb corner."""
+    eng = SimEngine(_door_world(2.6, 3.4, start), SimParams(nav_collision_retries=0, **FAST))
+    eng.run_until(lambda e: e.latest_scan is not None, 1.0)
+    eng.set_goal(goal[0], goal[1], 0.0)
+    eng.run_until(lambda e: e.nav_status.state is not NavState.ACTIVE, 120.0)
+    assert eng.nav_status.state is NavState.SUCCEEDED
+    xy = eng.trail
+    jambs = np.array([[3.0 - WALL_T / 2, 2.6], [3.0 + WALL_T / 2, 2.6],
+                      [3.0 - WALL_T / 2, 3.4], [3.0 + WALL_T / 2, 3.4]])
+    d = np.hypot(xy[:, None, 0] - jambs[None, :, 0], xy[:, None, 1] - jambs[None, :, 1])
+    assert eng.metrics.n_collisions == 0
+    assert float(d.min()) > 0.22
