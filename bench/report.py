@@ -14,7 +14,6 @@ Usage: ``.venv/bin/python bench/report.py OUT [--md BENCHMARKS.md]``.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import os
@@ -29,13 +28,10 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from bench import records  # noqa: E402
+from bench.records import TIMING_ROWS  # noqa: E402
+from bench.store import read_csv, slug  # noqa: E402
 
 MILESTONES = ("50", "90", "95", "99")
-TIMING_ROWS = (("frontier", "frontier detect + cluster"),
-               ("selection", "path lengths + select (incl. goal manager)"),
-               ("segmentation", "DuDe segmentation update"),
-               ("detection", "object detection (oracle, lock-step)"),
-               ("objects", "object costmap update (3D boxes, fusion, layer)"))
 
 
 def load_runs(out: Path) -> list[dict[str, Any]]:
@@ -61,10 +57,6 @@ def _groups(runs: list[dict[str, Any]]) -> dict[tuple[str, str], list[dict[str, 
     for r in runs:
         g.setdefault((r["world"], r["strategy"]), []).append(r)
     return g
-
-
-def _slug(spec: str) -> str:
-    return spec.replace("/", "_").replace(".", "_")
 
 
 # ----------------------------------------------------------------------- figures
@@ -122,7 +114,7 @@ def plot_coverage(runs: list[dict[str, Any]], out: Path) -> list[Path]:
                      + (", runs with coverage samples only)" if partial else ")"))
         ax.legend(loc="lower right", fontsize=8)
         fig.tight_layout()
-        p = out / f"coverage_{_slug(world)}.png"
+        p = out / f"coverage_{slug(world)}.png"
         fig.savefig(p, dpi=110)
         plt.close(fig)
         paths.append(p)
@@ -393,14 +385,6 @@ def _findings(g: dict[tuple[str, str], list[dict[str, Any]]], worlds: list[str])
     return out
 
 
-def read_csv(path: Path) -> list[dict[str, str]]:
-    """Rows of a CSV file as dicts ([] when absent or empty)."""
-    if not path.is_file() or not path.read_text().strip():
-        return []
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
-
-
 def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
     """Figures in ``out`` and, when ``md`` is given, the markdown summary there."""
     runs = load_runs(out)
@@ -454,7 +438,7 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
                          + f": `{part.get('command')}`")
             L.append("")
     mount = meta.get("camera_mount") if meta else None
-    # parts before the setting existed ran on 0.0 (run_bench.SETTING_DEFAULTS)
+    # parts before the setting existed ran on 0.0 (store.SETTING_DEFAULTS)
     margin = float((meta.get("settings") or {}).get("nav_inflation_margin_m", 0.0)) if meta else 0.0
     mount_txt = (f"{mount[0]:g} m above the floor, pitched {mount[1]:g} rad down"
                  + (" (the paper's robot)" if mount and list(mount) == [0.894, 0.1] else "")
@@ -504,14 +488,14 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
     if summary:
         L += ["## Against the targets", ""] + summary + [""]
     drawn = {p.name for p in cov}
-    kept = [out / f"coverage_{_slug(w)}.png" for w in dict.fromkeys(r["world"] for r in runs)
-            if f"coverage_{_slug(w)}.png" not in drawn
+    kept = [out / f"coverage_{slug(w)}.png" for w in dict.fromkeys(r["world"] for r in runs)
+            if f"coverage_{slug(w)}.png" not in drawn
             and not any(r.get("coverage_samples") for r in runs if r["world"] == w)
-            and (out / f"coverage_{_slug(w)}.png").is_file()]
+            and (out / f"coverage_{slug(w)}.png").is_file()]
     if cov or box or kept:
         L += ["## Figures", ""]
         partial = [w for w in dict.fromkeys(r["world"] for r in runs)
-                   if f"coverage_{_slug(w)}.png" in drawn
+                   if f"coverage_{slug(w)}.png" in drawn
                    and any(not r.get("coverage_samples") for r in runs if r["world"] == w)]
         if partial:
             L += ["Coverage curves of " + ", ".join(f"`{w}`" for w in partial) + " are over "
