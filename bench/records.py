@@ -58,6 +58,20 @@ def key_of(d: dict[str, Any]) -> tuple[str, str, int]:
     return d["world"], d["strategy"], int(d["seed"])
 
 
+def by_world_strategy(runs: list[dict[str, Any]]
+                      ) -> dict[tuple[str, str], list[dict[str, Any]]]:
+    """The records grouped by (world, strategy), in order of first appearance."""
+    g: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for r in runs:
+        g.setdefault((r["world"], r["strategy"]), []).append(r)
+    return g
+
+
+def as_float(v: Any) -> float:
+    """A record's number as a float, NaN when missing (None or a CSV's empty cell)."""
+    return math.nan if v is None or v == "" else float(v)
+
+
 # ------------------------------------------------------------------ histograms
 
 
