@@ -45,11 +45,31 @@ LEGACY_TIMING = "timing_legacy.json"
 BIN_RATIO = 1.01
 BIN_MIN_MS = 1e-3
 TIMING_KEYS = ("frontier", "selection", "segmentation", "detection", "objects", "decision")
+#: The timing keys of the report's per-module table, with their row labels.
+TIMING_ROWS = (("frontier", "frontier detect + cluster"),
+               ("selection", "path lengths + select (incl. goal manager)"),
+               ("segmentation", "DuDe segmentation update"),
+               ("detection", "object detection (oracle, lock-step)"),
+               ("objects", "object costmap update (3D boxes, fusion, layer)"))
 _LOG_RATIO = math.log(BIN_RATIO)
 
 
 def key_of(d: dict[str, Any]) -> tuple[str, str, int]:
     return d["world"], d["strategy"], int(d["seed"])
+
+
+def by_world_strategy(runs: list[dict[str, Any]]
+                      ) -> dict[tuple[str, str], list[dict[str, Any]]]:
+    """The records grouped by (world, strategy), in order of first appearance."""
+    g: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for r in runs:
+        g.setdefault((r["world"], r["strategy"]), []).append(r)
+    return g
+
+
+def as_float(v: Any) -> float:
+    """A record's number as a float, NaN when missing (None or a CSV's empty cell)."""
+    return math.nan if v is None or v == "" else float(v)
 
 
 # ------------------------------------------------------------------ histograms
@@ -246,7 +266,8 @@ def read(folder: Path) -> list[dict[str, Any]]:
     return list(by_key.values())
 
 
-def _line(d: dict[str, Any]) -> bytes:
+def compact_line(d: dict[str, Any]) -> bytes:
+    """A record's line in ``runs.jsonl.gz``: its compact form, keys sorted."""
     return (json.dumps(compact(d), sort_keys=True, separators=(",", ":")) + "\n").encode()
 
 
@@ -256,7 +277,7 @@ def write_compact(folder: Path, records: Iterable[dict[str, Any]]) -> None:
     tmp = folder / (COMPACT + ".tmp")
     with open(tmp, "wb") as raw, gzip.GzipFile(fileobj=raw, mode="wb", mtime=0) as f:
         for d in records:
-            f.write(_line(d))
+            f.write(compact_line(d))
     tmp.replace(folder / COMPACT)
 
 
@@ -265,7 +286,7 @@ def append_compact(folder: Path, d: dict[str, Any]) -> None:
     run that is killed later loses nothing written before)."""
     with open(folder / COMPACT, "ab") as raw, gzip.GzipFile(fileobj=raw, mode="wb",
                                                             mtime=0) as f:
-        f.write(_line(d))
+        f.write(compact_line(d))
 
 
 # ------------------------------------------------------------------ legacy timing
@@ -277,8 +298,6 @@ def timing_from_markdown(text: str, strategy: list[str] | None = None
     a BENCHMARKS.md written by :mod:`bench.report` (its row labels name the keys); the
     strategy the table is of (``paper`` or ``all``) goes into ``strategy[0]``."""
     strategy = strategy if strategy is not None else [""]
-    from bench.report import TIMING_ROWS
-
     label_key = {label: key for key, label in TIMING_ROWS}
     lines = text.splitlines()
     try:

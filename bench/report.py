@@ -14,7 +14,6 @@ Usage: ``.venv/bin/python bench/report.py OUT [--md BENCHMARKS.md]``.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import os
@@ -29,22 +28,16 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from bench import records  # noqa: E402
+from bench.figures import coverage_curves, plot_coverage, plot_time_to  # noqa: E402,F401
+from bench.records import TIMING_ROWS, as_float, by_world_strategy  # noqa: E402
+from bench.store import read_csv, slug  # noqa: E402
 
 MILESTONES = ("50", "90", "95", "99")
-TIMING_ROWS = (("frontier", "frontier detect + cluster"),
-               ("selection", "path lengths + select (incl. goal manager)"),
-               ("segmentation", "DuDe segmentation update"),
-               ("detection", "object detection (oracle, lock-step)"),
-               ("objects", "object costmap update (3D boxes, fusion, layer)"))
 
 
 def load_runs(out: Path) -> list[dict[str, Any]]:
     """Every run of ``out`` (:func:`bench.records.read`)."""
     return records.read(out)
-
-
-def _f(v: Any) -> float:
-    return math.nan if v is None or v == "" else float(v)
 
 
 def _mean_std(vals: list[float], nd: int = 1) -> str:
@@ -56,124 +49,6 @@ def _mean_std(vals: list[float], nd: int = 1) -> str:
     return f"{v.mean():.{nd}f} ± {v.std(ddof=1):.{nd}f}"
 
 
-def _groups(runs: list[dict[str, Any]]) -> dict[tuple[str, str], list[dict[str, Any]]]:
-    g: dict[tuple[str, str], list[dict[str, Any]]] = {}
-    for r in runs:
-        g.setdefault((r["world"], r["strategy"]), []).append(r)
-    return g
-
-
-def _slug(spec: str) -> str:
-    return spec.replace("/", "_").replace(".", "_")
-
-
-# ----------------------------------------------------------------------- figures
-
-
-def coverage_curves(runs: list[dict[str, Any]], step_s: float = 5.0
-                    ) -> dict[str, dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]]:
-    """world -> strategy -> (t, mean %, std %) on a common time grid."""
-    out: dict[str, dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]] = {}
-    for (world, strat), rs in _groups(runs).items():
-        t_end = max(r["sim_time_s"] for r in rs)
-        grid = np.arange(0.0, t_end + step_s, step_s)
-        curves = []
-        for r in rs:
-            s = np.asarray([(a, b if b is not None else np.nan)
-                            for a, b, _ in r["coverage_samples"]], dtype=np.float64)
-            if s.size == 0:
-                continue
-            ok = np.isfinite(s[:, 1])
-            curves.append(np.interp(grid, s[ok, 0], s[ok, 1]) if ok.any()
-                          else np.zeros_like(grid))
-        if curves:
-            c = np.vstack(curves)
-            out.setdefault(world, {})[strat] = (grid, c.mean(axis=0), c.std(axis=0))
-    return out
-
-
-def plot_coverage(runs: list[dict[str, Any]], out: Path) -> list[Path]:
-    """One ``coverage_<world>.png`` per world; returns the paths."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    paths = []
-    groups = _groups(runs)
-    for world, per in coverage_curves(runs).items():
-        fig, ax = plt.subplots(figsize=(7, 4.2))
-        for strat in dict.fromkeys(st for (w, st) in groups if w == world):
-            rs = groups[(world, strat)]
-            k = sum(1 for r in rs if r.get("coverage_samples"))
-            if strat not in per:
-                ax.plot([], [], " ", label=f"{strat} (no run with samples, {len(rs)} runs)")
-                continue
-            t, m, s = per[strat]
-            ax.plot(t, m, label=f"{strat} (n={k}" + (f" of {len(rs)} runs" if k < len(rs)
-                                                       else "") + ")")
-            ax.fill_between(t, np.clip(m - s, 0, 100), np.clip(m + s, 0, 100), alpha=0.2)
-        ax.set_xlabel("sim time [s]")
-        ax.set_ylabel("coverage [% of explorable area]")
-        ax.set_ylim(0, 101)
-        ax.grid(alpha=0.3)
-        partial = any(not r.get("coverage_samples") for (w, _), rs in groups.items()
-                      if w == world for r in rs)
-        ax.set_title(f"{world}: coverage vs time (mean ± std"
-                     + (", runs with coverage samples only)" if partial else ")"))
-        ax.legend(loc="lower right", fontsize=8)
-        fig.tight_layout()
-        p = out / f"coverage_{_slug(world)}.png"
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        paths.append(p)
-    return paths
-
-
-def plot_time_to(runs: list[dict[str, Any]], out: Path, milestone: str = "95") -> Path | None:
-    """Box plot of the time to ``milestone`` % per world and strategy."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    g = _groups(runs)
-    worlds = list(dict.fromkeys(r["world"] for r in runs))
-    strats = list(dict.fromkeys(r["strategy"] for r in runs))
-    if not worlds:
-        return None
-    ncol = min(3, len(worlds))
-    nrow = int(math.ceil(len(worlds) / ncol))
-    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.4 * nrow), squeeze=False)
-    for i, world in enumerate(worlds):
-        ax = axes[i // ncol][i % ncol]
-        data, labels = [], []
-        for s in strats:
-            vals = [_f(r["time_to_s"].get(milestone)) for r in g.get((world, s), [])]
-            vals = [v for v in vals if math.isfinite(v)]
-            data.append(vals if vals else [np.nan])
-            n = len(g.get((world, s), []))
-            labels.append(f"{s}\n{len(vals)}/{n}")
-        ax.boxplot(data, tick_labels=labels) if _mpl_has_tick_labels() else \
-            ax.boxplot(data, labels=labels)
-        ax.set_title(world, fontsize=9)
-        ax.set_ylabel(f"time to {milestone} % [s]")
-        ax.tick_params(axis="x", labelsize=7)
-        ax.grid(alpha=0.3, axis="y")
-    for j in range(len(worlds), nrow * ncol):
-        axes[j // ncol][j % ncol].axis("off")
-    fig.suptitle(f"time to {milestone} % coverage (reached/runs under each box)", fontsize=10)
-    fig.tight_layout()
-    p = out / f"time_to_{milestone}.png"
-    fig.savefig(p, dpi=110)
-    plt.close(fig)
-    return p
-
-
-def _mpl_has_tick_labels() -> bool:
-    import matplotlib
-    major, minor = (int(x) for x in matplotlib.__version__.split(".")[:2])
-    return (major, minor) >= (3, 9)
-
-
 # ------------------------------------------------------------------------ tables
 
 
@@ -183,17 +58,18 @@ def results_table(runs: list[dict[str, Any]], tours: dict[str, float]) -> list[s
             "path to 99 % [m] | path / tour | collisions | goals | switches | "
             "wall per run [s] |")
     lines = [head, "|" + "|".join(["---"] * (head.count("|") - 1)) + "|"]
-    for (world, strat), rs in _groups(runs).items():
+    for (world, strat), rs in by_world_strategy(runs).items():
         n = len(rs)
         done = sum(1 for r in rs if r["completed"])
-        times = " / ".join(_mean_std([_f(r["time_to_s"].get(m)) for r in rs], 0)
-                           + (f" ({sum(math.isfinite(_f(r['time_to_s'].get(m))) for r in rs)})"
-                              if any(not math.isfinite(_f(r["time_to_s"].get(m))) for r in rs)
-                              else "")
-                           for m in MILESTONES)
-        p99 = _mean_std([_f(r["path_to_m"].get("99")) for r in rs])
+        times = " / ".join(
+            _mean_std([as_float(r["time_to_s"].get(m)) for r in rs], 0)
+            + (f" ({sum(math.isfinite(as_float(r['time_to_s'].get(m))) for r in rs)})"
+               if any(not math.isfinite(as_float(r["time_to_s"].get(m))) for r in rs) else "")
+            for m in MILESTONES)
+        p99 = _mean_std([as_float(r["path_to_m"].get("99")) for r in rs])
         tour = tours.get(world)
-        ratio = _mean_std([_f(r["path_to_m"].get("99")) / tour for r in rs], 2) if tour else "-"
+        ratio = (_mean_std([as_float(r["path_to_m"].get("99")) / tour for r in rs], 2)
+                 if tour else "-")
         coll = [r["collisions"] for r in rs]
         early = sum(1 for r in rs if r["stop_reason"] == "done")
         timeout = sum(1 for r in rs if r["stop_reason"] == "timeout")
@@ -276,7 +152,7 @@ def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
 
 
 def _mean(rs: list[dict[str, Any]], m: str) -> tuple[float, int]:
-    v = [_f(r["time_to_s"].get(m)) for r in rs]
+    v = [as_float(r["time_to_s"].get(m)) for r in rs]
     v = [x for x in v if math.isfinite(x)]
     return (float(np.mean(v)) if v else math.nan), len(v)
 
@@ -285,7 +161,7 @@ def targets_summary(runs: list[dict[str, Any]]) -> list[str]:
     """The issue's questions answered from the runs: does ``paper`` complete every run,
     its time to 95 % against ``explore_lite`` and ``nearest`` (target <= 0.75x), which
     strategies fail to complete, and collisions with against without the object costmap."""
-    g = _groups(runs)
+    g = by_world_strategy(runs)
     worlds = list(dict.fromkeys(r["world"] for r in runs))
     if not any(w for w in worlds if (w, "paper") in g):
         return []
@@ -393,14 +269,6 @@ def _findings(g: dict[tuple[str, str], list[dict[str, Any]]], worlds: list[str])
     return out
 
 
-def read_csv(path: Path) -> list[dict[str, str]]:
-    """Rows of a CSV file as dicts ([] when absent or empty)."""
-    if not path.is_file() or not path.read_text().strip():
-        return []
-    with open(path, newline="") as f:
-        return list(csv.DictReader(f))
-
-
 def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
     """Figures in ``out`` and, when ``md`` is given, the markdown summary there."""
     runs = load_runs(out)
@@ -454,7 +322,7 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
                          + f": `{part.get('command')}`")
             L.append("")
     mount = meta.get("camera_mount") if meta else None
-    # parts before the setting existed ran on 0.0 (run_bench.SETTING_DEFAULTS)
+    # parts before the setting existed ran on 0.0 (store.SETTING_DEFAULTS)
     margin = float((meta.get("settings") or {}).get("nav_inflation_margin_m", 0.0)) if meta else 0.0
     mount_txt = (f"{mount[0]:g} m above the floor, pitched {mount[1]:g} rad down"
                  + (" (the paper's robot)" if mount and list(mount) == [0.894, 0.1] else "")
@@ -504,14 +372,14 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
     if summary:
         L += ["## Against the targets", ""] + summary + [""]
     drawn = {p.name for p in cov}
-    kept = [out / f"coverage_{_slug(w)}.png" for w in dict.fromkeys(r["world"] for r in runs)
-            if f"coverage_{_slug(w)}.png" not in drawn
+    kept = [out / f"coverage_{slug(w)}.png" for w in dict.fromkeys(r["world"] for r in runs)
+            if f"coverage_{slug(w)}.png" not in drawn
             and not any(r.get("coverage_samples") for r in runs if r["world"] == w)
-            and (out / f"coverage_{_slug(w)}.png").is_file()]
+            and (out / f"coverage_{slug(w)}.png").is_file()]
     if cov or box or kept:
         L += ["## Figures", ""]
         partial = [w for w in dict.fromkeys(r["world"] for r in runs)
-                   if f"coverage_{_slug(w)}.png" in drawn
+                   if f"coverage_{slug(w)}.png" in drawn
                    and any(not r.get("coverage_samples") for r in runs if r["world"] == w)]
         if partial:
             L += ["Coverage curves of " + ", ".join(f"`{w}`" for w in partial) + " are over "

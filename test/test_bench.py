@@ -11,7 +11,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench import run_bench  # noqa: E402
+from bench import run_bench, tasks  # noqa: E402
 
 ARGS = ["--worlds", "small_house", "--strategies", "nearest", "--jobs", "1",
         "--max-sim-time", "20", "--no-tour", "--yolo-frames", "0"]
@@ -145,14 +145,14 @@ def test_sigusr1_finishes_the_run_in_flight_and_starts_no_new_one(tmp_path):
 
 
 def test_a_failing_run_is_reported_and_the_others_go_on(tmp_path, monkeypatch):
-    real = run_bench.run_exploration
+    real = tasks.run_exploration
 
     def flaky(world, strategy, seed, **kw):
         if seed == 1:
             raise ValueError("boom")
         return real(world, strategy, seed, **kw)
 
-    monkeypatch.setattr(run_bench, "run_exploration", flaky)   # the fork inherits it
+    monkeypatch.setattr(tasks, "run_exploration", flaky)   # the fork inherits it
     out = tmp_path / "fail"
     assert run_bench.main(ARGS + ["--runs", "3", "--out", str(out), "--md",
                                   str(out / "B.md")]) == 1
@@ -160,7 +160,7 @@ def test_a_failing_run_is_reported_and_the_others_go_on(tmp_path, monkeypatch):
     part = json.loads((out / "meta.json").read_text())["parts"][0]
     assert part["failed"] == ["small_house/nearest/1: ValueError: boom"]
     assert part["runs_run"] == 2 and "interrupted" not in part
-    monkeypatch.setattr(run_bench, "run_exploration", real)
+    monkeypatch.setattr(tasks, "run_exploration", real)
     assert run_bench.main(ARGS + ["--runs", "3", "--out", str(out), "--md", str(out / "B.md"),
                                   "--resume"]) == 0
     assert sorted(r["seed"] for r in _runs(out)) == [0, 1, 2]

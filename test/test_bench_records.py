@@ -18,6 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench import records, report, run_bench  # noqa: E402
+from bench.rows import row_from_dict  # noqa: E402
 
 ARGS = ["--worlds", "small_house", "--strategies", "nearest", "--jobs", "1",
         "--max-sim-time", "20", "--no-tour", "--yolo-frames", "0"]
@@ -76,7 +77,7 @@ def test_compact_keeps_everything_but_the_per_update_lists(bench2):
                 assert c["timing_p"][key][0] == round(float(np.percentile(vals, 50)), 3)
                 assert c["timing_hist"][key]["n"] == len(vals)
         # the CSV row of the compact record is the full record's row
-        assert run_bench._row_from_dict(c) == run_bench._row_from_dict(f)
+        assert row_from_dict(c) == row_from_dict(f)
     # a few hundred bytes to a few kB a run instead of the full record's size
     assert (bench2 / records.COMPACT).stat().st_size < (bench2 / records.FULL).stat().st_size
 
@@ -128,7 +129,7 @@ def test_compact_records_stay_small():
                                      np.linspace(0, 1200.98765, 1000))],
             "timings_ms": {k: list(np.exp(rng.normal(1.5, 0.6, 5000)))
                            for k in records.TIMING_KEYS}}
-    line = records._line(full)
+    line = records.compact_line(full)
     gz = len(gzip.compress(line))
     assert gz < 15_000, gz
     assert len(gzip.compress(json.dumps(full).encode())) > 10 * gz
@@ -168,7 +169,7 @@ def test_import_from_csv_rebuilds_the_rows_and_the_timing_table(bench2, tmp_path
     with open(bench2 / "runs.csv", newline="") as f:
         old = list(csv.DictReader(f))
     for r, o in zip(recs, old):
-        row = run_bench._row_from_dict(r)
+        row = row_from_dict(r)
         for k, v in o.items():
             got = row.get(k, "")
             assert (str(got) == v or (v == "" and (got == "" or (isinstance(got, float)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 import os
@@ -19,14 +18,10 @@ from conftest import DOMAIN_ID, ROOT  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue  # noqa: E402
 from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 
+from scripts.demo_lib import DemoConfig, boxes_from_markers, explorer_command, \
+    metrics_from_diagnostics, sim_command  # noqa: E402
+
 DEMO = ROOT / "scripts" / "demo.py"
-_spec = importlib.util.spec_from_file_location("explore_seg_demo", DEMO)
-demo = importlib.util.module_from_spec(_spec)
-sys.modules[_spec.name] = demo        # dataclasses look their module up there
-_spec.loader.exec_module(demo)
-DemoConfig, boxes_from_markers = demo.DemoConfig, demo.boxes_from_markers
-explorer_command, metrics_from_diagnostics = demo.explorer_command, demo.metrics_from_diagnostics
-sim_command = demo.sim_command
 
 
 def _demo(out: Path, *args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess:

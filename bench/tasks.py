@@ -1,0 +1,179 @@
+"""The benchmark's worker side: one seeded lock-step run or coverage tour per task, the
+pool that runs them (drainable by SIGUSR1) and the signal handling around it.
+
+A run task is ``(world spec, strategy, seed, sim time limit s, picture path or None,
+camera mount or None, navigation margin m or None)``. The workers are forked from the
+main process and inherit what it loaded before: the worlds (:func:`bench.worlds.load`'s
+cache) and the explorer parameters (:func:`fix_explorer_params`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import multiprocessing as mp
+import queue
+import signal
+import sys
+import time
+from typing import Any
+
+import numpy as np
+
+from bench.worlds import load, sim_params_for
+from sim_bridge.coverage_tour import TourParams, coverage_tour
+from sim_bridge.lockstep import ExplorerParams, LockstepState, load_explorer_params, \
+    run_exploration
+
+#: The nodes' parameters of this benchmark, read once before the workers fork (an edit
+#: of config/explorer.yaml during a long benchmark must not change its later runs).
+_EXPLORER_PARAMS: ExplorerParams | None = None
+
+
+def fix_explorer_params() -> ExplorerParams:
+    """Read the nodes' parameters (``config/explorer.yaml``) now: the runs of this process
+    and of the workers it forks later use them."""
+    global _EXPLORER_PARAMS
+    _EXPLORER_PARAMS = load_explorer_params()
+    return _EXPLORER_PARAMS
+
+
+def explorer_params() -> ExplorerParams:
+    """The parameters :func:`fix_explorer_params` read, read now when it has not run."""
+    return _EXPLORER_PARAMS if _EXPLORER_PARAMS is not None else fix_explorer_params()
+
+
+def run_task(task: tuple[str, str, int, float, str | None, tuple[float, float] | None,
+                         float | None]) -> dict[str, Any]:
+    """One run (see the module docstring): its :meth:`RunResult.to_dict`; the final map is
+    drawn to the picture path when one is given."""
+    spec, strategy, seed, max_t, picture, mount, nav_margin = task
+    world, gt = load(spec)
+    last: dict[str, LockstepState] = {}
+
+    def keep_last(st: LockstepState) -> None:
+        last["state"] = st
+
+    res = run_exploration(world, strategy, seed, max_sim_time_s=max_t, ground_truth=gt,
+                          sim_params=sim_params_for(mount, nav_margin),
+                          explorer_params=_EXPLORER_PARAMS,
+                          observer=keep_last if picture else None)
+    if picture and "state" in last:
+        _save_picture(last["state"], picture)
+    return res.to_dict()
+
+
+def _save_picture(st: LockstepState, path: str) -> None:
+    from sim_bridge.render import engine_overlays, render_map_png
+
+    eng = st.engine
+    fr = np.zeros(st.grid.shape, dtype=bool)
+    for f in st.frontiers:
+        fr[f.cells[:, 0], f.cells[:, 1]] = True
+    ov = engine_overlays(eng, path_xy=eng.trail)
+    ov = dataclasses.replace(
+        ov, regions=st.labels, frontiers=fr, goals=list(st.goals),
+        boxes=[o.footprint() for o in st.object_map.objects()] if st.object_map else [])
+    render_map_png(path, st.grid, ov)
+
+
+def tour_task(spec: str) -> dict[str, Any]:
+    """The full-knowledge coverage tour of a world from its unperturbed start."""
+    world, gt = load(spec)
+    t0 = time.perf_counter()
+    tour = coverage_tour(world, params=TourParams(), ground_truth=gt)
+    return {"world": spec, "tour_m": round(tour.length_m, 2),
+            "viewpoints": int(len(tour.viewpoints_xy)),
+            "coverable_fraction": round(tour.coverable_fraction, 4),
+            "explorable_area_m2": round(gt.explorable_area_m2, 2),
+            "wall_s": round(time.perf_counter() - t0, 1)}
+
+
+#: Set by SIGUSR1: start no new run (see :func:`run_drainable`).
+_DRAIN = [False]
+
+
+def _request_drain(signum: int, frame: Any) -> None:
+    _DRAIN[0] = True
+
+
+def _raise_interrupt(signum: int, frame: Any) -> None:
+    """SIGTERM in the main process: stop like Ctrl-C (report what has run)."""
+    raise KeyboardInterrupt(signum)
+
+
+def _worker_init() -> None:
+    """Workers leave interrupts to the main process (which terminates them)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGUSR1, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def worker_pool(jobs: int) -> Any:
+    """``jobs`` forked worker processes (they inherit the loaded worlds and parameters)."""
+    return mp.get_context("fork").Pool(jobs, initializer=_worker_init, maxtasksperchild=20)
+
+
+def catch_stop_signals() -> tuple[Any, Any]:
+    """SIGTERM stops like Ctrl-C and SIGUSR1 drains the pool (:func:`run_drainable`), in
+    this process; returns the handlers replaced, for :func:`restore_signals`."""
+    old_term = signal.signal(signal.SIGTERM, _raise_interrupt)
+    _DRAIN[0] = False
+    old_usr1 = signal.signal(signal.SIGUSR1, _request_drain)
+    return old_term, old_usr1
+
+
+def restore_signals(old: tuple[Any, Any]) -> None:
+    """Put back the handlers :func:`catch_stop_signals` replaced."""
+    signal.signal(signal.SIGTERM, old[0])
+    signal.signal(signal.SIGUSR1, old[1])
+
+
+def run_drainable(pool: Any, jobs: int, tasks: list[tuple], failed: list[str]) -> Any:
+    """Yield the results of ``tasks`` as they finish, at most ``jobs`` in flight.
+
+    A run that raises is reported on stderr (with its traceback) and added to ``failed``
+    as ``"world/strategy/seed: error"``; the others go on (it is not in the output files,
+    so ``--resume`` runs it again).
+
+    SIGUSR1 makes it start no further task and end once the ones in flight have finished
+    (raising ``KeyboardInterrupt(SIGUSR1)`` then, so the caller reports like after an
+    interrupt): a long benchmark is stopped without losing the work of its running runs.
+    The next task is handed out before a result is yielded, so a run that is in the
+    output files is never the last one started.
+    """
+    done: queue.Queue = queue.Queue()
+    todo = list(tasks)
+    in_flight = 0
+    said = False
+
+    def top_up() -> int:
+        n = 0
+        while todo and in_flight + n < max(1, jobs) and not _DRAIN[0]:
+            task = todo.pop(0)
+            pool.apply_async(run_task, (task,), callback=lambda r: done.put((r, None, None)),
+                             error_callback=lambda e, t=task: done.put((None, e, t)))
+            n += 1
+        return n
+
+    in_flight += top_up()
+    while in_flight:
+        if _DRAIN[0] and not said:
+            said = True
+            print(f"\n[bench] SIGUSR1: finishing the {in_flight} run(s) in flight, starting "
+                  "no new ones", file=sys.stderr)
+        try:
+            result, err, task = done.get(timeout=0.2)
+        except queue.Empty:
+            continue
+        in_flight -= 1
+        in_flight += top_up()
+        if err is None:
+            yield result
+            continue
+        name = f"{task[0]}/{task[1]}/{task[2]}"
+        cause = getattr(err, "__cause__", None)     # the worker's traceback, as text
+        print(f"\n[bench] run {name} failed: {type(err).__name__}: {err}"
+              + (f"\n{cause}" if cause is not None else ""), file=sys.stderr)
+        failed.append(f"{name}: {type(err).__name__}: {err}")
+    if _DRAIN[0] and todo:
+        raise KeyboardInterrupt(int(signal.SIGUSR1))
