@@ -1,14 +1,16 @@
 """Benchmark: frontier detection + grouping and target selection on a 40 x 40 m map.
 
 Builds a maze-like 800 x 800 map at 0.05 m (rooms with doors and clutter), keeps as known
-only the cells near a random walk (a partially explored map), and times, over
+only the cells near a random walk (a partially explored map), and times the decision core
+(:class:`explore_seg.core.explorer.Explorer`, as the node and the lock step call it) over
 ``--reps`` robot positions:
 
-* detect+cluster: passable mask, frontier cells, groups and cPoints;
-* selection (cold): coarse path graph built from the map + one-sweep path lengths to every
-  cPoint + costs + goal choice (what a tick does after a map update);
-* selection (warm): the same with the graph of the unchanged map reused (what a tick does
-  when only the robot moved).
+* detect+cluster+graph: passable mask, frontier cells, groups, cPoints and the coarse path
+  graph (what the first decision after a map update does first);
+* distances+selection, first step: one-sweep path lengths to every cPoint + costs + goal
+  choice on the new map;
+* distances+selection, next step: the same with frontiers and graph of the unchanged map
+  reused (what a decision does when only the robot moved).
 
 Prints p50/p95 in milliseconds; asserts nothing. Usage::
 
@@ -27,11 +29,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from explore_seg.core.frontiers import find_frontiers, traversable_mask  # noqa: E402
+from explore_seg.core.block_graph import BlockGraph  # noqa: E402
+from explore_seg.core.explorer import Explorer  # noqa: E402
+from explore_seg.core.frontiers import FrontierParams, traversable_mask  # noqa: E402
 from explore_seg.core.grid import GridMap  # noqa: E402
-from explore_seg.core.paths import BlockGraph, disk_kernel  # noqa: E402
-from explore_seg.core.selection import (SelectionParams, frontier_distances,  # noqa: E402
-                                        select_goal)
+from explore_seg.core.paths import disk_kernel  # noqa: E402
+from explore_seg.core.selection import SelectionParams  # noqa: E402
 
 
 def maze_world(size_cells: int, room_cells: int, rng: np.random.Generator) -> np.ndarray:
@@ -99,7 +102,7 @@ def main() -> None:
     occ = maze_world(800, 80, rng)
     grid = GridMap(explored_map(occ, args.walk_steps, 60, rng), res, (-20.0, -20.0))
     params = SelectionParams(strategy=args.strategy, path_block_cells=args.block_cells)
-    fparams = params.frontier_params()
+    fparams = FrontierParams()
     labels = np.zeros(grid.shape, dtype=np.int32)   # rooms as regions, known cells only
     rr, cc = np.indices(grid.shape)
     labels[grid.data == 0] = (1 + (rr // 80) * 10 + cc // 80)[grid.data == 0]
@@ -108,34 +111,25 @@ def main() -> None:
     t_det, t_cold, t_warm, n_groups, n_cells = [], [], [], [], []
     passable = traversable_mask(grid, None, fparams)
     free_cells = np.argwhere(passable)
-    graph = None
     for _ in range(args.reps):
         robot = tuple(int(v) for v in free_cells[rng.integers(len(free_cells))])
-        t0 = time.perf_counter()
-        passable = traversable_mask(grid, None, fparams)
-        frontiers = find_frontiers(grid, None, fparams, passable=passable)
-        t1 = time.perf_counter()
-        graph = BlockGraph(passable, res, params.path_block_cells)
-        dist = frontier_distances(graph, robot, frontiers, params)
-        sel = select_goal(frontiers, dist, labels, robot, params)
-        t2 = time.perf_counter()
-        dist = frontier_distances(graph, robot, frontiers, params)
-        sel = select_goal(frontiers, dist, labels, robot, params)
-        t3 = time.perf_counter()
-        t_det.append(t1 - t0)
-        t_cold.append(t2 - t1)
-        t_warm.append(t3 - t2)
-        n_groups.append(len(frontiers))
-        n_cells.append(sum(f.size_cells for f in frontiers))
-        del sel
+        x, y = grid.cell_to_world(*robot)
+        explorer = Explorer(fparams, params)      # a new map: detection + graph + selection
+        cold = explorer.step(0.0, grid, (x, y, 0.0), None, labels)
+        warm = explorer.step(0.1, grid, (x, y, 0.0), None, labels)   # same map: cached
+        t_det.append(cold.detect_s)
+        t_cold.append(cold.select_s)
+        t_warm.append(warm.select_s)
+        n_groups.append(len(cold.frontiers))
+        n_cells.append(sum(f.size_cells for f in cold.frontiers))
     known = float((grid.data >= 0).mean())
     print(f"map 800x800 @ {res} m, known {known:.0%}, passable {int(passable.sum())} cells, "
           f"{np.mean(n_groups):.0f} groups / {np.mean(n_cells):.0f} frontier cells, "
-          f"graph {graph.num_nodes if graph else 0} nodes (block {params.path_block_cells}), "
+          f"block {params.path_block_cells}, "
           f"strategy {params.strategy}, {args.reps} robot positions")
-    print(f"detect+cluster       {pct(t_det)}")
-    print(f"selection (cold)     {pct(t_cold)}")
-    print(f"selection (warm)     {pct(t_warm)}")
+    print(f"detect+cluster+graph {pct(t_det)}   (Explorer.step on a new map)")
+    print(f"distances+selection  {pct(t_cold)}   (first step on the map)")
+    print(f"distances+selection  {pct(t_warm)}   (next step, frontiers and graph cached)")
 
 
 if __name__ == "__main__":

@@ -37,8 +37,7 @@ from explore_seg import convert
 from explore_seg.core.explorer import Explorer, ExplorerStep
 from explore_seg.core.frontiers import Frontier, FrontierParams
 from explore_seg.core.grid import GridMap, resample_array
-from explore_seg.core.selection import (REGION_STRATEGIES, Action, Goal, GoalManager,
-                                        SelectorNodeParams)
+from explore_seg.core.selection import REGION_STRATEGIES, Action, Goal, SelectorNodeParams
 from explore_seg.frontier_msgs import FrontierPublisher
 from explore_seg.frontier_node import FRONTIER_PREFIX
 from explore_seg.node_util import WarnThrottle, failsafe, run
@@ -132,8 +131,13 @@ class TargetSelectorNode(Node):
         return self._state
 
     @property
-    def manager(self) -> GoalManager:
-        """The goal manager (current goal, blacklist)."""
+    def explorer(self) -> Explorer:
+        """The decision core."""
+        return self._explorer
+
+    @property
+    def manager(self):  # noqa: ANN201 (the Explorer's GoalManager)
+        """The decision core's goal manager (current goal, blacklist)."""
         return self._explorer.manager
 
     def _now_s(self) -> float:

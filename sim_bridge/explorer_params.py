@@ -10,7 +10,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from explore_seg.core.frontiers import FrontierParams
-from explore_seg.core.objects import ObjectParams
+from explore_seg.core.objects import ObjectCostmapNodeParams
 from explore_seg.core.param_files import dataclass_from_values, load_node_params
 from explore_seg.core.segmentation import SegmentationNodeParams
 from explore_seg.core.selection import SelectorNodeParams
@@ -23,7 +23,7 @@ class ExplorerParams:
     frontier: FrontierParams = field(default_factory=FrontierParams)
     selection: SelectorNodeParams = field(default_factory=SelectorNodeParams)
     segmentation: SegmentationNodeParams = field(default_factory=SegmentationNodeParams)
-    objects: ObjectParams = field(default_factory=ObjectParams)
+    objects: ObjectCostmapNodeParams = field(default_factory=ObjectCostmapNodeParams)
 
 
 #: ExplorerParams field -> (node whose section sets it, parameter prefix). The frontier

@@ -32,7 +32,7 @@ so seeded runs differ from one another.
 Parameters: the nodes' parameters come from ``config/explorer.yaml`` when it exists
 (:func:`load_explorer_params`), else from the dataclass defaults, so a lock-step run and
 the ROS explorer use the same values; decisions run at ``SelectorNodeParams.rate_hz`` and
-the object costmap at ``ObjectParams.rate_hz`` unless :class:`LockstepParams` says
+the object costmap at ``ObjectCostmapNodeParams.rate_hz`` unless :class:`LockstepParams` says
 otherwise.
 
 Differences from the ROS pipeline (intentional): everything is synchronous (every
@@ -125,7 +125,7 @@ class LockstepParams:
         "1 / SelectorNodeParams.rate_hz (the target_selector's rate)", "s"))
     object_period_s: float = field(default=0.0, metadata=param_meta(
         "object costmap update period (one camera frame processed); 0 = "
-        "1 / ObjectParams.rate_hz (the object_costmap node's rate)", "s"))
+        "1 / ObjectCostmapNodeParams.rate_hz (the object_costmap node's rate)", "s"))
     coverage_target_pct: float = field(default=99.0, metadata=param_meta(
         "run completed at this coverage of the explorable area", "%"))
     milestones_pct: tuple[float, ...] = field(

@@ -60,3 +60,153 @@ def test_only_convert_builds_arrays_from_message_buffers():
         if "np.frombuffer(msg" in text or "frombuffer(msg.data" in text:
             offenders.append(str(path.relative_to(ROOT)))
     assert offenders == []
+
+
+# ------------------------------------------------------------ circles, size, one decision core
+
+PROJECT_PACKAGES = ("explore_seg", "sim_bridge", "bench")
+#: Longest file allowed in the package and the simulator.
+MAX_LINES = 600
+#: Names of the decision loop's pieces: outside the core's selection package and its
+#: decision API only ``explore_seg.core.explorer.Explorer`` wires them.
+WIRING_NAMES = {"PathGraphs", "GoalManager", "frontier_distances", "select_goal"}
+WIRING_HOMES = ("explore_seg/core/selection/", "explore_seg/core/explorer.py")
+
+
+def _module_name(path: Path) -> str:
+    rel = path.relative_to(ROOT).with_suffix("")
+    parts = rel.parts[:-1] if rel.name == "__init__" else rel.parts
+    return ".".join(parts)
+
+
+def _project_modules() -> dict[str, Path]:
+    out = {}
+    for pkg in PROJECT_PACKAGES:
+        for path in _files(pkg):
+            out[_module_name(path)] = path
+    return out
+
+
+def _all_imports(path: Path) -> set[str]:
+    """Every absolute import target of a file, top-level and inside functions alike
+    (``from a.b import c`` counts as ``a.b`` and, when it is a module, ``a.b.c``); imports
+    under ``if TYPE_CHECKING:`` do not run and are left out."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    skip: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            skip.update(id(n) for stmt in node.body for n in ast.walk(stmt))
+    mods: set[str] = set()
+    for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
+        if isinstance(node, ast.Import):
+            mods.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            mods.add(node.module)
+            mods.update(f"{node.module}.{a.name}" for a in node.names)
+    return mods
+
+
+def _import_graph() -> dict[str, set[str]]:
+    """module -> project modules it imports (a package's ``__init__`` runs before its
+    submodules, so importing ``a.b.c`` also imports ``a.b`` and ``a``; a module's own
+    ancestor packages are already importing, so they are not edges)."""
+    modules = _project_modules()
+    graph: dict[str, set[str]] = {m: set() for m in modules}
+    for mod, path in modules.items():
+        own = {".".join(mod.split(".")[:k]) for k in range(1, mod.count(".") + 1)}
+        if path.name == "__init__.py":
+            own.add(mod)
+        for target in _all_imports(path):
+            parts = target.split(".")
+            for k in range(1, len(parts) + 1):
+                pre = ".".join(parts[:k])
+                if pre in modules and pre not in own and pre != mod:
+                    graph[mod].add(pre)
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_import_circles_not_even_through_function_level_imports():
+    assert _cycles(_import_graph()) == []
+
+
+def test_the_circle_finder_finds_a_circle_hidden_in_a_function():
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
+    assert _cycles(graph) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+def test_function_level_imports_are_seen(tmp_path):
+    f = tmp_path / "m.py"
+    f.write_text("import os\n\ndef g():\n    from explore_seg.core import grid\n"
+                 "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import sim_bridge\n")
+    assert {"explore_seg.core", "explore_seg.core.grid", "os"} <= _all_imports(f)
+    assert "sim_bridge" not in _all_imports(f)
+
+
+@pytest.mark.parametrize("path", _files("explore_seg") + _files("sim_bridge"),
+                         ids=lambda p: str(p.relative_to(ROOT)))
+def test_files_stay_small(path):
+    n = len(path.read_text().splitlines())
+    assert n <= MAX_LINES, f"{path.relative_to(ROOT)} has {n} lines (at most {MAX_LINES})"
+
+
+def _used_names(path: Path) -> set[str]:
+    tree = ast.parse(path.read_text(), filename=str(path))
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name):
+            names.add(node.id)
+        elif isinstance(node, ast.Attribute):
+            names.add(node.attr)
+        elif isinstance(node, ast.ImportFrom):
+            names.update(a.name for a in node.names)
+    return names
+
+
+@pytest.mark.parametrize("path", [p for pkg in PROJECT_PACKAGES + ("scripts",)
+                                  for p in _files(pkg)
+                                  if not str(p.relative_to(ROOT)).startswith(WIRING_HOMES)],
+                         ids=lambda p: str(p.relative_to(ROOT)))
+def test_decision_loop_is_wired_only_by_the_core_explorer(path):
+    """Frontiers -> distances -> goal manager are wired once, in core/explorer.py: the
+    selector node, the lock step and the benchmarks call Explorer.step."""
+    used = _used_names(path) & WIRING_NAMES
+    assert not used, (f"{path.relative_to(ROOT)} wires {sorted(used)} by hand: call "
+                      "explore_seg.core.explorer.Explorer.step instead")

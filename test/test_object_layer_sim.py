@@ -40,7 +40,7 @@ from explore_seg.core.grid import GridMap
 from explore_seg.core.objects import (DepthFrame, Object3D, ObjectCostmapNodeParams, ObjectMap,
                                       ObjectParams, load_priors, points_in_rect, process_frame,
                                       wall_mask)
-from explore_seg.core.paths import BlockGraph
+from explore_seg.core.block_graph import BlockGraph
 from explore_seg.core.selection import SelectionParams, frontier_distances, select_goal
 from sim_bridge.engine import Collider, SimEngine, SimParams
 from sim_bridge.navigation import NavState

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from explore_seg.core.grid import grid_from_ascii
-from explore_seg.core.paths import (BlockGraph, block_distances, cost_distance_field,
-                                    distance_field, extract_path, inflate, path_length_m)
+from explore_seg.core.block_graph import BlockGraph, block_distances
+from explore_seg.core.paths import (cost_distance_field, distance_field, extract_path, inflate,
+                                    path_length_m)
 
 RES = 0.05
 

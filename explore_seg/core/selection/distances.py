@@ -16,7 +16,7 @@ import numpy.typing as npt
 
 from explore_seg.core.frontiers import Frontier, FrontierParams, traversable_mask
 from explore_seg.core.grid import GridMap, metres_to_cells
-from explore_seg.core.paths import BlockGraph
+from explore_seg.core.block_graph import BlockGraph
 from explore_seg.core.selection.params import SelectionParams
 
 

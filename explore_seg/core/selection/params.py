@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass, field
 
 from explore_seg.core.fields import INT_MAX, param_meta
-from explore_seg.core.paths import MAX_BLOCK_CELLS
+from explore_seg.core.block_graph import MAX_BLOCK_CELLS
 from explore_seg.core.selection.strategies import STRATEGIES
 
 POSE_TOPIC_TYPES = ("odom", "pose")
