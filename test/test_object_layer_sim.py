@@ -34,14 +34,14 @@ from scipy import ndimage
 from explore_seg.core.camera import (apply_transform, base_from_optical, depth_to_points,
                                      map_from_base)
 from explore_seg.core.detector import Detector, DetectorParams
-from explore_seg.core.frontiers import (Frontier, find_frontiers, object_obstacles,
-                                        traversable_mask)
+from explore_seg.core.frontiers import Frontier, FrontierParams
 from explore_seg.core.grid import GridMap
 from explore_seg.core.objects import (DepthFrame, Object3D, ObjectCostmapNodeParams, ObjectMap,
                                       ObjectParams, load_priors, points_in_rect, process_frame,
                                       wall_mask)
 from explore_seg.core.block_graph import BlockGraph
-from explore_seg.core.selection import SelectionParams, frontier_distances, select_goal
+from explore_seg.core.explorer import Explorer, detect_frontiers
+from explore_seg.core.selection import SelectionParams
 from sim_bridge.engine import Collider, SimEngine, SimParams
 from sim_bridge.navigation import NavState
 from sim_bridge.sensors import CLASS_IDS, CameraParams, DepthCamera, Lidar, LidarParams
@@ -479,14 +479,11 @@ def fig13_map(world: World, gt: GroundTruth, top: Primitive,
     return grid.with_data(data)
 
 
-def _choose(grid: GridMap, extra: npt.NDArray[np.bool_] | None, robot_rc: tuple[int, int],
-            params: SelectionParams) -> tuple[list[Frontier], int | None, BlockGraph]:
-    fp = params.frontier_params()
-    graph = BlockGraph(traversable_mask(grid, extra, fp), grid.resolution_m,
-                       params.path_block_cells)
-    frontiers = find_frontiers(grid, extra, fp)
-    dist = frontier_distances(graph, robot_rc, frontiers, params)
-    return frontiers, select_goal(frontiers, dist, None, robot_rc, params).index, graph
+def _choose(grid: GridMap, layer: GridMap | None, robot: tuple[float, float, float],
+            params: SelectionParams) -> tuple[list[Frontier], int | None]:
+    """One decision of the core (as target_selector makes it) with or without the layer."""
+    step = Explorer(FrontierParams(), params).step(0.0, grid, robot, layer)
+    return step.frontiers, step.selection.index if step.selection is not None else None
 
 
 @pytest.fixture(scope="module")
@@ -497,12 +494,11 @@ def fig13(small) -> Fig13:
     robot = views[0].pose                      # the robot stands where it saw the desk
     grid = fig13_map(world, gt, top, robot)
     params = SelectionParams(strategy="paper", use_regions=False)
-    robot_rc = grid.world_to_cell(robot[0], robot[1])
-    frontiers, choice, _ = _choose(grid, None, robot_rc, params)
+    frontiers, choice = _choose(grid, None, robot, params)
     run = run_pipeline(world, gt, views)
     layer = run.object_map.rasterize(gt.lidar)
-    extra = object_obstacles(layer, grid, params.object_occupied_threshold)
-    frontiers_layer, choice_layer, _ = _choose(grid, extra, robot_rc, params)
+    extra = detect_frontiers(grid, layer, FrontierParams()).extra_obstacles
+    frontiers_layer, choice_layer = _choose(grid, layer, robot, params)
     return Fig13(world, gt, top, robot, grid, layer, params, frontiers, choice,
                  frontiers_layer, choice_layer, extra)
 
@@ -533,8 +529,9 @@ def test_fig13_with_layer_the_desk_frontier_is_blocked_and_the_door_is_chosen(fi
     robot_rc = case.grid.world_to_cell(case.robot[0], case.robot[1])
     # The cPoint under the desk is an obstacle of the layer: no path leads there.
     assert case.extra[desk_f.point_rc], "the layer leaves the cPoint under the desk free"
-    _, _, graph = _choose(case.grid, case.extra, robot_rc, case.params)
-    assert np.isinf(frontier_distances(graph, robot_rc, [desk_f], case.params)).all()
+    det = detect_frontiers(case.grid, case.layer, FrontierParams())
+    graph = BlockGraph(det.passable, case.grid.resolution_m, case.params.path_block_cells)
+    assert np.isinf(graph.distances(robot_rc, np.asarray([desk_f.point_rc])))
     # The robot stands on free floor: the layer must not cover its own disk.
     rows, cols = np.indices(case.grid.shape)
     x, y = case.grid.cells_to_world(rows, cols)
