@@ -123,8 +123,8 @@ def test_boxes_from_markers():
 
 
 @pytest.mark.parametrize("strategy, without, params", [
-    ("paper", [], ["strategy:=paper", "use_regions:=true", "use_object_costmap:=true"]),
-    ("paper_noobj", ["object_costmap"], ["use_regions:=true", "use_object_costmap:=false"]),
+    ("paper", [], ["strategy:=paper", "use_regions:=true", "frontier.use_object_costmap:=true"]),
+    ("paper_noobj", ["object_costmap"], ["use_regions:=true", "frontier.use_object_costmap:=false"]),
     ("nearest", ["object_costmap", "segmentation"], ["strategy:=nearest", "use_regions:=false"]),
     ("explore_lite", ["object_costmap", "segmentation"], ["strategy:=explore_lite"]),
 ])

@@ -13,6 +13,7 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
 import param_docs  # noqa: E402
+from param_ranges import assert_range_enforced, ranged_fields  # noqa: E402
 
 from explore_seg.params import flatten_params, coerce_value, ros_fields  # noqa: E402
 
@@ -69,3 +70,25 @@ PARAM_FILES = sorted(p for p in (ROOT / "config").glob("*.yaml") if p.name != "o
 @pytest.mark.parametrize("path", PARAM_FILES, ids=lambda p: p.name)
 def test_parameter_files_hold_only_known_valid_parameters(path):
     _validate_profile(path)
+
+
+def _ranged(spec: str):
+    cls = param_docs.load_class(spec)
+    return [(cls, name) for name in ranged_fields(cls)]
+
+
+RANGED = sorted({(spec, name) for sections in param_docs.NODE_PARAMS.values()
+                 for _prefix, spec in sections for _cls, name in _ranged(spec)})
+
+
+def test_every_node_has_ranged_parameters():
+    """The descriptors carry ranges: each documented class declares some."""
+    specs = {spec for sections in param_docs.NODE_PARAMS.values() for _p, spec in sections}
+    assert all(_ranged(spec) for spec in specs), [s for s in specs if not _ranged(s)]
+
+
+@pytest.mark.parametrize("spec,name", RANGED, ids=[f"{s.split(':')[1]}.{n}" for s, n in RANGED])
+def test_declared_ranges_agree_with_validation(spec, name):
+    """A range is no looser than the dataclass: values just outside it are rejected
+    (the message may name a sub-parameter: SimParams validates through LidarParams etc.)."""
+    assert_range_enforced(param_docs.load_class(spec), name, match=None)

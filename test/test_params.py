@@ -8,18 +8,21 @@ import pytest
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
+from explore_seg.core.fields import param_meta
 from explore_seg.params import ParamBinding, load_node_params, overrides_from_dict
 
 
 @dataclass(frozen=True)
 class DemoParams:
-    rate_hz: float = field(default=2.0, metadata={"doc": "tick rate", "unit": "Hz"})
-    strategy: str = field(default="paper", metadata={"doc": "paper | nearest"})
-    layers: tuple[str, ...] = field(default=(), metadata={"doc": "extra layers"})
-    mount_xy_m: tuple[float, ...] = field(default=(0.1, -0.2), metadata={"doc": "mount", "unit": "m"})
-    enabled: bool = field(default=True, metadata={"doc": "on/off"})
-    max_items: int = field(default=5, metadata={"doc": "bound"})
-    table: dict = field(default_factory=dict, metadata={"ros": False})
+    rate_hz: float = field(default=2.0, metadata=param_meta("tick rate", "Hz"))
+    strategy: str = field(default="paper", metadata=param_meta("paper | nearest"))
+    layers: tuple[str, ...] = field(default=(), metadata=param_meta("extra layers"))
+    mount_xy_m: tuple[float, ...] = field(default=(0.1, -0.2), metadata=param_meta("mount", "m"))
+    enabled: bool = field(default=True, metadata=param_meta("on/off"))
+    max_items: int = field(default=5, metadata=param_meta("bound", range=(1, 10)))
+    gain: float = field(default=0.5, metadata=param_meta("a fraction", range=(0.0, 1.0)))
+    connectivity: int = field(default=4, metadata=param_meta("4 or 8", range=(4, 8, 4)))
+    table: dict = field(default_factory=dict, metadata=param_meta("internal", ros=False))
 
     def __post_init__(self) -> None:
         if not self.rate_hz > 0:
@@ -101,3 +104,28 @@ def test_explorer_puts_its_default_params_file_before_the_callers_overrides():
     assert ros == ["--ros-args", "--params-file", str(pf)]
     _, ros = build_args(["--ros-args", "--params-file", "mine.yaml"])
     assert ros == ["--ros-args", "--params-file", "mine.yaml"]
+
+
+def test_ranges_become_descriptor_ranges_that_rclpy_enforces(ros):
+    node = ros.add(Node("p_range", context=ros.context))
+    b = ParamBinding(node, DemoParams())
+    ir = node.describe_parameter("max_items").integer_range[0]
+    assert (ir.from_value, ir.to_value, ir.step) == (1, 10, 0)
+    fr = node.describe_parameter("gain").floating_point_range[0]
+    assert (fr.from_value, fr.to_value) == (0.0, 1.0)
+    assert not node.describe_parameter("rate_hz").floating_point_range
+    for name, value in (("max_items", 11), ("gain", 1.5), ("connectivity", 6)):
+        res = node.set_parameters([Parameter(name, value=value)])
+        assert not res[0].successful, name
+    assert (b.params.max_items, b.params.gain, b.params.connectivity) == (5, 0.5, 4)
+    res = node.set_parameters([Parameter("connectivity", value=8),
+                               Parameter("gain", value=1.0)])
+    assert all(r.successful for r in res)
+    assert (b.params.connectivity, b.params.gain) == (8, 1.0)
+
+
+def test_param_meta_rejects_a_malformed_range():
+    with pytest.raises(ValueError, match="range must be"):
+        param_meta("x", range=(2.0, 1.0))
+    with pytest.raises(ValueError, match="range must be"):
+        param_meta("x", range=(0.0,))

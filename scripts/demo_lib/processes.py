@@ -48,7 +48,7 @@ def explorer_command(cfg: DemoConfig) -> list[str]:
     if cfg.params_file:
         cmd += ["--params-file", cfg.params_file]
     params = {"use_sim_time": True, "strategy": spec.selection,
-              "use_regions": spec.use_regions, "use_object_costmap": spec.use_objects}
+              "use_regions": spec.use_regions, "frontier.use_object_costmap": spec.use_objects}
     if spec.use_objects:
         # The oracle backend as in the lock-step runs (LockstepParams): boxes from the
         # simulator's semantic image with 10 % misses and 2 px corner jitter.
