@@ -38,3 +38,10 @@ def map_qos(transient_local: bool = True) -> QoSProfile:
     return QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
                       reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.VOLATILE)
+
+
+#: An action's ``_action/status`` topic: what rclpy/rclcpp action servers publish with
+#: (reliable, transient local, depth 1: a late subscriber gets the latest array).
+ACTION_STATUS_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
+                               reliability=ReliabilityPolicy.RELIABLE,
+                               durability=DurabilityPolicy.TRANSIENT_LOCAL)

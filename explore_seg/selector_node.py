@@ -37,9 +37,11 @@ from explore_seg import convert
 from explore_seg.core.explorer import Explorer, ExplorerStep
 from explore_seg.core.frontiers import Frontier, FrontierParams
 from explore_seg.core.grid import GridMap, resample_array
-from explore_seg.core.selection import REGION_STRATEGIES, Action, Goal, SelectorNodeParams
+from explore_seg.core.selection import (REGION_STRATEGIES, Action, Goal, NavOutcome,
+                                        SelectorNodeParams)
 from explore_seg.frontier_msgs import FrontierPublisher
 from explore_seg.frontier_node import FRONTIER_PREFIX
+from explore_seg.nav_client import NavClient
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS, map_qos
@@ -106,6 +108,8 @@ class TargetSelectorNode(Node):
         else:
             self.create_subscription(PoseWithCovarianceStamped, "pose", self._on_pose,
                                      RELIABLE_QOS)
+        self._nav = (NavClient(self, p.nav_action, p.nav_accept_timeout_s, p.cancel_timeout_s,
+                               self._warn) if p.nav_action else None)
         self.create_service(Trigger, "~/start", self._srv_start)
         self.create_service(Trigger, "~/stop", self._srv_stop)
         self.create_service(Trigger, "~/resume", self._srv_resume)
@@ -136,6 +140,11 @@ class TargetSelectorNode(Node):
         return self._explorer
 
     @property
+    def nav(self) -> NavClient | None:
+        """The navigator's status/cancel client (None with ``nav_action: ''``)."""
+        return self._nav
+
+    @property
     def manager(self):  # noqa: ANN201 (the Explorer's GoalManager)
         """The decision core's goal manager (current goal, blacklist)."""
         return self._explorer.manager
@@ -149,8 +158,9 @@ class TargetSelectorNode(Node):
             self._timer.cancel()
             self.destroy_timer(self._timer)
             self._timer = self.create_timer(1.0 / new.rate_hz, self._tick)
-        if new.pose_topic_type != old.pose_topic_type:
-            self._warn("pose_type", "pose_topic_type changes take effect after a restart")
+        if new.pose_topic_type != old.pose_topic_type or new.nav_action != old.nav_action:
+            self._warn("restart_params",
+                       "pose_topic_type and nav_action changes take effect after a restart")
 
     def _publish_done(self, done: bool) -> None:
         if self._done_published is done:
@@ -211,9 +221,38 @@ class TargetSelectorNode(Node):
         was = self._state
         self._state = State.STOPPED
         response.success = True
+        canceled = self._cancel_goal("stop")
         response.message = ("already stopped" if was is State.STOPPED else
+                            "stopped, navigation goal canceled" if canceled else
                             "stopped (no new goals; the navigator keeps its current goal)")
         return response
+
+    def _cancel_goal(self, why: str) -> bool:
+        """Cancel our goal at the navigator; the goal is then forgotten, not blacklisted."""
+        if self._nav is None or not self._nav.cancel(why):
+            return False
+        self._explorer.report_navigation(NavOutcome.CANCELED_BY_US)
+        self._nav.tracker.clear()
+        return True
+
+    def _follow_navigation(self) -> None:
+        """Report the navigator's outcomes (status topic, accept timeout) to the core."""
+        if self._nav is None:
+            return
+        for ev in self._nav.poll():
+            if ev.outcome is None:
+                continue
+            applied = self._explorer.report_navigation(ev.outcome, ev.goal_xy_m)
+            self.get_logger().info(ev.message + ("" if applied else " (no longer our goal)"))
+
+    def destroy_node(self) -> None:
+        """Cancel our navigation goal (not waiting for the answer), then destroy."""
+        if self._nav is not None:
+            try:
+                self._cancel_goal("shutdown")
+            except Exception as err:  # noqa: BLE001 - shutting down: log, never raise
+                self.get_logger().warn(f"cancel at shutdown failed: {err}")
+        super().destroy_node()
 
     def _srv_resume(self, request: Trigger.Request, response: Trigger.Response
                     ) -> Trigger.Response:
@@ -258,6 +297,7 @@ class TargetSelectorNode(Node):
 
     @failsafe("goal selection")
     def _tick(self) -> None:
+        self._follow_navigation()
         if self._state is State.STOPPED:
             return
         grid = self._grid
@@ -312,6 +352,7 @@ class TargetSelectorNode(Node):
             self._state = State.DONE
             self._publish_done(True)
             self.get_logger().info(f"exploration done: {reason}")
+            self._cancel_goal("exploration done")
         else:
             self._state = State.SELECTING
         self._publish_markers(grid)
@@ -322,6 +363,8 @@ class TargetSelectorNode(Node):
                                                     self.get_clock().now().to_msg()))
         self._last_goal_pub_s = self._now_s()
         self.goals_sent += 1
+        if self._nav is not None:
+            self._nav.goal_sent(goal.xy_m)
 
     def _publish_markers(self, grid: GridMap) -> None:
         header = convert.make_header(grid.frame_id, self.get_clock().now().to_msg())

@@ -63,9 +63,10 @@ from explore_seg.core.grid import GridMap
 from explore_seg.core.objects import DepthFrame, ObjectMap, ObjectParams, WallMask, \
     load_priors, process_frame, wall_mask
 from explore_seg.core.segmentation import IncrementalSegmenter
-from explore_seg.core.selection import Action
+from explore_seg.core.selection import Action, NavOutcome
 from sim_bridge import worlds
 from sim_bridge.engine import Collider, SimEngine, SimParams
+from sim_bridge.navigation import OutcomeFollower
 from sim_bridge.explorer_params import (ExplorerParams, default_explorer_params_file,  # noqa: F401
                                         load_explorer_params)
 from sim_bridge.run_result import TIMING_KEYS, RunResult  # noqa: F401 (API)
@@ -147,6 +148,12 @@ class LockstepParams:
     object_update_tolerance_m: float = field(default=0.05, metadata=param_meta(
         "the planner's object layer is replaced only when a box moved or grew "
         "by more than this (or appeared/vanished)", "m"))
+    nav_feedback: bool = field(default=False, metadata=param_meta(
+        "tell the decision core how the navigation stand-in ended each goal (succeeded: "
+        "judge its frontier now; aborted/rejected: blacklist it now), as the "
+        "target_selector does with Nav2's action status; false (default) keeps the "
+        "earlier benchmark results reproducible: goals end by distance and "
+        "progress_timeout_s only"))
 
     def __post_init__(self) -> None:
         for name in ("max_sim_time_s", "sample_period_s", "camera_scale"):
@@ -411,6 +418,7 @@ def run_exploration(world: World, strategy: str, seed: int, *,
     labels: npt.NDArray[np.int32] | None = None
     seg_version = -1
     layer: GridMap | None = None
+    follower = OutcomeFollower() if p.nav_feedback else None
     wall0 = time.perf_counter()
 
     def record_coverage() -> float:
@@ -457,6 +465,9 @@ def run_exploration(world: World, strategy: str, seed: int, *,
                 res.timings_ms["segmentation"].append((time.perf_counter() - t0) * 1e3)
             # --- target_selector node (frontiers, distances, costs, goal)
             use_labels = labels if (labels is not None and labels.shape == grid.shape) else None
+            ended = follower.poll(engine.nav_status) if follower is not None else None
+            if ended is not None:
+                explorer.report_navigation(*ended)
             step = explorer.step(now, grid, engine.pose, layer, use_labels)
             if step.detected:
                 res.timings_ms["frontier"].append(step.detect_s * 1e3)
@@ -469,8 +480,13 @@ def run_exploration(world: World, strategy: str, seed: int, *,
                     engine.set_goal(gx, gy, step.goal.yaw_rad)
                     res.goals_sent += 1
                     res.goals.append((gx, gy))
+                    if follower is not None:
+                        follower.sent((gx, gy))
                 except ValueError:
-                    explorer.manager.abandon_goal(blacklist=True)
+                    if follower is not None:
+                        explorer.report_navigation(NavOutcome.REJECTED, step.goal)
+                    else:
+                        explorer.manager.abandon_goal(blacklist=True)
             res.timings_ms["decision"].append((time.perf_counter() - t_dec) * 1e3)
             if observer is not None:
                 goal = explorer.goal

@@ -8,6 +8,9 @@ run with ``use_sim_time: true``. Exploration nodes need none of the ``sim/*`` to
 Published: ``/clock``, ``scan``, ``odom`` (pose in ``map``), ``map``, ``plan``,
 ``camera/*`` (with ``enable_camera``), ``sim/metrics``. Subscribed: ``goal_pose`` and
 the OccupancyGrid layers named in ``costmap_layers``. Service: ``sim/save_metrics``.
+With ``nav_action`` (default ``navigate_to_pose``) the navigation stand-in also looks like
+Nav2's action from outside: ``<action>/_action/status`` and ``<action>/_action/cancel_goal``
+(:mod:`sim_bridge.nav_action`).
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS, SENSOR_QOS
 from sim_bridge.engine import CameraSample, ScanFrame, SimEngine, SimParams, engine_from_params
 from sim_bridge.metrics import CollisionEvent
+from sim_bridge.nav_action import SimNavAction
 from sim_bridge.navigation import NavState
 from sim_bridge.render import engine_overlays, render_map_png
 
@@ -92,6 +96,8 @@ class SimBridgeNode(Node):
         self._goal_seen = False       # startup_real_time_factor applies until then
         self._subscribe_layers(p.costmap_layers)
         self.create_service(Trigger, "sim/save_metrics", self._on_save_metrics)
+        self._nav_action = (SimNavAction(self, self._engine, p.nav_action)
+                            if p.nav_action else None)
         self._p.on_change(self._on_params)
         # Wall-clock timer: the sim is the clock, so it must not wait for /clock itself.
         self._timer = self.create_timer(p.tick_period_s, self._tick, clock=self._wall)
@@ -105,6 +111,11 @@ class SimBridgeNode(Node):
     def engine(self) -> SimEngine:
         """The simulated world (for tests and composed launches)."""
         return self._engine
+
+    @property
+    def nav_action(self) -> SimNavAction | None:
+        """The stand-in's action status / cancel (None with ``nav_action: ''``)."""
+        return self._nav_action
 
     # ------------------------------------------------------------- callbacks
     def _on_goal(self, msg: PoseStamped) -> None:
@@ -123,6 +134,8 @@ class SimBridgeNode(Node):
         except ValueError as err:
             self.get_logger().warn(f"rejected goal_pose: {err}", throttle_duration_sec=5.0)
             return
+        if self._nav_action is not None:
+            self._nav_action.accepted()
         self.get_logger().info(f"goal ({x:.2f}, {y:.2f}, {yaw:.2f})")
 
     def _make_layer_cb(self, name: str):
@@ -224,6 +237,8 @@ class SimBridgeNode(Node):
         if eng.plan_version != self._published_plan_version:
             self._published_plan_version = eng.plan_version
             self._plan_pub.publish(convert.path_msg(eng.plan, MAP_FRAME, stamp))
+        if self._nav_action is not None:
+            self._nav_action.publish()
         state = eng.nav_status.state
         if state is not self._nav_state:
             self._nav_state = state

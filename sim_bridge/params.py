@@ -156,6 +156,10 @@ class SimParams:
         range=(0.0, math.inf)))
     publish_clock: bool = field(default=True, metadata=param_meta(
         "publish /clock (the sim owns time; other nodes run with use_sim_time)"))
+    nav_action: str = field(default="navigate_to_pose", metadata=param_meta(
+        "serve the navigation stand-in as this action's status topic (<name>/_action/"
+        "status) and cancel service (<name>/_action/cancel_goal), as Nav2's bt_navigator "
+        "does for goal_pose; '' = neither", read_only=True))
     costmap_layers: tuple[str, ...] = field(default=("object_costmap",), metadata=param_meta(
         "OccupancyGrid topics whose occupied cells the navigation stand-in avoids"))
     output_dir: str = field(default="out/sim", metadata=param_meta(
@@ -196,6 +200,8 @@ class SimParams:
         if self.camera_depth_encoding not in DEPTH_ENCODINGS:
             raise ValueError(f"camera_depth_encoding must be one of {DEPTH_ENCODINGS}, got "
                              f"{self.camera_depth_encoding!r}")
+        if any(ch.isspace() for ch in self.nav_action):
+            raise ValueError(f"nav_action must be an action name or '', got {self.nav_action!r}")
         for name in self.costmap_layers:
             if not name or any(ch.isspace() for ch in name):
                 raise ValueError(f"costmap_layers entries must be topic names, got {name!r}")

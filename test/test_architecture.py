@@ -10,7 +10,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 ROS_MODULES = ("rclpy", "rcl_interfaces", "builtin_interfaces", "std_msgs", "std_srvs",
                "geometry_msgs", "nav_msgs", "sensor_msgs", "visualization_msgs",
-               "diagnostic_msgs", "rosgraph_msgs", "ament_index_python")
+               "diagnostic_msgs", "rosgraph_msgs", "ament_index_python", "action_msgs")
+#: sim_bridge's ROS side: the node and the action status/cancel it serves.
+SIM_ROS_FILES = ("node.py", "nav_action.py")
 
 
 def _imports(path: Path) -> set[str]:
@@ -38,7 +40,7 @@ def test_core_imports_no_ros_and_nothing_outside_core(path):
             assert mod.startswith("explore_seg.core"), f"{path.name} imports {mod}"
 
 
-@pytest.mark.parametrize("path", [p for p in _files("sim_bridge") if p.name != "node.py"],
+@pytest.mark.parametrize("path", [p for p in _files("sim_bridge") if p.name not in SIM_ROS_FILES],
                          ids=lambda p: p.name)
 def test_sim_engine_is_ros_free(path):
     for mod in _imports(path):

@@ -44,8 +44,8 @@ import numpy.typing as npt
 from explore_seg.core.frontiers import (Frontier, FrontierParams, find_frontiers,
                                         object_obstacles, traversable_mask)
 from explore_seg.core.grid import GridMap, metres_to_cells
-from explore_seg.core.selection import (Action, Goal, GoalManager, PathGraphs, Selection,
-                                        SelectionParams)
+from explore_seg.core.selection import (Action, Goal, GoalManager, NavOutcome, PathGraphs,
+                                        Selection, SelectionParams)
 
 #: Keys of :attr:`ExplorerStep.warnings` (the caller throttles its log per key).
 WARN_LAYER_FRAME = "layer_frame"
@@ -152,6 +152,7 @@ class Explorer:
         self._frontiers: list[Frontier] = []
         self._graph: PathGraphs | None = None
         self._layer_warning = ""
+        self._reported_blacklisted = 0
 
     # ------------------------------------------------------------------ state
     @property
@@ -192,6 +193,30 @@ class Explorer:
     def reset(self, clear_blacklist: bool = False) -> None:
         """Forget the goal and DONE (and the blacklist when asked), as on a (re)start."""
         self.manager.reset(clear_blacklist=clear_blacklist)
+
+    def report_navigation(self, outcome: NavOutcome,
+                          goal: Goal | tuple[float, float] | None = None) -> bool:
+        """What the navigator did with a goal (Nav2's action status, the simulator's
+        stand-in): see :meth:`GoalManager.report_navigation`. A blacklisting here is
+        counted in the next step's :attr:`ExplorerStep.blacklisted`.
+
+        Parameters
+        ----------
+        outcome : NavOutcome
+        goal : Goal or (x_m, y_m), optional
+            The goal the outcome belongs to (ignored when it is not the current goal);
+            None: the current goal.
+
+        Returns
+        -------
+        bool
+            True when applied to the current goal.
+        """
+        xy = goal.xy_m if isinstance(goal, Goal) else goal
+        added = self.manager.blacklist_added
+        applied = self.manager.report_navigation(outcome, xy)
+        self._reported_blacklisted += self.manager.blacklist_added - added
+        return applied
 
     # ------------------------------------------------------------------- step
     def _detect(self, grid: GridMap, layer: GridMap | None) -> None:
@@ -248,7 +273,8 @@ class Explorer:
         old_goal = manager.goal
         added = manager.blacklist_added
         res = manager.step(now_s, (x, y), grid, frontiers, dist, labels, robot_rc, excluded)
-        blacklisted = manager.blacklist_added - added
+        blacklisted = manager.blacklist_added - added + self._reported_blacklisted
+        self._reported_blacklisted = 0
         switched = (res.action is Action.NEW_GOAL and res.goal is not None
                     and old_goal is not None and not old_goal.is_return and not blacklisted
                     and res.selection is not None

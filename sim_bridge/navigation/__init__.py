@@ -32,16 +32,21 @@ active and is replanned up to ``collision_retries`` times, like Nav2's recoverie
 then aborted.
 
 Modules: :mod:`~sim_bridge.navigation.params` (:class:`NavParams`),
+:mod:`~sim_bridge.navigation.goal_status` (goal ids and statuses as Nav2's action reports
+them, :class:`GoalBook`; outcomes for the lock step, :class:`OutcomeFollower`),
 :mod:`~sim_bridge.navigation.planner` (costmap and windowed Dijkstra),
 :mod:`~sim_bridge.navigation.navigator` (goal state machine and pure-pursuit following).
 This package re-exports their public names.
 """
 
 from explore_seg.core.paths import cost_distance_field
+from sim_bridge.navigation.goal_status import (OUTCOME_OF_STATE, STATUS_OF_STATE, GoalBook,
+                                              OutcomeFollower)
 from sim_bridge.navigation.navigator import (ARC_FREE_START_M, NavState, NavStatus, Navigator,
                                             wrap_angle)
 from sim_bridge.navigation.params import NavParams
 from sim_bridge.navigation.planner import coarsen, cost_grid, path_cost, plan_path
 
-__all__ = ["ARC_FREE_START_M", "NavParams", "NavState", "NavStatus", "Navigator", "coarsen",
+__all__ = ["ARC_FREE_START_M", "GoalBook", "NavParams", "NavState", "NavStatus", "Navigator",
+           "OUTCOME_OF_STATE", "OutcomeFollower", "STATUS_OF_STATE", "coarsen",
            "cost_distance_field", "cost_grid", "path_cost", "plan_path", "wrap_angle"]

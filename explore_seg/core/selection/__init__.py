@@ -14,7 +14,8 @@ The decision loop that wires them is :class:`explore_seg.core.explorer.Explorer`
 
 from explore_seg.core.selection.costs import Selection, compute_costs, select_goal
 from explore_seg.core.selection.distances import PathGraphs, frontier_distances
-from explore_seg.core.selection.goals import Action, Goal, GoalManager, StepResult, goal_yaw
+from explore_seg.core.selection.goals import (Action, Goal, GoalManager, NavOutcome,
+                                              StepResult, goal_yaw)
 from explore_seg.core.selection.params import (POSE_TOPIC_TYPES, SelectionParams,
                                                SelectorNodeParams)
 from explore_seg.core.selection.regions import frontier_regions, region_at
@@ -22,7 +23,7 @@ from explore_seg.core.selection.strategies import (COST_FUNCTIONS, REGION_STRATE
                                                    STRATEGIES, CostInputs)
 
 __all__ = [
-    "Action", "COST_FUNCTIONS", "CostInputs", "Goal", "GoalManager", "POSE_TOPIC_TYPES",
+    "Action", "COST_FUNCTIONS", "CostInputs", "Goal", "GoalManager", "NavOutcome", "POSE_TOPIC_TYPES",
     "PathGraphs", "REGION_STRATEGIES", "STRATEGIES", "Selection", "SelectionParams",
     "SelectorNodeParams", "StepResult", "compute_costs", "frontier_distances",
     "frontier_regions", "goal_yaw", "region_at", "select_goal",

@@ -25,6 +25,17 @@ _FLICKER_POINTS = 20
 _FLICKER_AREAS = 100
 
 
+class NavOutcome(enum.Enum):
+    """What the navigator did with a goal (Nav2's ``navigate_to_pose`` action status, or
+    the simulator's stand-in), reported through :meth:`GoalManager.report_navigation`."""
+
+    SUCCEEDED = "succeeded"          # reached: judge the goal's frontier now
+    ABORTED = "aborted"              # gave up (no path, recoveries exhausted): blacklist
+    REJECTED = "rejected"            # never accepted (or not within the timeout): blacklist
+    CANCELED = "canceled"            # canceled by someone else: blacklist
+    CANCELED_BY_US = "canceled_by_us"  # our own cancel (stop, done): forget, no blacklist
+
+
 class Action(enum.Enum):
     """What :meth:`GoalManager.step` asks the caller to do."""
 
@@ -117,6 +128,8 @@ class GoalManager:
         self._last_progress_s = 0.0
         self._arrived_s: float | None = None
         self._arrived_stamp_ns = 0
+        self._nav_succeeded = False
+        self._outcome_reason = ""
         self._empty_ticks = 0
         self._goal_cells_xy: npt.NDArray[np.float64] | None = None
         self._retries_left = self.params.blacklist_retries
@@ -152,6 +165,51 @@ class GoalManager:
         if self.goal is not None and blacklist and not self.goal.is_return:
             self.add_to_blacklist(self.goal.xy_m)
         self.goal = None
+
+    def report_navigation(self, outcome: NavOutcome,
+                          goal_xy_m: tuple[float, float] | None = None) -> bool:
+        """Tell the manager what the navigator did with the current goal.
+
+        SUCCEEDED counts as arrival whatever the distance (the goal's frontier is judged
+        at the next :meth:`step`, on a map newer than the arrival or after
+        ``arrival_wait_s``; a return-to-start goal ends exploration there); ABORTED,
+        REJECTED and CANCELED (by someone else) blacklist the goal at once, so the next
+        :meth:`step` picks another frontier instead of waiting ``progress_timeout_s``;
+        CANCELED_BY_US drops the goal without blacklisting it.
+
+        Parameters
+        ----------
+        outcome : NavOutcome
+        goal_xy_m : (float, float), optional
+            The goal the outcome belongs to; an outcome for another goal (an older one
+            that the navigator finished late) is ignored. None: the current goal.
+
+        Returns
+        -------
+        bool
+            True when the outcome was applied to the current goal.
+        """
+        goal = self.goal
+        if goal is None or not isinstance(outcome, NavOutcome):
+            return False
+        if goal_xy_m is not None and math.hypot(goal_xy_m[0] - goal.xy_m[0],
+                                                goal_xy_m[1] - goal.xy_m[1]) > 1e-6:
+            return False
+        if outcome is NavOutcome.SUCCEEDED:
+            self._nav_succeeded = True
+            return True
+        if outcome is NavOutcome.CANCELED_BY_US:
+            self.goal = None
+            self._outcome_reason = "goal canceled by us"
+            return True
+        if goal.is_return:
+            self.goal = None
+            self.done = True
+            self._outcome_reason = f"navigation {outcome.value} returning to start"
+            return True
+        self.abandon_goal(blacklist=True)
+        self._outcome_reason = f"navigation {outcome.value}: blacklisted"
+        return True
 
     def set_start(self, xy_m: tuple[float, float], yaw_rad: float) -> None:
         """Remember the pose to return to (first pose, unless set again)."""
@@ -239,6 +297,7 @@ class GoalManager:
         self._best_path_dist = math.inf
         self._last_progress_s = now_s
         self._arrived_s = None
+        self._nav_succeeded = False
 
     def step(self, now_s: float, robot_xy_m: tuple[float, float], grid: GridMap,
              frontiers: Sequence[Frontier], dist_m: npt.ArrayLike | None,
@@ -272,7 +331,8 @@ class GoalManager:
         StepResult
         """
         if self.done:
-            return StepResult(Action.DONE, None, "exploration done")
+            reason, self._outcome_reason = self._outcome_reason or "exploration done", ""
+            return StepResult(Action.DONE, None, reason)
         if self.start_xy_m is None:
             self.set_start(robot_xy_m, 0.0)
         if robot_rc is None:
@@ -280,6 +340,7 @@ class GoalManager:
         version = self._blacklist_version
         # 1. progress and arrival on the current goal
         early, reason = self._check_progress(now_s, robot_xy_m, grid, frontiers, dist_m)
+        reason, self._outcome_reason = self._outcome_reason or reason, ""
         if early is not None:
             return early
         if dist_m is None:
@@ -318,7 +379,7 @@ class GoalManager:
                 if math.isfinite(self._best_path_dist):
                     self._last_progress_s = now_s
                 self._best_path_dist = d_path
-        if d_goal <= p.goal_reached_tolerance_m:
+        if d_goal <= p.goal_reached_tolerance_m or self._nav_succeeded:
             if self.goal.is_return:
                 self.goal = None
                 self.done = True

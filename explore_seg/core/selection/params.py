@@ -9,6 +9,7 @@ pose source, republishing). Frontier detection has its own
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 
 from explore_seg.core.fields import INT_MAX, param_meta
@@ -139,13 +140,26 @@ class SelectorNodeParams(SelectionParams):
     map_transient_local: bool = field(default=True, metadata=param_meta(
         "transient-local map/object_costmap/regions subscriptions (false for volatile "
         "publishers)"))
+    nav_action: str = field(default="navigate_to_pose", metadata=param_meta(
+        "the navigator's action (its <name>/_action/status tells how each goal ended, "
+        "<name>/_action/cancel_goal cancels it); '' = publish goal_pose only (goals end by "
+        "progress_timeout_s)"))
+    nav_accept_timeout_s: float = field(default=5.0, metadata=param_meta(
+        "a goal no action status lists this long after its publish counts as rejected "
+        "(only while a status publisher exists)", "s", range=(0.0, _INF)))
+    cancel_timeout_s: float = field(default=2.0, metadata=param_meta(
+        "a cancel request not answered within this time is logged", "s",
+        range=(0.0, _INF)))
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.pose_topic_type not in POSE_TOPIC_TYPES:
             raise ValueError(f"pose_topic_type must be one of {POSE_TOPIC_TYPES}, "
                              f"got {self.pose_topic_type!r}")
-        for name in ("rate_hz", "pose_timeout_s"):
+        if self.nav_action and not re.fullmatch(r"[A-Za-z_/][A-Za-z0-9_/]*", self.nav_action):
+            raise ValueError(f"nav_action must be a ROS name (letters, digits, _ and /) or "
+                             f"'', got {self.nav_action!r}")
+        for name in ("rate_hz", "pose_timeout_s", "nav_accept_timeout_s", "cancel_timeout_s"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
