@@ -25,6 +25,9 @@ from std_msgs.msg import Header
 
 from explore_seg.core.camera import CameraIntrinsics
 from explore_seg.core.grid import GridMap, quaternion_from_yaw, yaw_from_quaternion
+from explore_seg.core.limits import InputLimits, check_frame, normalize_frame  # noqa: F401
+
+DEFAULT_LIMITS = InputLimits()
 
 # --------------------------------------------------------------------------- time
 
@@ -32,6 +35,15 @@ from explore_seg.core.grid import GridMap, quaternion_from_yaw, yaw_from_quatern
 def stamp_to_ns(stamp: Time) -> int:
     """builtin_interfaces/Time -> integer nanoseconds."""
     return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def checked_stamp_ns(stamp: Time, what: str) -> int:
+    """:func:`stamp_to_ns`; ``ValueError`` on a negative stamp (no header could carry it)."""
+    sec, nsec = int(stamp.sec), int(stamp.nanosec)
+    if sec < 0 or not 0 <= nsec < 1_000_000_000:
+        raise ValueError(f"{what}: header.stamp must be >= 0 with nanosec < 1e9, got "
+                         f"sec={sec} nanosec={nsec}")
+    return sec * 1_000_000_000 + nsec
 
 
 def ns_to_stamp(ns: int) -> Time:
@@ -68,24 +80,25 @@ def _yaw_checked(q: Any, what: str) -> float:
     return yaw_from_quaternion(*(v / norm for v in vals))
 
 
-def pose2d_from_pose(pose: Pose, what: str = "pose") -> tuple[float, float, float]:
-    """(x, y, yaw) of a geometry_msgs/Pose; ValueError on NaN or a non-unit quaternion."""
+def pose2d_from_pose(pose: Pose, what: str = "pose", limits: InputLimits = DEFAULT_LIMITS
+                     ) -> tuple[float, float, float]:
+    """(x, y, yaw) of a Pose; ValueError on NaN, |x|,|y| > max_coordinate_m, a bad quaternion."""
     x, y = float(pose.position.x), float(pose.position.y)
-    if not (math.isfinite(x) and math.isfinite(y)):
-        raise ValueError(f"{what}: position must be finite, got ({x}, {y})")
+    limits.check_xy(x, y, what)
     return x, y, _yaw_checked(pose.orientation, what)
 
 
-def pose2d_from_odometry(msg: Odometry) -> tuple[float, float, float]:
-    """(x, y, yaw) of nav_msgs/Odometry's pose (in its header frame)."""
-    return pose2d_from_pose(msg.pose.pose, "odometry")
-
-
-def pose2d_from_pose_msg(msg: PoseWithCovarianceStamped | PoseStamped
+def pose2d_from_odometry(msg: Odometry, limits: InputLimits = DEFAULT_LIMITS
                          ) -> tuple[float, float, float]:
+    """(x, y, yaw) of nav_msgs/Odometry's pose (in its header frame)."""
+    return pose2d_from_pose(msg.pose.pose, "odometry", limits)
+
+
+def pose2d_from_pose_msg(msg: PoseWithCovarianceStamped | PoseStamped,
+                         limits: InputLimits = DEFAULT_LIMITS) -> tuple[float, float, float]:
     """(x, y, yaw) of a PoseStamped or PoseWithCovarianceStamped."""
     pose = msg.pose.pose if isinstance(msg, PoseWithCovarianceStamped) else msg.pose
-    return pose2d_from_pose(pose, type(msg).__name__)
+    return pose2d_from_pose(pose, type(msg).__name__, limits)
 
 
 def pose_from_2d(x: float, y: float, yaw: float) -> Pose:
@@ -140,37 +153,44 @@ def path_msg(xy: npt.ArrayLike, frame_id: str, stamp: Time | int | None = None) 
 # ---------------------------------------------------------------------- occupancy
 
 
-def _meta_checked(info: MapMetaData) -> tuple[float, float, float, float]:
-    """(resolution, origin x, origin y, origin yaw) of MapMetaData, validated."""
+def _meta_checked(info: MapMetaData, limits: InputLimits = DEFAULT_LIMITS
+                  ) -> tuple[float, float, float, float]:
+    """(resolution, origin x, origin y, origin yaw) of MapMetaData, validated (size and
+    resolution against ``limits`` too: nothing is allocated before this passes)."""
     res = float(info.resolution)
     if not (math.isfinite(res) and res > 0):
         raise ValueError(f"map resolution must be finite and > 0, got {res}")
+    limits.check_map_size(info.width, info.height, res)
     ox, oy = float(info.origin.position.x), float(info.origin.position.y)
     if not (math.isfinite(ox) and math.isfinite(oy)):
         raise ValueError(f"map origin must be finite, got ({ox}, {oy})")
+    limits.check_xy(ox, oy, "map origin")
     return res, ox, oy, _yaw_checked(info.origin.orientation, "map origin")
 
 
-def grid_from_msg(msg: OccupancyGrid) -> GridMap:
-    """nav_msgs/OccupancyGrid -> :class:`GridMap` (row = y, no flip).
+def grid_from_msg(msg: OccupancyGrid, limits: InputLimits = DEFAULT_LIMITS) -> GridMap:
+    """nav_msgs/OccupancyGrid -> :class:`GridMap` (row = y, no flip; frame without a
+    leading ``/``).
 
     Raises
     ------
     ValueError
-        Wrong data length, zero/negative/NaN resolution, NaN origin, bad orientation,
-        values outside -1..100.
+        Wrong data length, a size or resolution beyond ``limits``, zero/negative/NaN
+        resolution, NaN or absurd origin, bad orientation, a negative stamp, values
+        outside -1..100.
     """
     info = msg.info
     w, h = int(info.width), int(info.height)
     n = len(msg.data)
     if n != w * h:
         raise ValueError(f"map data has {n} cells, expected width*height={w}*{h}={w * h}")
-    res, ox, oy, yaw = _meta_checked(info)
+    res, ox, oy, yaw = _meta_checked(info, limits)
+    stamp_ns = checked_stamp_ns(msg.header.stamp, "map")
     data = np.frombuffer(_as_bytes(msg.data), dtype=np.int8, count=n).reshape(h, w).copy()
     if data.size and (data.min() < -1 or data.max() > 100):
         raise ValueError(f"map values must be in -1..100, got {data.min()}..{data.max()}")
-    return GridMap(data, res, (ox, oy), yaw, msg.header.frame_id or "map",
-                   stamp_to_ns(msg.header.stamp))
+    return GridMap(data, res, (ox, oy), yaw, normalize_frame(msg.header.frame_id, "map"),
+                   stamp_ns)
 
 
 def map_meta(grid: GridMap, stamp: Time | int | None = None) -> MapMetaData:
@@ -192,9 +212,11 @@ def grid_to_msg(grid: GridMap, stamp: Time | int | None = None) -> OccupancyGrid
     return msg
 
 
-def geometry_from_meta(info: MapMetaData, frame_id: str = "map") -> GridMap:
-    """An all-unknown :class:`GridMap` with the geometry of a MapMetaData."""
-    res, ox, oy, yaw = _meta_checked(info)
+def geometry_from_meta(info: MapMetaData, frame_id: str = "map",
+                       limits: InputLimits = DEFAULT_LIMITS) -> GridMap:
+    """An all-unknown :class:`GridMap` with the geometry of a MapMetaData (checked against
+    ``limits`` before it is allocated)."""
+    res, ox, oy, yaw = _meta_checked(info, limits)
     data = np.full((int(info.height), int(info.width)), -1, dtype=np.int8)
     return GridMap(data, res, (ox, oy), yaw, frame_id, stamp_to_ns(info.map_load_time))
 
@@ -215,15 +237,17 @@ def labels_to_msgs(labels: npt.NDArray[np.integer], grid: GridMap,
     return img, map_meta(grid, img.header.stamp)
 
 
-def labels_from_msgs(img: Image, info: MapMetaData) -> tuple[npt.NDArray[np.int32], GridMap]:
-    """(Image 32SC1, MapMetaData) -> (labels int32 (H, W), grid geometry)."""
+def labels_from_msgs(img: Image, info: MapMetaData, limits: InputLimits = DEFAULT_LIMITS
+                     ) -> tuple[npt.NDArray[np.int32], GridMap]:
+    """(Image 32SC1, MapMetaData) -> (labels int32 (H, W), grid geometry); the info's size
+    is checked against the image's and ``limits`` before anything is allocated."""
     if img.encoding != "32SC1":
         raise ValueError(f"region labels must be 32SC1, got {img.encoding!r}")
+    if (int(img.width), int(img.height)) != (int(info.width), int(info.height)):
+        raise ValueError(f"labels image is {img.width}x{img.height}, "
+                         f"map info says {info.width}x{info.height}")
     labels = image_from_msg(img)
-    geom = geometry_from_meta(info, img.header.frame_id or "map")
-    if labels.shape != geom.shape:
-        raise ValueError(f"labels image is {labels.shape[1]}x{labels.shape[0]}, "
-                         f"map info says {geom.width}x{geom.height}")
+    geom = geometry_from_meta(info, normalize_frame(img.header.frame_id, "map"), limits)
     return labels.astype(np.int32, copy=False), geom
 
 

@@ -23,6 +23,7 @@ from explore_seg import convert
 from explore_seg.core.explorer import detect_frontiers
 from explore_seg.core.frontiers import Frontier, FrontierNodeParams, FrontierParams
 from explore_seg.core.grid import GridMap
+from explore_seg.core.limits import InputLimits
 from explore_seg.frontier_msgs import FrontierPublisher
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
@@ -50,6 +51,7 @@ class FrontierDetectorNode(Node):
                          parameter_overrides=parameter_overrides or [], namespace=namespace)
         self._node_p = ParamBinding(self, FrontierNodeParams())
         self._p = ParamBinding(self, FrontierParams(), prefix=FRONTIER_PREFIX)
+        self._lp = ParamBinding(self, InputLimits(), prefix="input.")
         node_p = self._node_p.params
         self._grid: GridMap | None = None
         self._layer: GridMap | None = None
@@ -95,14 +97,14 @@ class FrontierDetectorNode(Node):
 
     def _on_map(self, msg: OccupancyGrid) -> None:
         try:
-            self._grid = convert.grid_from_msg(msg)
+            self._grid = convert.grid_from_msg(msg, self._lp.params)
             self._dirty = True
         except ValueError as err:
             self._warn("map", f"dropped map: {err}")
 
     def _on_layer(self, msg: OccupancyGrid) -> None:
         try:
-            self._layer = convert.grid_from_msg(msg)
+            self._layer = convert.grid_from_msg(msg, self._lp.params)
             self._dirty = True
         except ValueError as err:
             self._warn("object_costmap", f"dropped object_costmap: {err}")

@@ -90,6 +90,11 @@ class WarnThrottle:
         if self._due(key):
             self._logger.warn(msg)
 
+    def info(self, key: str, msg: str) -> None:
+        """The same at info level."""
+        if self._due(key):
+            self._logger.info(msg)
+
     def error(self, key: str, msg: str) -> None:
         """The same at error level."""
         if self._due(key):

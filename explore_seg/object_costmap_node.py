@@ -35,12 +35,15 @@ from explore_seg import convert
 from explore_seg.core.camera import base_from_optical, map_from_base
 from explore_seg.core.detector import Detector, DetectorParams
 from explore_seg.core.grid import GridMap, quaternion_from_yaw
+from explore_seg.core.limits import InputLimits
 from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D,
                                       ObjectCostmapNodeParams, ObjectMap, WallMask,
                                       load_priors, parse_class_ids, process_frame, wall_mask)
 from explore_seg.node_util import WarnThrottle, config_file, failsafe, run
+from explore_seg.object_inputs import purge_newer, wait_reason
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, POSE_QOS, SENSOR_QOS, map_qos
+from explore_seg.time_guard import StallWatchdog, TimeGuard
 
 #: Colour/depth/semantic messages kept for stamp pairing (older ones are dropped).
 _PAIR_BUFFER = 4
@@ -84,6 +87,7 @@ class ObjectCostmapNode(Node):
                          parameter_overrides=parameter_overrides or [], namespace=namespace)
         self._p = ParamBinding(self, ObjectCostmapNodeParams())
         self._dp = ParamBinding(self, DetectorParams(), prefix="detector.")
+        self._lp = ParamBinding(self, InputLimits(), prefix="input.")
         p = self._p.params
         # the installed share's priors when no file is given (the core knows only the
         # source tree)
@@ -115,6 +119,12 @@ class ObjectCostmapNode(Node):
         self._warn = WarnThrottle(self, _WARN_PERIOD_S)
         self.failures = 0          # cycles lost to an exception (node_util.failsafe)
         self._warn_lag = WarnThrottle(self, _LAG_WARN_PERIOD_S)
+        # Time model: jumps of the camera/pose stamps or the clock reset what is keyed by
+        # time; the watchdog says why frames that arrive are not processed.
+        self._time = TimeGuard(self._lp.params.clock_jump_s)
+        self._stall = StallWatchdog(self._lp.params.stall_periods * _POLLS_PER_PERIOD)
+        #: Clock jumps seen (any stream).
+        self.time_jumps = 0
 
         self._pub_grid = self.create_publisher(OccupancyGrid, "object_costmap", MAP_QOS)
         self._pub_cloud = self.create_publisher(PointCloud2, "object_costmap/cloud", 1)
@@ -144,6 +154,7 @@ class ObjectCostmapNode(Node):
         self._timer = self.create_timer(1.0 / (p.rate_hz * _POLLS_PER_PERIOD), self._tick)
         self._p.on_change(self._params_changed)
         self._dp.on_change(self._detector_params_changed)
+        self._lp.on_change(self._limits_changed)
 
     # ---------------------------------------------------------------- helpers
     @property
@@ -176,20 +187,55 @@ class ObjectCostmapNode(Node):
             self._timer = self.create_timer(1.0 / (new.rate_hz * _POLLS_PER_PERIOD),
                                             self._tick)
 
+    def _limits_changed(self, old: InputLimits, new: InputLimits) -> None:
+        self._time.jump_s = new.clock_jump_s
+        self._stall.periods = new.stall_periods * _POLLS_PER_PERIOD
+
     def _detector_params_changed(self, old: DetectorParams, new: DetectorParams) -> None:
         self._detector = None
         self._detector_failed = False
 
     # -------------------------------------------------------------- callbacks
     def _on_color(self, msg: Image) -> None:
-        self._colors.append(msg)
+        if self._timed("camera", msg):
+            self._colors.append(msg)
 
     def _on_depth(self, msg: Image) -> None:
-        self._depths.append(msg)
-        self.frames_received += 1
+        if self._timed("camera", msg):
+            self._depths.append(msg)
+            self.frames_received += 1
 
     def _on_semantic(self, msg: Image) -> None:
-        self._semantics.append(msg)
+        if self._timed("camera", msg):
+            self._semantics.append(msg)
+
+    def _timed(self, stream: str, msg: Any) -> bool:
+        """Check a timed input's stamp and feed it to the time model; False: dropped."""
+        try:
+            t_ns = convert.checked_stamp_ns(msg.header.stamp, stream)
+        except ValueError as err:
+            self._drop(stream, str(err))
+            return False
+        self._observe(stream, t_ns)
+        return True
+
+    def _observe(self, stream: str, t_ns: int, expected_gap_ns: int = 0) -> None:
+        jump = self._time.observe(stream, t_ns, expected_gap_ns)
+        if jump is None:
+            return
+        self.time_jumps += 1
+        if jump.backwards:
+            # Everything stamped after the new time line began is from the old one (or was
+            # future-stamped): forget it, so that new frames are not held back by it.
+            horizon = t_ns + int(self._time.jump_s * 1e9)
+            for buf in (self._colors, self._depths, self._semantics):
+                purge_newer(buf, horizon, _stamp_ns)
+            purge_newer(self._poses, horizon, lambda sp: sp[0])
+            if self._last_depth_ns is not None and self._last_depth_ns > horizon:
+                self._last_depth_ns = None
+            self._lag_mark = None
+        self._warn(f"jump_{stream}", jump.describe() + (
+            "; frames, poses and stamps of the old time line dropped" if jump.backwards else ""))
 
     def _on_info(self, msg: CameraInfo) -> None:
         try:
@@ -202,30 +248,53 @@ class ObjectCostmapNode(Node):
 
     def _on_map(self, msg: OccupancyGrid) -> None:
         try:
-            self._grid = convert.grid_from_msg(msg)
+            self._grid = convert.grid_from_msg(msg, self._lp.params)
             self._walls = None                  # recomputed once per map, not per frame
         except ValueError as err:
             self._drop("map", str(err))
 
     def _on_odom(self, msg: Odometry) -> None:
-        try:
-            self._add_pose(_stamp_ns(msg), convert.pose2d_from_odometry(msg))
-        except ValueError as err:
-            self._drop("pose", str(err))
+        self._add_pose(msg, convert.pose2d_from_odometry)
 
     def _on_pose(self, msg: PoseWithCovarianceStamped) -> None:
+        self._add_pose(msg, convert.pose2d_from_pose_msg)
+
+    def _add_pose(self, msg: Any, to_2d: Any) -> None:
         try:
-            self._add_pose(_stamp_ns(msg), convert.pose2d_from_pose_msg(msg))
+            convert.check_frame(msg.header.frame_id, self.params.map_frame, "pose")
+            pose = to_2d(msg, self._lp.params)
+            t_ns = convert.checked_stamp_ns(msg.header.stamp, "pose")
         except ValueError as err:
             self._drop("pose", str(err))
-
-    def _add_pose(self, t_ns: int, pose: tuple[float, float, float]) -> None:
+            return
+        self._observe("pose", t_ns)
         self._poses.append((t_ns, pose))
+        self._objects.note_robot_position(pose[0], pose[1])   # swept path: cleared
         self._objects.note_robot_position(pose[0], pose[1])   # swept path: cleared
 
     # ------------------------------------------------------------------- tick
     @failsafe("object costmap update")
     def _tick(self) -> None:
+        period_ns = int(1e9 / (self.params.rate_hz * _POLLS_PER_PERIOD))
+        self._observe("clock", self.get_clock().now().nanoseconds, period_ns)
+        processed = self.frames_processed
+        self._tick_inner()
+        reason = self._stall.tick(bool(self._depths), self.frames_processed > processed,
+                                  self._wait_reason)
+        if reason is not None:
+            self._warn("stall", f"camera frames arrive but none was processed for "
+                                f"{self._lp.params.stall_periods} periods: {reason}")
+
+    def _wait_reason(self) -> str:
+        p = self.params
+        text = wait_reason([_stamp_ns(m) for m in self._depths],
+                           [_stamp_ns(m) for m in self._colors], [t for t, _ in self._poses],
+                           self._last_depth_ns, p.sync_tolerance_s, p.pose_tolerance_s,
+                           _MIN_GAP_PERIODS / p.rate_hz)
+        skew = self._time.disagreement("camera", "pose")
+        return text + (f"; {skew}" if skew else "")
+
+    def _tick_inner(self) -> None:
         if self._info is None:
             self._state = State.WAITING_FOR_CAMERA_INFO
             if self._depths:
@@ -391,7 +460,7 @@ class ObjectCostmapNode(Node):
     def _publish(self, t_ns: int) -> None:
         p = self.params
         self._publish_grid()
-        header = convert.make_header(p.map_frame, t_ns)
+        header = convert.make_header(convert.normalize_frame(p.map_frame), t_ns)
         # The cloud (for a Nav2 voxel layer) and the markers (RViz) cost a share of every
         # frame's time: only for subscribers.
         if self._pub_cloud.get_subscription_count() > 0:

@@ -31,6 +31,7 @@ from std_msgs.msg import Float64
 
 from explore_seg import convert
 from explore_seg.core.grid import GridMap
+from explore_seg.core.limits import InputLimits
 from explore_seg.core.segmentation import (IncrementalSegmenter, SegmentationNodeParams,
                                            SegmentationParams)
 from explore_seg.node_util import WarnThrottle, failsafe, run
@@ -66,6 +67,7 @@ class SegmentationNode(Node):
         super().__init__(node_name, context=context,
                          parameter_overrides=parameter_overrides or [], namespace=namespace)
         self._p = ParamBinding(self, SegmentationNodeParams())
+        self._lp = ParamBinding(self, InputLimits(), prefix="input.")
         p = self._p.params
         self._seg = IncrementalSegmenter(self._algo_params(p))
         self._latest: OccupancyGrid | None = None
@@ -132,7 +134,7 @@ class SegmentationNode(Node):
         if msg is None:
             return
         try:
-            grid = convert.grid_from_msg(msg)
+            grid = convert.grid_from_msg(msg, self._lp.params)
         except ValueError as err:
             self._warn("map", f"dropped map: {err}")
             return

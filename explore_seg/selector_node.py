@@ -37,6 +37,7 @@ from explore_seg import convert
 from explore_seg.core.explorer import Explorer, ExplorerStep
 from explore_seg.core.frontiers import Frontier, FrontierParams
 from explore_seg.core.grid import GridMap, resample_array
+from explore_seg.core.limits import InputLimits
 from explore_seg.core.selection import (REGION_STRATEGIES, Action, Goal, NavOutcome,
                                         SelectorNodeParams)
 from explore_seg.frontier_msgs import FrontierPublisher
@@ -45,6 +46,7 @@ from explore_seg.nav_client import NavClient
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS, map_qos
+from explore_seg.time_guard import StallWatchdog, TimeGuard
 
 #: Seconds between repeated warnings of one kind.
 _WARN_PERIOD_S = 5.0
@@ -73,6 +75,7 @@ class TargetSelectorNode(Node):
                          parameter_overrides=parameter_overrides or [], namespace=namespace)
         self._p = ParamBinding(self, SelectorNodeParams())
         self._fp = ParamBinding(self, FrontierParams(), prefix=FRONTIER_PREFIX)
+        self._lp = ParamBinding(self, InputLimits(), prefix="input.")
         p = self._p.params
         self._explorer = Explorer(self._fp.params, p)
         self._grid: GridMap | None = None
@@ -92,6 +95,9 @@ class TargetSelectorNode(Node):
         self.failures = 0          # cycles lost to an exception (node_util.failsafe)
         self.last_reason = ""
         self.goals_sent = 0
+        self._time = TimeGuard(self._lp.params.clock_jump_s)
+        self._stall = StallWatchdog(self._lp.params.stall_periods)
+        self._pose_stamp_ns: int | None = None
 
         self._pub_goal = self.create_publisher(PoseStamped, "goal_pose", RELIABLE_QOS)
         self._pub_done = self.create_publisher(Bool, "exploration_done", MAP_QOS)
@@ -171,7 +177,7 @@ class TargetSelectorNode(Node):
     # -------------------------------------------------------------- callbacks
     def _on_map(self, msg: OccupancyGrid) -> None:
         try:
-            self._grid = convert.grid_from_msg(msg)
+            self._grid = convert.grid_from_msg(msg, self._lp.params)
         except ValueError as err:
             self._warn("map", f"dropped map: {err}")
             return
@@ -179,7 +185,7 @@ class TargetSelectorNode(Node):
 
     def _on_layer(self, msg: OccupancyGrid) -> None:
         try:
-            self._layer = convert.grid_from_msg(msg)
+            self._layer = convert.grid_from_msg(msg, self._lp.params)
         except ValueError as err:
             self._warn("object_costmap", f"dropped object_costmap: {err}")
 
@@ -191,21 +197,23 @@ class TargetSelectorNode(Node):
         self._regions_info = msg
         self._labels_dirty = True
 
-    def _set_pose(self, pose: tuple[float, float, float]) -> None:
+    def _set_pose(self, msg: Odometry | PoseWithCovarianceStamped, to_2d) -> None:
+        try:
+            if self._grid is not None:
+                convert.check_frame(msg.header.frame_id, self._grid.frame_id, "pose")
+            pose = to_2d(msg, self._lp.params)
+            self._pose_stamp_ns = convert.checked_stamp_ns(msg.header.stamp, "pose")
+        except ValueError as err:
+            self._warn("pose", f"dropped {type(msg).__name__}: {err}")
+            return
         self._pose = pose
         self._pose_time_ns = self.get_clock().now().nanoseconds
 
     def _on_odom(self, msg: Odometry) -> None:
-        try:
-            self._set_pose(convert.pose2d_from_odometry(msg))
-        except ValueError as err:
-            self._warn("pose", f"dropped odom: {err}")
+        self._set_pose(msg, convert.pose2d_from_odometry)
 
     def _on_pose(self, msg: PoseWithCovarianceStamped) -> None:
-        try:
-            self._set_pose(convert.pose2d_from_pose_msg(msg))
-        except ValueError as err:
-            self._warn("pose", f"dropped pose: {err}")
+        self._set_pose(msg, convert.pose2d_from_pose_msg)
 
     # --------------------------------------------------------------- services
     def _srv_start(self, request: Trigger.Request, response: Trigger.Response
@@ -279,7 +287,8 @@ class TargetSelectorNode(Node):
         if self._regions_img is None or self._regions_info is None:
             return
         try:
-            labels, geom = convert.labels_from_msgs(self._regions_img, self._regions_info)
+            labels, geom = convert.labels_from_msgs(self._regions_img, self._regions_info,
+                                                    self._lp.params)
         except ValueError as err:
             self._warn("regions", f"dropped regions: {err}")
             return
@@ -295,23 +304,49 @@ class TargetSelectorNode(Node):
             labels = resample_array(labels, geom, grid, fill=0)
         self._labels = labels
 
+    def _check_clock(self, now_ns: int) -> None:
+        """A clock jump restarts the goal's timers and forgets a pose of the old time line."""
+        jump = self._time.observe("clock", now_ns, int(1e9 / self.params.rate_hz))
+        if jump is None:
+            return
+        if jump.backwards:
+            self._pose = None
+        self._explorer.clock_jumped(now_ns * 1e-9)
+        self._warn("clock_jump", jump.describe() + "; goal timers restarted")
+
+    def _stall_reason(self) -> str:
+        if self._pose is None:
+            return "no valid robot pose received (see the dropped pose warnings, if any)"
+        age_s = (self.get_clock().now().nanoseconds - self._pose_time_ns) * 1e-9
+        return (f"newest pose received {age_s:.1f} s ago (pose_timeout_s "
+                f"{self.params.pose_timeout_s:g}; pose stamp "
+                f"{(self._pose_stamp_ns or 0) * 1e-9:.3f} s)")
+
     @failsafe("goal selection")
     def _tick(self) -> None:
+        if self._state is State.DONE:
+            return      # idle: only ~/start or ~/resume wake it
         self._follow_navigation()
         if self._state is State.STOPPED:
             return
+        self._check_clock(self.get_clock().now().nanoseconds)
+        reason = self._stall.tick(self._grid is not None, self._tick_decides(),
+                                  self._stall_reason)
+        if reason is not None:
+            self._warn("stall", f"map received but no decision for "
+                                f"{self._lp.params.stall_periods} periods: {reason}")
+
+    def _tick_decides(self) -> bool:
+        """One decision cycle; False when it waited for an input."""
         grid = self._grid
         if grid is None:
             self._state = State.WAITING_FOR_MAP
-            return
+            return False
         p = self.params
         now_ns = self.get_clock().now().nanoseconds
         if self._pose is None or (now_ns - self._pose_time_ns) * 1e-9 > p.pose_timeout_s:
-            if self._state is not State.DONE:
-                self._state = State.WAITING_FOR_POSE
-            return
-        if self._state is State.DONE:
-            return
+            self._state = State.WAITING_FOR_POSE
+            return False
         self._update_labels(grid)
         out = self._explorer.step(self._now_s(), grid, self._pose, self._layer, self._labels)
         for key, text in out.warnings:
@@ -327,6 +362,7 @@ class TargetSelectorNode(Node):
             label="detect_cluster_ms,selection_ms,frontiers", size=3, stride=3)]
         timing.data = [out.detect_s * 1e3, out.select_s * 1e3, float(len(out.frontiers))]
         self._pub_timing.publish(timing)
+        return True
 
     def _log_region_gain(self, out: ExplorerStep) -> None:
         """Say once when a region strategy runs without region labels."""

@@ -32,7 +32,7 @@ from std_srvs.srv import Trigger
 
 from explore_seg import convert
 from explore_seg.core.grid import GridMap
-from explore_seg.node_util import run
+from explore_seg.node_util import WarnThrottle, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, RELIABLE_QOS, SENSOR_QOS
 from sim_bridge.engine import CameraSample, ScanFrame, SimEngine, SimParams, engine_from_params
@@ -42,6 +42,8 @@ from sim_bridge.navigation import NavState
 from sim_bridge.render import engine_overlays, render_map_png
 
 MAP_FRAME = "map"
+#: Wall seconds between two INFO lines about new goals (a planner may send 40 per second).
+_GOAL_LOG_PERIOD_S = 1.0
 BASE_FRAME = "base_footprint"
 SCAN_FRAME = "base_scan"
 CAMERA_FRAME = "camera_color_optical_frame"
@@ -94,6 +96,8 @@ class SimBridgeNode(Node):
         self._layer_subs: dict[str, object] = {}
         self._last_layers: dict[str, GridMap] = {}
         self._goal_seen = False       # startup_real_time_factor applies until then
+        self._last_logged_goal: tuple[float, float, float] | None = None
+        self._goal_info = WarnThrottle(self, _GOAL_LOG_PERIOD_S).info
         self._subscribe_layers(p.costmap_layers)
         self.create_service(Trigger, "sim/save_metrics", self._on_save_metrics)
         self._nav_action = (SimNavAction(self, self._engine, p.nav_action)
@@ -136,7 +140,14 @@ class SimBridgeNode(Node):
             return
         if self._nav_action is not None:
             self._nav_action.accepted()
-        self.get_logger().info(f"goal ({x:.2f}, {y:.2f}, {yaw:.2f})")
+        self._goal_log(x, y, yaw)
+
+    def _goal_log(self, x: float, y: float, yaw: float) -> None:
+        """INFO for a new goal, at most once per _GOAL_LOG_PERIOD_S; re-sent goals: none."""
+        goal = (round(x, 2), round(y, 2), round(yaw, 2))
+        if goal != self._last_logged_goal:
+            self._last_logged_goal = goal
+            self._goal_info("goal", f"goal ({x:.2f}, {y:.2f}, {yaw:.2f})")
 
     def _make_layer_cb(self, name: str):
         def cb(msg: OccupancyGrid) -> None:

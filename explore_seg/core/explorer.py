@@ -218,6 +218,12 @@ class Explorer:
         self._reported_blacklisted += self.manager.blacklist_added - added
         return applied
 
+    def clock_jumped(self, now_s: float) -> None:
+        """The clock jumped (sim reset, ``/clock`` leap): the current goal's progress and
+        arrival timers restart at ``now_s`` instead of timing out (or never) on a stale
+        reference."""
+        self.manager.restart_timers(now_s)
+
     # ------------------------------------------------------------------- step
     def _detect(self, grid: GridMap, layer: GridMap | None) -> None:
         det = detect_frontiers(grid, layer, self._fp)

@@ -105,6 +105,8 @@ class GridMap:
             raise ValueError(
                 f"origin must be finite, got xy=({ox}, {oy}) yaw={yaw}")
         object.__setattr__(self, "data", data)
+        # tf2 frame names have no leading '/': "/map" and "map" are one frame.
+        object.__setattr__(self, "frame_id", str(self.frame_id).lstrip("/"))
         object.__setattr__(self, "resolution_m", res)
         object.__setattr__(self, "origin_xy_m", (ox, oy))
         object.__setattr__(self, "origin_yaw_rad", yaw)

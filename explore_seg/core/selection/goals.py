@@ -143,6 +143,11 @@ class GoalManager:
         self._blacklist.clear()
         self._blacklist_version += 1
 
+    def restart_timers(self, now_s: float) -> None:
+        """Restart the progress and arrival timers at ``now_s`` (after a clock jump)."""
+        self._last_progress_s = now_s
+        self._arrived_s = None
+
     def set_params(self, params: SelectionParams) -> None:
         """Apply new parameters (the blacklist keeps its newest entries)."""
         self.params = params

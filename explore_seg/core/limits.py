@@ -1,0 +1,103 @@
+"""Limits on what one input message may make a node do, and its time-fault settings.
+
+Every node binds :class:`InputLimits` under ``input.``. The map and label converters
+(:mod:`explore_seg.convert`) check a message's sizes against the data it carries and against
+these limits *before* they allocate anything, so a hostile ``width x height`` or a tiny
+resolution costs a warning instead of gigabytes or minutes; poses and map origins farther
+than ``max_coordinate_m`` from the frame's origin are rejected before any cell arithmetic.
+``clock_jump_s`` and ``stall_periods`` drive :mod:`explore_seg.time_guard`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from explore_seg.core.fields import INT_MAX, param_meta
+
+
+@dataclass(frozen=True)
+class InputLimits:
+    """Input limits and time-fault settings shared by every node (``input.*``).
+
+    Raises
+    ------
+    ValueError
+        From ``__post_init__`` on a non-positive or non-finite limit.
+
+    Examples
+    --------
+    >>> InputLimits().check_map_size(100, 50, 0.05)
+    >>> InputLimits(max_map_cells=100).check_map_size(100, 50, 0.05)
+    Traceback (most recent call last):
+    ...
+    ValueError: map claims 100x50 = 5000 cells, more than input.max_map_cells = 100
+    """
+
+    max_map_cells: int = field(default=25_000_000, metadata=param_meta(
+        "largest width*height accepted in a map, object layer or region labels (checked "
+        "before any array is made)", "cells", range=(1, INT_MAX)))
+    min_resolution_m: float = field(default=0.005, metadata=param_meta(
+        "finer maps are rejected (kernels sized from the resolution, e.g. the robot-radius "
+        "inflation, would grow without bound)", "m", range=(0.0, math.inf)))
+    max_coordinate_m: float = field(default=100_000.0, metadata=param_meta(
+        "poses and map origins farther than this from their frame's origin are rejected",
+        "m", range=(0.0, math.inf)))
+    clock_jump_s: float = field(default=5.0, metadata=param_meta(
+        "a stamp or the node clock going back (sim reset) or ahead (future-stamped input) by "
+        "more than this is a clock jump: time-keyed state is reset and it is logged once; "
+        "streams whose newest stamps differ by more than this are reported as clock sources "
+        "that disagree", "s", range=(0.0, math.inf)))
+    stall_periods: int = field(default=10, metadata=param_meta(
+        "when inputs arrive but nothing has been produced for this many periods, the node "
+        "logs why it waits", "", range=(1, INT_MAX)))
+
+    def __post_init__(self) -> None:
+        for name in ("min_resolution_m", "max_coordinate_m", "clock_jump_s"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be finite and > 0, got {v}")
+        for name in ("max_map_cells", "stall_periods"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
+
+    def check_map_size(self, width: int, height: int, resolution_m: float) -> None:
+        """Raise ``ValueError`` when a claimed map geometry exceeds the limits (allocates
+        nothing)."""
+        w, h = int(width), int(height)
+        if w < 0 or h < 0:
+            raise ValueError(f"map size must be >= 0, got {w}x{h}")
+        if w * h > self.max_map_cells:
+            raise ValueError(f"map claims {w}x{h} = {w * h} cells, more than "
+                             f"input.max_map_cells = {self.max_map_cells}")
+        res = float(resolution_m)
+        if not (math.isfinite(res) and res >= self.min_resolution_m):
+            raise ValueError(f"map resolution {res} m is below input.min_resolution_m = "
+                             f"{self.min_resolution_m} m (or not finite)")
+
+    def check_xy(self, x_m: float, y_m: float, what: str) -> None:
+        """Raise ``ValueError`` when (x, y) is non-finite or beyond ``max_coordinate_m``."""
+        lim = self.max_coordinate_m
+        if not (math.isfinite(x_m) and math.isfinite(y_m)):
+            raise ValueError(f"{what}: position must be finite, got ({x_m}, {y_m})")
+        if abs(x_m) > lim or abs(y_m) > lim:
+            raise ValueError(f"{what}: position ({x_m:.6g}, {y_m:.6g}) is beyond "
+                             f"input.max_coordinate_m = {lim:g} m")
+
+
+def normalize_frame(frame_id: str, default: str = "") -> str:
+    """A frame id without its leading ``/`` (tf2 names have none); ``default`` if empty.
+
+    >>> normalize_frame("/map"), normalize_frame("", "map")
+    ('map', 'map')
+    """
+    return frame_id.lstrip("/") or default
+
+
+def check_frame(frame_id: str, expected: str, what: str) -> None:
+    """Raise ``ValueError`` unless ``frame_id`` is ``expected`` (leading ``/`` ignored; an
+    empty frame id is taken to be ``expected``)."""
+    got = normalize_frame(frame_id, normalize_frame(expected))
+    if got != normalize_frame(expected):
+        raise ValueError(f"{what} frame must be {normalize_frame(expected)!r} (the map's), "
+                         f"got {frame_id!r}")

@@ -1,0 +1,57 @@
+"""Pairing bookkeeping of ``object_costmap``'s stamped inputs (ROS-free helpers).
+
+:func:`wait_reason` says in one sentence why no camera frame can be processed now (the
+stall watchdog logs it); :func:`purge_newer` drops buffered inputs of an abandoned time line
+after a clock jump.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import Any, Callable, Sequence
+
+_NS = 1e9
+
+
+def purge_newer(buf: deque, horizon_ns: int, stamp: Callable[[Any], int]) -> int:
+    """Remove the entries of ``buf`` stamped after ``horizon_ns`` (order kept); returns
+    how many were removed.
+
+    >>> d = deque([1, 5, 2, 9]); purge_newer(d, 4, int), list(d)
+    (2, [1, 2])
+    """
+    keep = [m for m in buf if stamp(m) <= horizon_ns]
+    removed = len(buf) - len(keep)
+    if removed:
+        buf.clear()
+        buf.extend(keep)
+    return removed
+
+
+def wait_reason(depth_ns: Sequence[int], color_ns: Sequence[int], pose_ns: Sequence[int],
+                last_ns: int | None, sync_tol_s: float, pose_tol_s: float,
+                min_gap_s: float) -> str:
+    """Why the newest depth image is not processed, naming the stamps involved.
+
+    Examples
+    --------
+    >>> wait_reason([100 * 10**9], [100 * 10**9], [50 * 10**9], None, 0.05, 0.2, 0.45)
+    'no pose newer than image stamp 100.000 s (newest pose 50.000 s, pose_tolerance_s 0.2)'
+    """
+    if not depth_ns:
+        return "no depth image"
+    t = max(depth_ns)
+    if last_ns is not None and t < last_ns + int(min_gap_s * _NS):
+        return (f"newest image stamp {t / _NS:.3f} s is not {min_gap_s:.2f} s after the last "
+                f"processed one ({last_ns / _NS:.3f} s)")
+    if not pose_ns:
+        return "no robot pose received"
+    newest_pose = max(pose_ns)
+    if t > newest_pose + int(pose_tol_s * _NS):
+        return (f"no pose newer than image stamp {t / _NS:.3f} s (newest pose "
+                f"{newest_pose / _NS:.3f} s, pose_tolerance_s {pose_tol_s:g})")
+    near = min((abs(c - t) for c in color_ns), default=None)
+    if near is None or near > int(sync_tol_s * _NS):
+        got = "no colour image" if near is None else f"nearest colour {near / _NS:.3f} s away"
+        return f"no colour image within sync_tolerance_s {sync_tol_s:g} of the depth ({got})"
+    return "a semantic image matching the depth stamp (oracle backend)"

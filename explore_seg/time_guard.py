@@ -1,0 +1,123 @@
+"""Time model of a node: clock jumps, disagreeing clock sources, stalls (ROS-free).
+
+A node feeds :class:`TimeGuard` the stamp of every timed input (per stream: ``camera``,
+``pose``, the node's own ``clock``) and gets a :class:`Jump` back when a stream goes back
+(simulator restart, ``/clock`` reset, the message after a future-stamped one) or ahead by
+more than ``jump_s``; it then resets what it keeps keyed by time and logs the jump once.
+:meth:`TimeGuard.disagreement` names two streams whose newest stamps lie further apart
+than ``jump_s`` (e.g. odometry an hour behind the camera). :class:`StallWatchdog` counts
+periods in which inputs arrived but nothing was produced and says when to log why.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+_NS = 1_000_000_000
+
+
+@dataclass(frozen=True)
+class Jump:
+    """A stream's stamp moved by more than the jump threshold."""
+
+    stream: str
+    from_ns: int
+    to_ns: int
+
+    @property
+    def backwards(self) -> bool:
+        """True for a jump back in time."""
+        return self.to_ns < self.from_ns
+
+    def describe(self) -> str:
+        """One log line naming the stream, direction, size and both stamps."""
+        d = abs(self.to_ns - self.from_ns) / _NS
+        how = ("back (simulator restart or clock reset?)" if self.backwards
+               else "ahead (future-stamped input or a paused source?)")
+        return (f"{self.stream} stamps jumped {how} by {d:.1f} s: "
+                f"{self.from_ns / _NS:.3f} -> {self.to_ns / _NS:.3f} s")
+
+
+class TimeGuard:
+    """Newest stamp per stream; detects jumps and streams that disagree.
+
+    Examples
+    --------
+    >>> g = TimeGuard(jump_s=5.0)
+    >>> g.observe("camera", 100 * _NS) is None
+    True
+    >>> g.observe("camera", 10 * _NS).backwards     # a sim restart
+    True
+    >>> g.newest("camera") == 10 * _NS              # the new time line is followed
+    True
+    """
+
+    def __init__(self, jump_s: float) -> None:
+        self.jump_s = float(jump_s)
+        self._newest: dict[str, int] = {}
+
+    def observe(self, stream: str, t_ns: int, expected_gap_ns: int = 0) -> Jump | None:
+        """Record ``t_ns`` of ``stream``; a :class:`Jump` when it went back by more than
+        ``jump_s`` or ahead by more than ``jump_s + expected_gap_ns``. After a jump the
+        stream follows the new time line."""
+        last = self._newest.get(stream)
+        jump_ns = int(self.jump_s * _NS)
+        if last is None:
+            self._newest[stream] = t_ns
+            return None
+        if t_ns < last - jump_ns or t_ns > last + jump_ns + max(0, expected_gap_ns):
+            self._newest[stream] = t_ns
+            return Jump(stream, last, t_ns)
+        self._newest[stream] = max(last, t_ns)
+        return None
+
+    def newest(self, stream: str) -> int | None:
+        """Newest stamp of ``stream`` (ns), None before the first."""
+        return self._newest.get(stream)
+
+    def disagreement(self, a: str, b: str) -> str | None:
+        """A sentence when the newest stamps of ``a`` and ``b`` differ by more than
+        ``jump_s`` (clock sources on different time bases), else None."""
+        ta, tb = self._newest.get(a), self._newest.get(b)
+        if ta is None or tb is None or abs(ta - tb) <= self.jump_s * _NS:
+            return None
+        d = (ta - tb) / _NS
+        return (f"clock sources disagree: {a} stamps are {abs(d):.1f} s "
+                f"{'ahead of' if d > 0 else 'behind'} {b} stamps ({ta / _NS:.3f} vs "
+                f"{tb / _NS:.3f} s); is one source on another clock (use_sim_time)?")
+
+    def forget(self) -> None:
+        """Forget every stream."""
+        self._newest.clear()
+
+
+class StallWatchdog:
+    """Says when a node that receives inputs has produced nothing for ``periods`` ticks.
+
+    Examples
+    --------
+    >>> w = StallWatchdog(periods=2)
+    >>> [w.tick(waiting=True, produced=False, reason=lambda: "why") for _ in range(4)]
+    [None, 'why', None, 'why']
+    >>> w.tick(waiting=True, produced=True, reason=lambda: "why") is None
+    True
+    """
+
+    def __init__(self, periods: int) -> None:
+        self.periods = max(1, int(periods))
+        self._idle = 0
+        #: The last reason reported (empty before the first stall).
+        self.last_reason = ""
+
+    def tick(self, waiting: bool, produced: bool, reason: Callable[[], str]) -> str | None:
+        """Count one period; the reason (computed only then) every ``periods`` stalled
+        ticks, else None. ``waiting``: inputs are there but could not be used."""
+        if produced or not waiting:
+            self._idle = 0
+            return None
+        self._idle += 1
+        if self._idle % self.periods:
+            return None
+        self.last_reason = reason()
+        return self.last_reason
