@@ -1,7 +1,15 @@
 #!/usr/bin/env python3
 """Recall / precision (Bormann et al. 2016, IPA definition) of the DuDe segmentation.
 
-Two modes:
+Three modes:
+
+* furnished floor plans (``--set furnished``): the seeded maps of
+  ``sim_bridge.worlds.furnished`` (offices, open-plan offices, homes), each segmented
+  plain (walls only) and furnished (furniture as a lidar sees it, scanned), side by side:
+  recall, precision and segments per room (segments whose largest overlap is that room,
+  averaged over rooms; max over the rooms of a map)::
+
+      python bench/eval_segmentation.py --set furnished --maps 30
 
 * generated houses (default): for every seed, ``sim_bridge.worlds.generate_house`` gives
   the rooms (``World.room_labels``) and ``ground_truth(world).as_map("lidar")`` the map
@@ -87,8 +95,56 @@ def run_houses(seeds: list[int], taus: list[float], cluttered: bool, size_m: flo
     return results
 
 
+def segments_per_room(e: dict) -> tuple[float, int]:
+    """Mean and max over the rooms of ``evaluate``'s result of the number of segments
+    whose best room it is."""
+    per = {r: 0 for r in e["rooms"]}
+    for v in e["segments"].values():
+        if v["best_room"] in per:
+            per[v["best_room"]] += 1
+    if not per:
+        return float("nan"), 0
+    return float(np.mean(list(per.values()))), int(max(per.values()))
+
+
+def run_furnished(n_maps: int, first_seed: int, params: SegmentationParams,
+                  verbose: bool = True) -> dict[str, dict[str, float]]:
+    """Plain and furnished scores over the furnished evaluation set; prints per map."""
+    from sim_bridge.worlds.furnished import furnished_map, furnished_set
+
+    acc: dict[str, dict[str, list[float]]] = {
+        k: {"recall": [], "precision": [], "spr": [], "spr_max": [], "time_ms": []}
+        for k in ("plain", "furnished")}
+    for seed, kind in furnished_set(n_maps, first_seed):
+        m = furnished_map(seed, kind)
+        line = f"  {m.name:18s}"
+        for key, grid, rooms in (("plain", m.plain, m.plain_rooms),
+                                 ("furnished", m.furnished, m.furnished_rooms)):
+            t0 = time.perf_counter()
+            labels = segment(grid, params)
+            dt = (time.perf_counter() - t0) * 1e3
+            e = evaluate(labels, rooms)
+            spr, spr_max = segments_per_room(e)
+            a = acc[key]
+            for name, v in (("recall", e["recall"]), ("precision", e["precision"]),
+                            ("spr", spr), ("spr_max", spr_max), ("time_ms", dt)):
+                a[name].append(v)
+            line += (f"  {key} R {e['recall'] * 100:5.1f} P {e['precision'] * 100:5.1f} "
+                     f"seg/room {spr:4.2f} (max {spr_max})")
+        if verbose:
+            print(line + f"  rooms {e['n_rooms']}")
+    return {k: {name: float(np.mean(v)) for name, v in a.items()} | {
+        "spr_max": float(np.max(a["spr_max"])), "recall_min": float(np.min(a["recall"]))}
+        for k, a in acc.items()}
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--set", choices=("houses", "furnished"), default="houses",
+                    help="generated houses, or the furnished floor plans (plain and "
+                         "furnished side by side)")
+    ap.add_argument("--maps", type=int, default=30, help="furnished set: number of maps")
+    ap.add_argument("--first-seed", type=int, default=0, help="furnished set: first seed")
     ap.add_argument("--seeds", default="0-7", help="house seeds, e.g. 0-9 or 1,4,7")
     ap.add_argument("--tau", default=str(SegmentationParams().tau_m),
                     help="tau in metres, comma-separated for a sweep")
@@ -133,6 +189,16 @@ def main(argv: list[str] | None = None) -> int:
 
     taus = [float(t) for t in args.tau.split(",") if t]
     base = SegmentationParams(corridor_merge=args.corridor_merge)
+    if args.set == "furnished":
+        params = SegmentationParams(**{**base.__dict__, "tau_m": taus[0]})
+        print(f"furnished floor plans ({args.maps} maps from seed {args.first_seed}), tau "
+              f"{taus[0]:.2f} m; IPA recall/precision, min size {args.min_px} px")
+        res_f = run_furnished(args.maps, args.first_seed, params, verbose=not args.quiet)
+        for key, r in res_f.items():
+            print(f"{key:9s}: recall {r['recall'] * 100:5.1f} % (min {r['recall_min'] * 100:5.1f})"
+                  f"  precision {r['precision'] * 100:5.1f} %  segments per room "
+                  f"{r['spr']:4.2f} (max {r['spr_max']:.0f})  mean time {r['time_ms']:.0f} ms")
+        return 0
     kind = "cluttered" if args.cluttered else "plain"
     print(f"generated houses ({kind}, {args.size:.0f} m, seeds {args.seeds}); "
           f"IPA recall/precision, min size {args.min_px} px")

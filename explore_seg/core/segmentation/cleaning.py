@@ -67,12 +67,50 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
     grown = cv2.dilate(free_raw.astype(np.uint8), _square(r_close)) if r_close > 0 \
         else free_raw.astype(np.uint8)
     free_clean = (grown > 0) & (obst == 0)
-    return free_raw, free_clean
+    return free_raw, fill_clutter_holes(free_clean, occ_u8, params, res)
+
+
+def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8],
+                       params: SegmentationParams, res: float) -> npt.NDArray[np.bool_]:
+    """``free_clean`` with its clutter holes filled.
+
+    A hole of the cleaned free space (a component of its complement that does not reach
+    the array border) is clutter when it is at most ``clutter_max_extent_m`` wide and
+    high, at most ``clutter_max_area_m2`` large and holds no occupied component (8-
+    connected, ``occ``) whose bounding-box diagonal exceeds ``clutter_max_object_m``:
+    free-standing furniture seen as leg specks, castors, pedestals and panels, with the
+    unknown cells around it. A wall piece between two doors is a hole too, but a long
+    one. Clutter holes count as free space for the decomposition, so furniture does not
+    cut rooms.
+    """
+    ext = params.clutter_max_extent_m / res
+    area = params.clutter_max_area_m2 / (res * res)
+    if ext <= 0 or area <= 0 or free_clean.size == 0:
+        return free_clean
+    n, lab, stats, _ = cv2.connectedComponentsWithStats((~free_clean).astype(np.uint8),
+                                                        connectivity=8)
+    h, w = free_clean.shape
+    x, y = stats[:, cv2.CC_STAT_LEFT], stats[:, cv2.CC_STAT_TOP]
+    bw, bh = stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT]
+    small = ((x > 0) & (y > 0) & (x + bw < w) & (y + bh < h)
+             & (np.maximum(bw, bh) <= ext) & (stats[:, cv2.CC_STAT_AREA] <= area))
+    small[0] = False
+    if not small.any():
+        return free_clean
+    no, olab, ost, _ = cv2.connectedComponentsWithStats(occ, connectivity=8)
+    diag = np.hypot(ost[:, cv2.CC_STAT_WIDTH], ost[:, cv2.CC_STAT_HEIGHT])
+    big = diag > params.clutter_max_object_m / res
+    big[0] = False
+    if big.any():
+        struct = big[olab]
+        small[np.unique(lab[struct])] = False
+    return free_clean | small[lab]
 
 
 def clean_influence_cells(params: SegmentationParams, res: float) -> int:
     """How far (cells) a changed grid cell can change the cleaned mask."""
     speck = int(math.ceil(params.obstacle_speck_area_m2 / (res * res)))
     return max(length_to_cells(params.obstacle_inflation_m, res),
-               length_to_cells(params.free_close_m, res)) + speck + 2
+               length_to_cells(params.free_close_m, res),
+               int(math.ceil(params.clutter_max_extent_m / res)) + 1) + speck + 2
 

@@ -43,6 +43,18 @@ class SegmentationParams:
     min_hole_area_m2: float = field(default=0.0125, metadata=param_meta(
         "obstacle islands of at most this area are ignored by the decomposition", "m^2",
         range=(0.0, math.inf)))
+    clutter_max_extent_m: float = field(default=6.0, metadata=param_meta(
+        "holes of the cleaned free space (free-standing furniture and the unknown cells "
+        "around it) at most this wide and high are filled before decomposing, so "
+        "furniture does not cut rooms (6 m, 16 m^2, 1.6 m: best of a sweep on "
+        "bench/eval_segmentation.py --set furnished); 0 disables", "m",
+        range=(0.0, math.inf)))
+    clutter_max_area_m2: float = field(default=16.0, metadata=param_meta(
+        "holes filled as clutter are at most this large", "m^2", range=(0.0, math.inf)))
+    clutter_max_object_m: float = field(default=1.6, metadata=param_meta(
+        "a hole holding an occupied component whose bounding-box diagonal exceeds this "
+        "(a wall piece, a long sofa) is structure, never filled as clutter", "m",
+        range=(0.0, math.inf)))
     simplify_epsilon_m: float = field(default=0.075, metadata=param_meta(
         "Douglas-Peucker tolerance applied to traced contours", "m", range=(0.0, math.inf)))
     min_region_area_m2: float = field(default=1.0, metadata=param_meta(
@@ -86,7 +98,8 @@ class SegmentationParams:
     def __post_init__(self) -> None:
         pos = ("tau_m", "max_door_width_m", "merge_concavity_factor")
         nonneg = ("obstacle_inflation_m", "free_close_m", "obstacle_speck_area_m2",
-                  "min_component_area_m2", "min_hole_area_m2", "simplify_epsilon_m",
+                  "min_component_area_m2", "min_hole_area_m2", "clutter_max_extent_m",
+                  "clutter_max_area_m2", "clutter_max_object_m", "simplify_epsilon_m",
                   "min_region_area_m2", "min_region_width_m", "inc_min_blob_m2")
         for name in pos:
             v = getattr(self, name)
