@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
+from explore_seg.core.grid import metres_to_cells
 from sim_bridge.world import Primitive, World
 from sim_bridge.worlds.walls import Wall, bounds_around
 
@@ -50,7 +50,7 @@ def generate_maze(seed: int, size_m: tuple[float, float] = (40.0, 40.0), cell_m:
         raise ValueError(f"need 0 < wall_thickness_m < cell_m - 0.5, got {t} for cell {cell_m}")
     if not 0 <= float(o["loop_prob"]) <= 1:
         raise ValueError(f"loop_prob must be in [0, 1], got {o['loop_prob']}")
-    nx, ny = (int(math.floor(float(v) / cell_m + 1e-9)) for v in size_m)
+    nx, ny = (metres_to_cells(float(v), cell_m) for v in size_m)
     if nx < 2 or ny < 2:
         raise ValueError(f"size_m {size_m} holds fewer than 2x2 cells of {cell_m} m")
     rng = np.random.default_rng(seed)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from explore_seg.core.grid import metres_to_cells
 from sim_bridge.world import Primitive
 from sim_bridge.worlds.truth import GT_RESOLUTION_M
 
@@ -77,7 +78,7 @@ def bounds_around(xmin: float, ymin: float, xmax: float, ymax: float, margin: fl
     """Bounds around a box, grown by ``margin`` and snapped outwards to the ground-truth
     raster (:data:`~sim_bridge.worlds.truth.GT_RESOLUTION_M`)."""
     step = GT_RESOLUTION_M
-    return (round(math.floor((xmin - margin) / step + 1e-9) * step, 6),
-            round(math.floor((ymin - margin) / step + 1e-9) * step, 6),
+    return (round(metres_to_cells(xmin - margin, step) * step, 6),
+            round(metres_to_cells(ymin - margin, step) * step, 6),
             round(math.ceil((xmax + margin) / step - 1e-9) * step, 6),
             round(math.ceil((ymax + margin) / step - 1e-9) * step, 6))
