@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from explore_seg.core.pose_fusion import (POSE_SOURCES, PoseFusion, PoseFusionParams, compose,
-                                          inverse, wrap_angle)
+from explore_seg.core.pose_fusion import (POSE_SOURCES, PoseFusion, PoseFusionParams,
+                                          StampedPoses, compose, inverse, wrap_angle)
 
 NS = 1_000_000_000
 ODOM_HZ, SLAM_HZ = 50, 5
@@ -182,3 +182,17 @@ def test_history_is_bounded():
         f.add_odom(k * NS // 50, (0.0, 0.0, 0.0))
     lo, hi = f._odom.span_ns()
     assert hi - lo <= NS and len(f._odom) <= 51
+
+
+def test_pose_at_an_image_stamp_is_interpolated_between_the_bracketing_poses():
+    s = 1_000_000_000
+    poses = StampedPoses(10 * s)
+    poses.add(s, (1.0, 2.0, -3.0))                             # any order
+    poses.add(0, (0.0, 0.0, 3.0))                              # yaw crosses +-pi
+    x, y, yaw = poses.at(s // 4, s)
+    assert (x, y) == pytest.approx((0.25, 0.5))
+    assert math.cos(yaw) == pytest.approx(math.cos(3.0 + 0.25 * (2 * math.pi - 6.0)))
+    # only one side within the tolerance: the nearest pose; none: None
+    assert poses.at(s // 10, s // 5) == (0.0, 0.0, 3.0)
+    assert poses.at(3 * s, s // 5) is None
+    assert StampedPoses(s).at(0, s) is None
