@@ -320,16 +320,21 @@ class ObjectCostmapNode(Node):
         """Newest unprocessed depth with a colour (and semantic) image close in time."""
         tol_ns = int(self.params.sync_tolerance_s * 1e9)
         oracle = self._dp.params.backend == "oracle"
-        # Frames newer than the newest pose wait for their pose (the pose stream may lag
-        # behind the images while this node is busy); they are taken on a later tick.
+        # Frames newer than the newest pose wait for a pose at or after their stamp while
+        # poses keep arriving (the pose stream may lag behind the images while this node
+        # is busy); when none arrived for pose_tolerance_s, the nearest within it will do.
         newest_pose = self._pose_in.newest_ns()
         pose_tol_ns = int(self.params.pose_tolerance_s * 1e9)
+        arrival = self._pose_in.arrival_ns
+        poses_flow = (arrival is not None
+                      and self.get_clock().now().nanoseconds - arrival < pose_tol_ns)
         min_gap_ns = int(_MIN_GAP_PERIODS / self.params.rate_hz * 1e9)
         for depth in sorted(self._depths, key=_stamp_ns, reverse=True):
             t = _stamp_ns(depth)
             if self._last_depth_ns is not None and t < self._last_depth_ns + min_gap_ns:
                 return None     # processed, or too soon after the last one: wait for a newer
-            if newest_pose is not None and t > newest_pose + pose_tol_ns:
+            if newest_pose is not None and t > newest_pose and (
+                    t > newest_pose + pose_tol_ns or poses_flow):
                 continue
             color = _closest(self._colors, t, tol_ns)
             semantic = _closest(self._semantics, t, tol_ns) if oracle else None

@@ -46,6 +46,9 @@ class PoseInput:
                  on_stamp: Callable[[str, int], None] | None = None,
                  callback_group: Any = None) -> None:
         self.fusion = PoseFusion(source, params)
+        self._clock = node.get_clock()
+        #: ROS time (ns) of the last accepted pose message, None before the first.
+        self.arrival_ns: int | None = None
         self._lock = threading.Lock()
         self._map_frame, self._limits, self._warn, self._drop = map_frame, limits, warn, drop
         self._on_pose, self._on_stamp = on_pose, on_stamp
@@ -84,6 +87,7 @@ class PoseInput:
         except ValueError as err:
             self._drop(f"{type(msg).__name__} on '{stream}': {err}")
             return
+        self.arrival_ns = self._clock.now().nanoseconds
         if event is not None:
             self._warn(f"pose_fusion_{event.kind}", f"pose fusion: {event.message}")
         if self._on_stamp is not None:
