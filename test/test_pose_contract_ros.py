@@ -31,7 +31,9 @@ def _err(a, b) -> tuple[float, float]:
 
 
 def _sim(ros, tmp_path, **extra):
-    params = {"world": "small_house", "real_time_factor": 4.0, "enable_camera": True,
+    # 2x real time: all nodes share this test's one executor thread on a loaded machine (at
+    # 4x the frames then outrun the CPU, whatever the pose); the 4x figure is the demo's.
+    params = {"world": "small_house", "real_time_factor": 2.0, "enable_camera": True,
               "camera_rate_hz": 2.0, "camera_width_px": 160, "camera_height_px": 120,
               "camera_fx_px": 131.0, "camera_fy_px": 131.0, "camera_cx_px": 79.5,
               "camera_cy_px": 59.5, "output_dir": str(tmp_path), **extra}
