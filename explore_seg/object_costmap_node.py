@@ -352,7 +352,10 @@ class ObjectCostmapNode(Node):
                 ids = parse_class_ids(self.params.oracle_sim_class_ids) \
                     if dp.backend == "oracle" else None
                 self._detector = Detector(dp, sim_class_ids=ids)
-                self.get_logger().info(f"detector backend: {self._detector.backend_name}")
+                self.get_logger().info(f"detector backend: {self._detector.backend_name} "
+                                       f"on {self._detector.device_name}")
+                if self._detector.device_note:
+                    self.get_logger().warn(self._detector.device_note)
             except (OSError, ValueError, ImportError, RuntimeError) as err:
                 self._detector_failed = True
                 self.get_logger().error(
