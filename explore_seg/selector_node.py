@@ -47,7 +47,7 @@ from explore_seg.nav_client import NavClient
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.pose_input import PoseInput
-from explore_seg.qos import MAP_QOS, RELIABLE_QOS, map_qos
+from explore_seg.qos import MAP_QOS, POSE_QOS, RELIABLE_QOS, map_qos
 from explore_seg.time_guard import StallWatchdog, TimeGuard
 
 #: Seconds between repeated warnings of one kind.
@@ -113,7 +113,7 @@ class TargetSelectorNode(Node):
         self.create_subscription(Image, "regions", self._on_regions, qos)
         self.create_subscription(MapMetaData, "regions/info", self._on_regions_info, qos)
         self._pose_in = PoseInput(
-            self, p.pose_topic_type, self._pfp.params, RELIABLE_QOS,
+            self, p.pose_topic_type, self._pfp.params, POSE_QOS,
             map_frame=lambda: None if self._grid is None else self._grid.frame_id,
             limits=lambda: self._lp.params, warn=self._warn,
             drop=lambda text: self._warn("pose", f"dropped {text}"), on_pose=self._set_pose)

@@ -36,7 +36,7 @@ from explore_seg import convert
 from explore_seg.core.grid import GridMap
 from explore_seg.node_util import WarnThrottle, run
 from explore_seg.params import ParamBinding
-from explore_seg.qos import MAP_QOS, RELIABLE_QOS, SENSOR_QOS
+from explore_seg.qos import MAP_QOS, POSE_QOS, RELIABLE_QOS, SENSOR_QOS
 from sim_bridge.engine import CameraSample, ScanFrame, SimEngine, SimParams, engine_from_params
 from sim_bridge.metrics import CollisionEvent
 from sim_bridge.nav_action import SimNavAction
@@ -79,10 +79,12 @@ class SimBridgeNode(Node):
 
         self._clock_pub = self.create_publisher(ClockMsg, "/clock", CLOCK_QOS)
         self._scan_pub = self.create_publisher(LaserScan, "scan", SENSOR_QOS)
-        self._odom_pub = self.create_publisher(Odometry, "odom", RELIABLE_QOS)
+        # Depth 100 (POSE_QOS): a subscriber busy with a camera frame must not lose the
+        # odometry of the scans and frames meanwhile (KEEP_LAST 10 dropped them at 4x).
+        self._odom_pub = self.create_publisher(Odometry, "odom", POSE_QOS)
         self._odometry = (None if p.odom_frame.lstrip("/") == MAP_FRAME else
                           DriftingOdometry(p.odom_drift_scale, p.odom_drift_yaw_radps))
-        self._slam_pub = (self.create_publisher(PoseWithCovarianceStamped, "pose", RELIABLE_QOS)
+        self._slam_pub = (self.create_publisher(PoseWithCovarianceStamped, "pose", POSE_QOS)
                           if p.slam_pose else None)
         self._slam = SlamPoses(p.slam_min_travel_m, p.slam_min_turn_rad)
         self._map_pub = self.create_publisher(OccupancyGrid, "map", MAP_QOS)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from detector_support import HAVE_WEIGHTS, MODEL_DIR, frame_or_noise, needs_weights
+from detector_support import MODEL_DIR, frame_or_noise, needs_weights
 from detector_support import torch_backend  # noqa: F401 - a fixture
 from explore_seg.core.detector import Detector, DetectorParams, OnnxBackend, letterbox
 from explore_seg.core.detector.backends import TorchBackend

@@ -121,8 +121,14 @@ def test_slam_pose_without_odometry_near_it_makes_no_correction():
     f.add_odom(0, (0.0, 0.0, 0.0))
     f.add_odom(2 * NS, (2.0, 0.0, 0.0))
     ev = f.add_map_pose(NS, (5.0, 5.0, 0.0))
-    assert ev is not None and ev.kind == "dropped" and "no odometry within 0.1 s" in ev.message
+    assert ev is not None and ev.kind == "dropped" and "on both sides within 0.1 s" in ev.message
     assert f.latest() == (NS, (5.0, 5.0, 0.0))                   # falls back to SLAM alone
+    # odometry on one side only (50 ms before): no correction either (a lever arm: a
+    # heading error of the odometry tilts the whole correction)
+    f.add_odom(NS - NS // 20, (0.95, 0.0, 0.0))
+    f.add_odom(3 * NS, (3.0, 0.0, 0.0))
+    ev = f.add_map_pose(2 * NS + NS // 2, (9.0, 9.0, 0.0))
+    assert ev is not None and ev.kind == "dropped"
 
 
 def test_time_going_back_clears_and_reports():

@@ -66,8 +66,9 @@ class PoseFusionParams:
         "odometry, SLAM poses and corrections are kept this long (newest stamp minus this); "
         "an image older than that gets no pose", "s", range=(0.0, math.inf)))
     match_tolerance_s: float = field(default=0.1, metadata=param_meta(
-        "a SLAM pose makes a correction only with odometry this close to its stamp (on "
-        "both sides, or one side within it)", "s", range=(0.0, math.inf)))
+        "a SLAM pose makes a correction only with odometry this close to its stamp on both "
+        "sides (a one-sided match while turning would tilt the correction)", "s",
+        range=(0.0, math.inf)))
     backwards_s: float = field(default=0.5, metadata=param_meta(
         "an odometry or SLAM stamp this much older than the newest one (simulator reset) "
         "clears the fusion (logged)", "s", range=(0.0, math.inf)))
@@ -165,10 +166,11 @@ class StampedPoses:
         """(oldest, newest) stamp, None when empty."""
         return (self._t[0], self._t[-1]) if self._t else None
 
-    def at(self, t_ns: int, tol_ns: int | None = None) -> Pose2D | None:
+    def at(self, t_ns: int, tol_ns: int | None = None, both_sides: bool = False
+           ) -> Pose2D | None:
         """The pose at ``t_ns``: interpolated between its neighbours when both lie within
-        ``tol_ns``, else the nearest within ``tol_ns``; None when none does.
-        ``tol_ns=None``: clamp to the ends (any distance)."""
+        ``tol_ns``, else (unless ``both_sides``) the nearest within ``tol_ns``; None when
+        none does. ``tol_ns=None``: clamp to the ends (any distance)."""
         if not self._t:
             return None
         i = bisect.bisect_left(self._t, t_ns)
@@ -180,7 +182,7 @@ class StampedPoses:
         if ok_b and ok_a:
             t0, t1 = self._t[i - 1], self._t[i]
             return blend(self._p[i - 1], self._p[i], (t_ns - t0) / (t1 - t0))
-        if ok_b or ok_a:
+        if (ok_b or ok_a) and not both_sides:
             return self._p[i - 1] if ok_b else self._p[i]
         return None
 
@@ -319,11 +321,12 @@ class PoseFusion:
             if t_ns > newest_odom[0]:
                 keep.append((t_ns, pose))
                 continue
-            odom = self._odom.at(t_ns, tol)
+            odom = self._odom.at(t_ns, tol, both_sides=True)
             if odom is None:
                 event = PoseEvent("dropped", f"SLAM pose at {t_ns / _NS:.3f} s has no "
-                                             f"odometry within {self.params.match_tolerance_s:g}"
-                                             f" s ({self.describe()}): no correction made")
+                                             "odometry on both sides within "
+                                             f"{self.params.match_tolerance_s:g} s "
+                                             f"({self.describe()}): no correction made")
                 continue
             event = self._add_correction(t_ns, compose(pose, inverse(odom))) or event
         self._pending = keep
