@@ -23,11 +23,11 @@ def truth(t: float) -> tuple[float, float, float]:
             wrap_angle(math.atan2(0.6 * math.cos(0.4 * s), 0.4 * math.cos(0.2 * s))))
 
 
-def drifting_odometry(times: np.ndarray, scale: float = 1.04, yaw_bias_radps: float = 0.03
-                      ) -> list[tuple[float, float, float]]:
+def drifting_odometry(times: np.ndarray, scale: float = 1.04, yaw_bias_radps: float = 0.03,
+                      start=(0.3, -0.2, 0.4)) -> list[tuple[float, float, float]]:
     """Odometry integrating the true body-frame increments with a scale error and a gyro
     bias (only while moving), starting at an offset odom frame."""
-    odom = [(0.3, -0.2, 0.4)]
+    odom = [start]
     prev = truth(times[0])
     for t0, t1 in zip(times[:-1], times[1:]):
         cur = truth(t1)
@@ -161,6 +161,25 @@ def test_loop_closure_jump_is_accepted_and_rekeys():
     # every stamp now uses the new correction (no blend of the two)
     assert f.pose_at(3 * NS // 2, 0) == pytest.approx((1.5, 1.0, 0.0))
     assert f.latest() == (3 * NS, pytest.approx((3.0, 1.0, 0.0)))
+
+
+def test_heading_drift_far_from_the_odom_origin_is_no_loop_closure():
+    """50 m from the odometry's origin a 0.05 rad/s gyro bias swings the correction by
+    ~2.5 m per second; the robot's pose moves by millimetres: no re-key."""
+    times = np.arange(0.0, 20.0, 0.02)
+    odom = drifting_odometry(times, scale=1.0, yaw_bias_radps=0.05, start=(50.0, 0.0, 0.0))
+    f = PoseFusion("fused", PoseFusionParams())
+    corrections = []
+    for k, (t, o) in enumerate(zip(times, odom)):
+        f.add_odom(int(t * NS), o)
+        if k % 50 == 25:                                      # SLAM at 1 Hz, 0.5 s late
+            ts = times[k - 25]
+            assert f.add_map_pose(int(ts * NS), truth(ts)) is None
+            corrections.append(f._corr.newest()[1])
+    swings = [math.hypot(a[0] - b[0], a[1] - b[1]) for a, b in zip(corrections, corrections[1:])]
+    assert max(swings) > 1.0 and f.rekeys == 0
+    d_m, d_rad = pose_err(f.latest()[1], truth(f.latest()[0] / NS))
+    assert d_m < TOL_M and d_rad < 0.06         # at most 1 s of gyro bias since the last
 
 
 def test_sources_and_validation():

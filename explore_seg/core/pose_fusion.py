@@ -20,8 +20,8 @@ Sources (:data:`POSE_SOURCES`, the ``pose_topic_type`` of ``object_costmap`` and
     a stamp, the SLAM pose alone.
 
 Faults: a stamp that goes back by more than ``backwards_s`` on either stream (simulator
-reset) clears everything; a correction that differs from the previous one by more than
-``jump_m`` / ``jump_rad`` (loop closure) is accepted and re-keys the fusion (older
+reset) clears everything; a SLAM pose farther than ``jump_m`` / ``jump_rad`` from the
+fused pose at its stamp (loop closure) is accepted and re-keys the fusion (older
 corrections are forgotten, so no pose blends the two). Both return a :class:`PoseEvent` for
 the node to log. Non-finite poses raise ``ValueError``.
 """
@@ -73,8 +73,9 @@ class PoseFusionParams:
         "an odometry or SLAM stamp this much older than the newest one (simulator reset) "
         "clears the fusion (logged)", "s", range=(0.0, math.inf)))
     jump_m: float = field(default=0.3, metadata=param_meta(
-        "a correction moving by more than this (loop closure) re-keys the fusion: older "
-        "corrections are forgotten (logged)", "m", range=(0.0, math.inf)))
+        "a SLAM pose farther than this from the fused pose at its stamp (loop closure) "
+        "re-keys the fusion: older corrections are forgotten (logged)", "m",
+        range=(0.0, math.inf)))
     jump_rad: float = field(default=0.3, metadata=param_meta(
         "as jump_m, for the correction's heading", "rad", range=(0.0, math.inf)))
 
@@ -328,22 +329,26 @@ class PoseFusion:
                                              f"{self.params.match_tolerance_s:g} s "
                                              f"({self.describe()}): no correction made")
                 continue
-            event = self._add_correction(t_ns, compose(pose, inverse(odom))) or event
+            event = self._add_correction(t_ns, pose, odom) or event
         self._pending = keep
         return event
 
-    def _add_correction(self, t_ns: int, corr: Pose2D) -> PoseEvent | None:
-        prev = self._corr.newest()
-        self._corr.add(t_ns, corr)
-        if prev is None:
+    def _add_correction(self, t_ns: int, slam: Pose2D, odom: Pose2D) -> PoseEvent | None:
+        """Keep map <- odom at ``t_ns``; a jump is judged at the robot: the SLAM pose
+        against the pose the corrections so far predict (not the correction itself, which
+        swings by the heading drift times the odometry's distance from its origin)."""
+        predicted = self._corr.at(t_ns) if len(self._corr) else None
+        self._corr.add(t_ns, compose(slam, inverse(odom)))
+        if predicted is None:
             return None
-        d_m = math.hypot(corr[0] - prev[1][0], corr[1] - prev[1][1])
-        d_rad = abs(wrap_angle(corr[2] - prev[1][2]))
+        was = compose(predicted, odom)
+        d_m = math.hypot(slam[0] - was[0], slam[1] - was[1])
+        d_rad = abs(wrap_angle(slam[2] - was[2]))
         if d_m <= self.params.jump_m and d_rad <= self.params.jump_rad:
             return None
         self._corr.clear()
-        self._corr.add(t_ns, corr)
+        self._corr.add(t_ns, compose(slam, inverse(odom)))
         self.rekeys += 1
-        return PoseEvent("jump", f"SLAM correction jumped {d_m:.2f} m / {d_rad:.2f} rad at "
-                                 f"{t_ns / _NS:.3f} s (loop closure?): accepted, older "
-                                 "corrections forgotten")
+        return PoseEvent("jump", f"SLAM pose at {t_ns / _NS:.3f} s is {d_m:.2f} m / "
+                                 f"{d_rad:.2f} rad from the fused pose (loop closure?): "
+                                 "accepted, older corrections forgotten")
