@@ -33,8 +33,9 @@ class PoseInput:
     """Pose subscriptions of one node feeding a :class:`PoseFusion`.
 
     ``map_frame()`` names the frame map-frame poses must be in (None: not known yet, not
-    checked); ``limits()`` the node's current input limits; ``on_stamp(stream, t_ns)``
-    sees every accepted stamp (the node's time model), ``on_pose`` every new newest pose;
+    checked); ``limits()`` the node's current input limits; ``on_stamp("pose", t_ns)``
+    sees every accepted stamp of the stream that sets the pose's rate (the node's time
+    model; not the SLAM poses of ``fused``), ``on_pose`` every new newest pose;
     ``warn(key, text)`` is the node's throttled warning, ``drop(text)`` its (throttled,
     counted) report of a dropped pose message.
     """
@@ -90,7 +91,10 @@ class PoseInput:
         self.arrival_ns = self._clock.now().nanoseconds
         if event is not None:
             self._warn(f"pose_fusion_{event.kind}", f"pose fusion: {event.message}")
-        if self._on_stamp is not None:
+        # Only the stream that sets the pose's rate feeds the node's time model: SLAM poses
+        # of the fused source lag behind the odometry and pause while the robot stands
+        # still (the fusion checks their time line itself).
+        if self._on_stamp is not None and (stream == "pose") == (self.source == "pose"):
             self._on_stamp("pose", t_ns)
         if newest is not None and self._on_pose is not None:
             self._on_pose(*newest)

@@ -136,3 +136,21 @@ def _slam_msg(t_ns: int, pose) -> PoseWithCovarianceStamped:
     msg.header = convert.make_header("map", t_ns)
     msg.pose.pose = convert.pose_from_2d(*pose)
     return msg
+
+
+def test_late_slam_poses_do_not_reset_the_object_costmaps_time_model(ros):
+    """SLAM poses 8 s behind the odometry (a busy SLAM node): with the fused source they are
+    not a clock jump of the pose stream, so frames and odometry are kept."""
+    from explore_seg import convert
+
+    cm = ros.add(ObjectCostmapNode(context=ros.context, parameter_overrides=[
+        Parameter("pose_topic_type", value="fused")]))
+    pin = cm._pose_in
+    s = 1_000_000_000
+    for k in range(100):                                   # odometry 10..19.9 s
+        pin._on_odom(convert.odometry_msg((0.1 * k, 0.0, 0.0), (0.0, 0.0), "odom", "base",
+                                          10 * s + k * s // 10))
+    pin._on_slam(_slam_msg(11 * s, (5.0, 0.0, 0.0)))     # 8.9 s behind the odometry
+    assert cm.time_jumps == 0
+    assert pin.newest_ns() == 10 * s + 99 * s // 10
+    assert cm._pose_at(19 * s) == pytest.approx((5.0 + 8.0, 0.0, 0.0))
