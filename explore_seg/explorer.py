@@ -8,8 +8,10 @@ loop, holding the GIL, starved the object costmap in this process (measured in t
 simulator demo at 4x real time: 25 of 801 camera frames processed, explorer at 100 % of a
 core, against a third to a half of the frames and a third of a core single-threaded). Each node
 reads its parameters from ``config/explorer.yaml`` (installed to
-``share/explore_seg/config``) unless ``--ros-args --params-file FILE`` is given, and each is
-also runnable alone (``frontier_detector``, ``segmentation``, ``target_selector``,
+``share/explore_seg/config``) unless ``--ros-args --params-file FILE`` is given; a caller's
+``-p name:=value`` then overrides that file for every node (rcl lets a file's node section
+beat a ``-p``, which applies to ``/**``: the overrides are also written to a file of node
+sections that follows the default one). Each node is also runnable alone (``frontier_detector``, ``segmentation``, ``target_selector``,
 ``object_costmap``).
 
 Usage::
@@ -20,10 +22,16 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import copy
 import importlib
+import os
 import sys
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
+
+import yaml
 
 from explore_seg.node_util import config_file, run
 
@@ -73,19 +81,57 @@ def build_args(argv: list[str]) -> tuple[argparse.Namespace, list[str]]:
                     help="executor threads (1 = single-threaded, the default; more use "
                          "rclpy's MultiThreadedExecutor, see the module docstring)")
     opts = ap.parse_args(ours)
+    opts.overrides_file = None
     if "--params-file" not in ros:
         pf = default_params_file()
         if pf is not None:
-            # First, so that the caller's -p overrides win (later ones take precedence).
+            # First, and the caller's -p overrides again as node sections after it: a node
+            # section of a file beats a -p (which rcl files under /**).
             ros = ["--ros-args", "--params-file", str(pf)] + ros[1:]
+            overrides = cli_overrides(ros)
+            if overrides:
+                opts.overrides_file = write_overrides(overrides)
+                ros[3:3] = ["--params-file", opts.overrides_file]
     return opts, ros
+
+
+def cli_overrides(ros: list[str]) -> dict[str, Any]:
+    """``name -> value`` of the ``-p`` / ``--param`` arguments (values parsed as YAML, as rcl
+    does)."""
+    out: dict[str, Any] = {}
+    for flag, arg in zip(ros, ros[1:]):
+        if flag in ("-p", "--param") and ":=" in arg:
+            name, value = arg.split(":=", 1)
+            out[name] = yaml.safe_load(value) if value else ""
+    return out
+
+
+def write_overrides(overrides: dict[str, Any]) -> str:
+    """A params file with ``overrides`` in the section of every explorer node; its path."""
+    nested: dict[str, Any] = {}
+    for name, value in overrides.items():
+        *heads, last = name.split(".")
+        d = nested
+        for h in heads:
+            d = d.setdefault(h, {})
+        d[last] = value
+    # a copy per section: rcl's parser rejects YAML aliases
+    doc = {c.name: {"ros__parameters": copy.deepcopy(nested)} for c in COMPONENTS}
+    fd, path = tempfile.mkstemp(prefix="explorer_overrides_", suffix=".yaml")
+    with os.fdopen(fd, "w") as f:
+        yaml.safe_dump(doc, f)
+    return path
 
 
 def main(args: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if args is None else args)
     opts, ros = build_args(argv)
-    classes = node_classes(set(opts.without))
-    return run(classes, args=[sys.argv[0]] + ros, num_threads=max(1, opts.threads))
+    try:
+        classes = node_classes(set(opts.without))
+        return run(classes, args=[sys.argv[0]] + ros, num_threads=max(1, opts.threads))
+    finally:
+        if opts.overrides_file:
+            Path(opts.overrides_file).unlink(missing_ok=True)
 
 
 if __name__ == "__main__":

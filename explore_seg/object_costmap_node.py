@@ -17,14 +17,12 @@ half of the frames it could (``rate_hz`` or the camera's rate, whichever is lowe
 from __future__ import annotations
 
 import collections
-import math
 import time
 from enum import Enum
 from typing import Any
 
 import numpy as np
-from geometry_msgs.msg import PoseWithCovarianceStamped
-from nav_msgs.msg import OccupancyGrid, Odometry
+from nav_msgs.msg import OccupancyGrid
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, Image, LaserScan, PointCloud2
@@ -36,19 +34,19 @@ from explore_seg.core.camera import base_from_optical, map_from_base
 from explore_seg.core.detector import Detector, DetectorParams
 from explore_seg.core.grid import GridMap, quaternion_from_yaw
 from explore_seg.core.limits import InputLimits
+from explore_seg.core.pose_fusion import PoseFusionParams
 from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D,
                                       ObjectCostmapNodeParams, ObjectMap, WallMask,
                                       load_priors, parse_class_ids, process_frame, wall_mask)
 from explore_seg.node_util import WarnThrottle, config_file, failsafe, run
 from explore_seg.object_inputs import purge_newer, wait_reason
 from explore_seg.params import ParamBinding
+from explore_seg.pose_input import PoseInput
 from explore_seg.qos import MAP_QOS, POSE_QOS, SENSOR_QOS, map_qos
 from explore_seg.time_guard import StallWatchdog, TimeGuard
 
 #: Colour/depth/semantic messages kept for stamp pairing (older ones are dropped).
 _PAIR_BUFFER = 4
-#: Robot poses kept for matching image stamps.
-_POSE_BUFFER = 200
 #: Seconds between repeated warnings of one kind.
 _WARN_PERIOD_S = 5.0
 #: Timer ticks per 1 / rate_hz (a frame is taken soon after it arrives).
@@ -88,6 +86,7 @@ class ObjectCostmapNode(Node):
         self._p = ParamBinding(self, ObjectCostmapNodeParams())
         self._dp = ParamBinding(self, DetectorParams(), prefix="detector.")
         self._lp = ParamBinding(self, InputLimits(), prefix="input.")
+        self._pfp = ParamBinding(self, PoseFusionParams(), prefix="pose_fusion.")
         p = self._p.params
         # the installed share's priors when no file is given (the core knows only the
         # source tree)
@@ -100,7 +99,6 @@ class ObjectCostmapNode(Node):
         self._colors: collections.deque = collections.deque(maxlen=_PAIR_BUFFER)
         self._depths: collections.deque = collections.deque(maxlen=_PAIR_BUFFER)
         self._semantics: collections.deque = collections.deque(maxlen=_PAIR_BUFFER)
-        self._poses: collections.deque = collections.deque(maxlen=_POSE_BUFFER)
         self._walls: WallMask | None = None     # wall_mask of self._grid
         self._scan: LaserScan | None = None
         self._grid: GridMap | None = None
@@ -141,13 +139,12 @@ class ObjectCostmapNode(Node):
         # Poses in their own callback group: with a multi-threaded executor they keep
         # arriving while a frame is processed (else the poses around the next image's
         # stamp are lost and that frame is dropped).
-        poses_group = MutuallyExclusiveCallbackGroup()
-        if p.pose_topic_type == "odom":
-            self.create_subscription(Odometry, "odom", self._on_odom, POSE_QOS,
-                                     callback_group=poses_group)
-        else:
-            self.create_subscription(PoseWithCovarianceStamped, "pose", self._on_pose,
-                                     POSE_QOS, callback_group=poses_group)
+        self._pose_in = PoseInput(
+            self, p.pose_topic_type, self._pfp.params, POSE_QOS,
+            map_frame=lambda: self.params.map_frame, limits=lambda: self._lp.params,
+            warn=self._warn, drop=lambda text: self._drop("pose", text),
+            on_pose=self._on_robot_pose, on_stamp=self._observe,
+            callback_group=MutuallyExclusiveCallbackGroup())
         # Used (and required for pairing) only by the oracle detector backend.
         self.create_subscription(Image, "camera/semantic/image_raw", self._on_semantic,
                                  SENSOR_QOS)
@@ -155,6 +152,7 @@ class ObjectCostmapNode(Node):
         self._p.on_change(self._params_changed)
         self._dp.on_change(self._detector_params_changed)
         self._lp.on_change(self._limits_changed)
+        self._pfp.on_change(lambda old, new: self._pose_in.set_params(new))
 
     # ---------------------------------------------------------------- helpers
     @property
@@ -230,7 +228,7 @@ class ObjectCostmapNode(Node):
             horizon = t_ns + int(self._time.jump_s * 1e9)
             for buf in (self._colors, self._depths, self._semantics):
                 purge_newer(buf, horizon, _stamp_ns)
-            purge_newer(self._poses, horizon, lambda sp: sp[0])
+            self._pose_in.drop_newer(horizon)
             if self._last_depth_ns is not None and self._last_depth_ns > horizon:
                 self._last_depth_ns = None
             self._lag_mark = None
@@ -253,23 +251,7 @@ class ObjectCostmapNode(Node):
         except ValueError as err:
             self._drop("map", str(err))
 
-    def _on_odom(self, msg: Odometry) -> None:
-        self._add_pose(msg, convert.pose2d_from_odometry)
-
-    def _on_pose(self, msg: PoseWithCovarianceStamped) -> None:
-        self._add_pose(msg, convert.pose2d_from_pose_msg)
-
-    def _add_pose(self, msg: Any, to_2d: Any) -> None:
-        try:
-            convert.check_frame(msg.header.frame_id, self.params.map_frame, "pose")
-            pose = to_2d(msg, self._lp.params)
-            t_ns = convert.checked_stamp_ns(msg.header.stamp, "pose")
-        except ValueError as err:
-            self._drop("pose", str(err))
-            return
-        self._observe("pose", t_ns)
-        self._poses.append((t_ns, pose))
-        self._objects.note_robot_position(pose[0], pose[1])   # swept path: cleared
+    def _on_robot_pose(self, t_ns: int, pose: tuple[float, float, float]) -> None:
         self._objects.note_robot_position(pose[0], pose[1])   # swept path: cleared
 
     # ------------------------------------------------------------------- tick
@@ -287,8 +269,10 @@ class ObjectCostmapNode(Node):
 
     def _wait_reason(self) -> str:
         p = self.params
+        newest_pose = self._pose_in.newest_ns()
         text = wait_reason([_stamp_ns(m) for m in self._depths],
-                           [_stamp_ns(m) for m in self._colors], [t for t, _ in self._poses],
+                           [_stamp_ns(m) for m in self._colors],
+                           [] if newest_pose is None else [newest_pose],
                            self._last_depth_ns, p.sync_tolerance_s, p.pose_tolerance_s,
                            _MIN_GAP_PERIODS / p.rate_hz)
         skew = self._time.disagreement("camera", "pose")
@@ -336,16 +320,21 @@ class ObjectCostmapNode(Node):
         """Newest unprocessed depth with a colour (and semantic) image close in time."""
         tol_ns = int(self.params.sync_tolerance_s * 1e9)
         oracle = self._dp.params.backend == "oracle"
-        # Frames newer than the newest pose wait for their pose (the pose stream may lag
-        # behind the images while this node is busy); they are taken on a later tick.
-        newest_pose = self._poses[-1][0] if self._poses else None
+        # Frames newer than the newest pose wait for a pose at or after their stamp while
+        # poses keep arriving (the pose stream may lag behind the images while this node
+        # is busy); when none arrived for pose_tolerance_s, the nearest within it will do.
+        newest_pose = self._pose_in.newest_ns()
         pose_tol_ns = int(self.params.pose_tolerance_s * 1e9)
+        arrival = self._pose_in.arrival_ns
+        poses_flow = (arrival is not None
+                      and self.get_clock().now().nanoseconds - arrival < pose_tol_ns)
         min_gap_ns = int(_MIN_GAP_PERIODS / self.params.rate_hz * 1e9)
         for depth in sorted(self._depths, key=_stamp_ns, reverse=True):
             t = _stamp_ns(depth)
             if self._last_depth_ns is not None and t < self._last_depth_ns + min_gap_ns:
                 return None     # processed, or too soon after the last one: wait for a newer
-            if newest_pose is not None and t > newest_pose + pose_tol_ns:
+            if newest_pose is not None and t > newest_pose and (
+                    t > newest_pose + pose_tol_ns or poses_flow):
                 continue
             color = _closest(self._colors, t, tol_ns)
             semantic = _closest(self._semantics, t, tol_ns) if oracle else None
@@ -354,9 +343,7 @@ class ObjectCostmapNode(Node):
         return None
 
     def _pose_at(self, t_ns: int) -> tuple[float, float, float] | None:
-        tol_ns = int(self.params.pose_tolerance_s * 1e9)
-        poses = list(self._poses)    # a copy: the pose callback may append meanwhile
-        return interpolate_pose(poses, t_ns, tol_ns)
+        return self._pose_in.pose_at(t_ns, int(self.params.pose_tolerance_s * 1e9))
 
     def _ensure_detector(self) -> Detector | None:
         if self._detector is None and not self._detector_failed:
@@ -365,7 +352,10 @@ class ObjectCostmapNode(Node):
                 ids = parse_class_ids(self.params.oracle_sim_class_ids) \
                     if dp.backend == "oracle" else None
                 self._detector = Detector(dp, sim_class_ids=ids)
-                self.get_logger().info(f"detector backend: {self._detector.backend_name}")
+                self.get_logger().info(f"detector backend: {self._detector.backend_name} "
+                                       f"on {self._detector.device_name}")
+                if self._detector.device_note:
+                    self.get_logger().warn(self._detector.device_note)
             except (OSError, ValueError, ImportError, RuntimeError) as err:
                 self._detector_failed = True
                 self.get_logger().error(
@@ -378,10 +368,8 @@ class ObjectCostmapNode(Node):
         pose = self._pose_at(t_ns)
         self._last_depth_ns = t_ns
         if pose is None:
-            span = (f"poses {self._poses[0][0] / 1e9:.2f}..{self._poses[-1][0] / 1e9:.2f} s"
-                    if self._poses else "no pose received")
             self._drop("frame", f"no robot pose within {p.pose_tolerance_s} s of the image "
-                                f"({t_ns / 1e9:.2f} s; {span})")
+                                f"({t_ns / 1e9:.2f} s; {self._pose_in.describe()})")
             return
         try:
             depth = convert.depth_from_msg(depth_msg)
@@ -468,27 +456,6 @@ class ObjectCostmapNode(Node):
             self._pub_cloud.publish(convert.cloud_to_msg(convert.xyz_cloud(cloud), header))
         if self._pub_markers.get_subscription_count() > 0:
             self._pub_markers.publish(_markers(self._objects.boxes(), header))
-
-
-def interpolate_pose(poses: list[tuple[int, tuple[float, float, float]]], t_ns: int,
-                     tol_ns: int) -> tuple[float, float, float] | None:
-    """The robot pose at ``t_ns`` from stamped poses (any order): linear between the
-    nearest poses before and after it (yaw along the shorter arc) when both lie within
-    ``tol_ns``, else the nearest one within ``tol_ns``; None when none does."""
-    before = max((sp for sp in poses if sp[0] <= t_ns), key=lambda sp: sp[0], default=None)
-    after = min((sp for sp in poses if sp[0] >= t_ns), key=lambda sp: sp[0], default=None)
-    ok_b = before is not None and t_ns - before[0] <= tol_ns
-    ok_a = after is not None and after[0] - t_ns <= tol_ns
-    if ok_b and ok_a and after[0] > before[0]:
-        w = (t_ns - before[0]) / (after[0] - before[0])
-        (x0, y0, a0), (x1, y1, a1) = before[1], after[1]
-        da = math.atan2(math.sin(a1 - a0), math.cos(a1 - a0))
-        yaw = math.atan2(math.sin(a0 + w * da), math.cos(a0 + w * da))
-        return x0 + w * (x1 - x0), y0 + w * (y1 - y0), yaw
-    cands = [sp for sp, ok in ((before, ok_b), (after, ok_a)) if ok]
-    if not cands:
-        return None
-    return min(cands, key=lambda sp: abs(sp[0] - t_ns))[1]
 
 
 def _closest(msgs, t_ns: int, tol_ns: int):

@@ -25,8 +25,8 @@ import math
 from enum import Enum
 
 import numpy as np
-from geometry_msgs.msg import Point, PoseStamped, PoseWithCovarianceStamped
-from nav_msgs.msg import MapMetaData, OccupancyGrid, Odometry
+from geometry_msgs.msg import Point, PoseStamped
+from nav_msgs.msg import MapMetaData, OccupancyGrid
 from rclpy.node import Node
 from sensor_msgs.msg import Image
 from std_msgs.msg import Bool, ColorRGBA, Float64MultiArray, MultiArrayDimension
@@ -38,6 +38,7 @@ from explore_seg.core.explorer import Explorer, ExplorerStep
 from explore_seg.core.frontiers import Frontier, FrontierParams
 from explore_seg.core.grid import GridMap, resample_array
 from explore_seg.core.limits import InputLimits
+from explore_seg.core.pose_fusion import PoseFusionParams
 from explore_seg.core.selection import (REGION_STRATEGIES, Action, Goal, NavOutcome,
                                         SelectorNodeParams)
 from explore_seg.frontier_msgs import FrontierPublisher
@@ -45,7 +46,8 @@ from explore_seg.frontier_node import FRONTIER_PREFIX
 from explore_seg.nav_client import NavClient
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
-from explore_seg.qos import MAP_QOS, RELIABLE_QOS, map_qos
+from explore_seg.pose_input import PoseInput
+from explore_seg.qos import MAP_QOS, POSE_QOS, RELIABLE_QOS, map_qos
 from explore_seg.time_guard import StallWatchdog, TimeGuard
 
 #: Seconds between repeated warnings of one kind.
@@ -76,6 +78,7 @@ class TargetSelectorNode(Node):
         self._p = ParamBinding(self, SelectorNodeParams())
         self._fp = ParamBinding(self, FrontierParams(), prefix=FRONTIER_PREFIX)
         self._lp = ParamBinding(self, InputLimits(), prefix="input.")
+        self._pfp = ParamBinding(self, PoseFusionParams(), prefix="pose_fusion.")
         p = self._p.params
         self._explorer = Explorer(self._fp.params, p)
         self._grid: GridMap | None = None
@@ -109,11 +112,12 @@ class TargetSelectorNode(Node):
         self.create_subscription(OccupancyGrid, "object_costmap", self._on_layer, qos)
         self.create_subscription(Image, "regions", self._on_regions, qos)
         self.create_subscription(MapMetaData, "regions/info", self._on_regions_info, qos)
-        if p.pose_topic_type == "odom":
-            self.create_subscription(Odometry, "odom", self._on_odom, RELIABLE_QOS)
-        else:
-            self.create_subscription(PoseWithCovarianceStamped, "pose", self._on_pose,
-                                     RELIABLE_QOS)
+        self._pose_in = PoseInput(
+            self, p.pose_topic_type, self._pfp.params, POSE_QOS,
+            map_frame=lambda: None if self._grid is None else self._grid.frame_id,
+            limits=lambda: self._lp.params, warn=self._warn,
+            drop=lambda text: self._warn("pose", f"dropped {text}"), on_pose=self._set_pose)
+        self._pfp.on_change(lambda old, new: self._pose_in.set_params(new))
         self._nav = (NavClient(self, p.nav_action, p.nav_accept_timeout_s, p.cancel_timeout_s,
                                self._warn) if p.nav_action else None)
         self.create_service(Trigger, "~/start", self._srv_start)
@@ -197,23 +201,11 @@ class TargetSelectorNode(Node):
         self._regions_info = msg
         self._labels_dirty = True
 
-    def _set_pose(self, msg: Odometry | PoseWithCovarianceStamped, to_2d) -> None:
-        try:
-            if self._grid is not None:
-                convert.check_frame(msg.header.frame_id, self._grid.frame_id, "pose")
-            pose = to_2d(msg, self._lp.params)
-            self._pose_stamp_ns = convert.checked_stamp_ns(msg.header.stamp, "pose")
-        except ValueError as err:
-            self._warn("pose", f"dropped {type(msg).__name__}: {err}")
-            return
+    def _set_pose(self, t_ns: int, pose: tuple[float, float, float]) -> None:
+        """A new newest map-frame pose (from :class:`PoseInput`)."""
+        self._pose_stamp_ns = t_ns
         self._pose = pose
         self._pose_time_ns = self.get_clock().now().nanoseconds
-
-    def _on_odom(self, msg: Odometry) -> None:
-        self._set_pose(msg, convert.pose2d_from_odometry)
-
-    def _on_pose(self, msg: PoseWithCovarianceStamped) -> None:
-        self._set_pose(msg, convert.pose2d_from_pose_msg)
 
     # --------------------------------------------------------------- services
     def _srv_start(self, request: Trigger.Request, response: Trigger.Response
@@ -311,6 +303,7 @@ class TargetSelectorNode(Node):
             return
         if jump.backwards:
             self._pose = None
+            self._pose_in.clear()
         self._explorer.clock_jumped(now_ns * 1e-9)
         self._warn("clock_jump", jump.describe() + "; goal timers restarted")
 

@@ -72,6 +72,10 @@ def _parse(argv: list[str] | None) -> DemoConfig:
     ap.add_argument("--params-file", default="", help="explorer parameter file")
     ap.add_argument("--no-explorer", action="store_true",
                     help="run the simulator and the monitor only")
+    ap.add_argument("--odom-in-map", action="store_true",
+                    help="simulator odometry is the map-frame pose (no drift, no SLAM pose "
+                         "topic; explorer pose_topic_type odom) instead of the real-robot "
+                         "contract (drifting odom + scan-rate pose, fused)")
     ap.add_argument("--sim-arg", action="append", default=[],
                     help="extra ROS argument for the simulator (repeatable)")
     ap.add_argument("--explorer-arg", action="append", default=[],
@@ -82,6 +86,7 @@ def _parse(argv: list[str] | None) -> DemoConfig:
                       wall_timeout_s=a.wall_timeout, stall_sim_s=a.stall_sim,
                       stop_coverage_pct=a.stop_coverage, params_file=a.params_file,
                       explorer=not a.no_explorer, explorer_threads=a.explorer_threads,
+                      real_robot_pose=not a.odom_in_map,
                       sim_args=tuple(a.sim_arg),
                       explorer_args=tuple(a.explorer_arg))
 

@@ -29,13 +29,16 @@ from explore_seg.params import field_doc, ros_fields  # noqa: E402
 #: node name (or ``/**``: every node) -> [(parameter prefix, "module:DataclassName")], in
 #: the order they are bound.
 _LIMITS = ("input.", "explore_seg.core.limits:InputLimits")
+_POSE_FUSION = ("pose_fusion.", "explore_seg.core.pose_fusion:PoseFusionParams")
 NODE_PARAMS: dict[str, list[tuple[str, str]]] = {
     "/**": [("frontier.", "explore_seg.core.frontiers:FrontierParams")],
     "frontier_detector": [("", "explore_seg.core.frontiers:FrontierNodeParams"), _LIMITS],
     "segmentation": [("", "explore_seg.core.segmentation:SegmentationNodeParams"), _LIMITS],
     "object_costmap": [("", "explore_seg.core.objects:ObjectCostmapNodeParams"),
-                       ("detector.", "explore_seg.core.detector:DetectorParams"), _LIMITS],
-    "target_selector": [("", "explore_seg.core.selection:SelectorNodeParams"), _LIMITS],
+                       ("detector.", "explore_seg.core.detector:DetectorParams"), _LIMITS,
+                       _POSE_FUSION],
+    "target_selector": [("", "explore_seg.core.selection:SelectorNodeParams"), _LIMITS,
+                        _POSE_FUSION],
     "sim_bridge": [("", "sim_bridge.engine:SimParams")],
 }
 #: README heading of a NODE_PARAMS key that is not a node.

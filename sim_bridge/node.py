@@ -5,8 +5,10 @@ It owns the clock: a wall-clock (steady) timer advances the :class:`SimEngine` b
 lock-step mode) and publishes ``/clock``; every stamp is sim time, so the other nodes
 run with ``use_sim_time: true``. Exploration nodes need none of the ``sim/*`` topics.
 
-Published: ``/clock``, ``scan``, ``odom`` (pose in ``map``), ``map``, ``plan``,
-``camera/*`` (with ``enable_camera``), ``sim/metrics``. Subscribed: ``goal_pose`` and
+Published: ``/clock``, ``scan``, ``odom`` (the true pose in ``map``; with ``odom_frame``
+``odom``: drifting odometry, :mod:`sim_bridge.odometry`), ``pose`` (with ``slam_pose``: the
+scan-rate map-frame pose slam_toolbox would publish), ``map``, ``plan``, ``camera/*`` (with
+``enable_camera``), ``sim/metrics``. Subscribed: ``goal_pose`` and
 the OccupancyGrid layers named in ``costmap_layers``. Service: ``sim/save_metrics``.
 With ``nav_action`` (default ``navigate_to_pose``) the navigation stand-in also looks like
 Nav2's action from outside: ``<action>/_action/status`` and ``<action>/_action/cancel_goal``
@@ -21,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import PoseStamped
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
 from nav_msgs.msg import OccupancyGrid, Odometry, Path as PathMsg
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
@@ -34,11 +36,12 @@ from explore_seg import convert
 from explore_seg.core.grid import GridMap
 from explore_seg.node_util import WarnThrottle, run
 from explore_seg.params import ParamBinding
-from explore_seg.qos import MAP_QOS, RELIABLE_QOS, SENSOR_QOS
+from explore_seg.qos import MAP_QOS, POSE_QOS, RELIABLE_QOS, SENSOR_QOS
 from sim_bridge.engine import CameraSample, ScanFrame, SimEngine, SimParams, engine_from_params
 from sim_bridge.metrics import CollisionEvent
 from sim_bridge.nav_action import SimNavAction
 from sim_bridge.navigation import NavState
+from sim_bridge.odometry import DriftingOdometry, SlamPoses
 from sim_bridge.render import engine_overlays, render_map_png
 
 MAP_FRAME = "map"
@@ -76,7 +79,14 @@ class SimBridgeNode(Node):
 
         self._clock_pub = self.create_publisher(ClockMsg, "/clock", CLOCK_QOS)
         self._scan_pub = self.create_publisher(LaserScan, "scan", SENSOR_QOS)
-        self._odom_pub = self.create_publisher(Odometry, "odom", RELIABLE_QOS)
+        # Depth 100 (POSE_QOS): a subscriber busy with a camera frame must not lose the
+        # odometry of the scans and frames meanwhile (KEEP_LAST 10 dropped them at 4x).
+        self._odom_pub = self.create_publisher(Odometry, "odom", POSE_QOS)
+        self._odometry = (None if p.odom_frame.lstrip("/") == MAP_FRAME else
+                          DriftingOdometry(p.odom_drift_scale, p.odom_drift_yaw_radps))
+        self._slam_pub = (self.create_publisher(PoseWithCovarianceStamped, "pose", POSE_QOS)
+                          if p.slam_pose else None)
+        self._slam = SlamPoses(p.slam_min_travel_m, p.slam_min_turn_rad)
         self._map_pub = self.create_publisher(OccupancyGrid, "map", MAP_QOS)
         self._plan_pub = self.create_publisher(PathMsg, "plan", RELIABLE_QOS)
         self._metrics_pub = self.create_publisher(DiagnosticArray, "sim/metrics", RELIABLE_QOS)
@@ -185,6 +195,11 @@ class SimBridgeNode(Node):
             return
         if new.costmap_layers != old.costmap_layers:
             self._subscribe_layers(new.costmap_layers)
+        if self._odometry is not None:
+            self._odometry.scale = new.odom_drift_scale
+            self._odometry.yaw_bias_radps = new.odom_drift_yaw_radps
+        self._slam.min_travel_m, self._slam.min_turn_rad = (new.slam_min_travel_m,
+                                                            new.slam_min_turn_rad)
 
     def _on_collision(self, ev: CollisionEvent) -> None:
         self.get_logger().warn(
@@ -233,15 +248,19 @@ class SimBridgeNode(Node):
             clk = ClockMsg()
             clk.clock = convert.ns_to_stamp(stamp)
             self._clock_pub.publish(clk)
-        for scan in eng.drain_scans():
-            self._publish_scan(scan)
-        for frame in eng.drain_camera():
-            # The pose at the frame's capture first (a real odom stream has one within a
-            # few ms of every image), so consumers need not match stale poses to images.
-            self._odom_pub.publish(convert.odometry_msg(
-                frame.pose, eng.velocity, MAP_FRAME, BASE_FRAME, _ns(frame.stamp_s)))
-            self._publish_camera(frame)
-        self._odom_pub.publish(convert.odometry_msg(eng.pose, eng.velocity, MAP_FRAME, BASE_FRAME, stamp))
+        # In time order, odometry at each scan's and each frame's capture first (a real
+        # odom stream has one within a few ms of every scan and image), so consumers need
+        # not match stale poses to them however long this tick was.
+        sensed = sorted([(s.stamp_s, 0, s) for s in eng.drain_scans()]
+                        + [(f.stamp_s, 1, f) for f in eng.drain_camera()],
+                        key=lambda e: e[:2])
+        for stamp_s, kind, sample in sensed:
+            self._publish_odom(stamp_s, sample.pose)
+            if kind == 0:
+                self._publish_scan(sample)
+            else:
+                self._publish_camera(sample)
+        self._publish_odom(t, eng.pose)
         if t >= self._next_map_s:
             self._next_map_s = t + 1.0 / p.map_rate_hz
             self._map_pub.publish(convert.grid_to_msg(eng.map))
@@ -260,6 +279,15 @@ class SimBridgeNode(Node):
             eng.metrics.set_time(t)
             self._publish_metrics(stamp)
 
+    def _publish_odom(self, t_s: float, true_pose: tuple[float, float, float]) -> None:
+        """Odometry at ``t_s``: the true pose in ``map``, or drifting in ``odom_frame``."""
+        if self._odometry is None:
+            pose, frame = true_pose, MAP_FRAME
+        else:
+            pose, frame = self._odometry.update(t_s, true_pose), self._p.params.odom_frame
+        self._odom_pub.publish(convert.odometry_msg(pose, self._engine.velocity, frame,
+                                                    BASE_FRAME, _ns(t_s)))
+
     def _publish_scan(self, scan: ScanFrame) -> None:
         g = self._engine.scan_geometry
         msg = convert.scan_to_msg(scan.ranges, g.angle_min_rad, g.angle_increment_rad,
@@ -267,6 +295,11 @@ class SimBridgeNode(Node):
                                   convert.make_header(SCAN_FRAME, _ns(scan.stamp_s)),
                                   scan_time_s=1.0 / self._p.params.scan_rate_hz)
         self._scan_pub.publish(msg)
+        if self._slam_pub is not None and self._slam.take(scan.pose):
+            pose = PoseWithCovarianceStamped()
+            pose.header = convert.make_header(MAP_FRAME, _ns(scan.stamp_s))
+            pose.pose.pose = convert.pose_from_2d(*scan.pose)
+            self._slam_pub.publish(pose)
 
     def _publish_camera(self, sample: CameraSample) -> None:
         header = convert.make_header(CAMERA_FRAME, _ns(sample.stamp_s))

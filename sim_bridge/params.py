@@ -113,6 +113,28 @@ class SimParams:
     pose_noise_yaw_rad: float = field(default=0.0, metadata=param_meta(
         "std of the heading error of the pose each scan is mapped at", "rad",
         range=(0.0, math.inf)))
+    # --- real-robot pose contract (sim_bridge.odometry)
+    odom_frame: str = field(default="map", metadata=param_meta(
+        "frame of the published odometry: 'map' (the true pose, no drift) or another name, "
+        "e.g. 'odom' (a real robot's odometry: starts at (0, 0, 0) and drifts by "
+        "odom_drift_*; pair with slam_pose and pose_topic_type 'fused')", read_only=True))
+    odom_drift_scale: float = field(default=0.0, metadata=param_meta(
+        "odometry distance error: travelled distance x (1 + this) (odom_frame != 'map')",
+        range=(-0.5, 0.5)))
+    odom_drift_yaw_radps: float = field(default=0.0, metadata=param_meta(
+        "odometry heading drift while the robot moves (gyro bias; odom_frame != 'map')",
+        "rad/s", range=(-1.0, 1.0)))
+    slam_pose: bool = field(default=False, metadata=param_meta(
+        "publish the true map-frame pose of scans as geometry_msgs/PoseWithCovarianceStamped "
+        "on 'pose' (slam_toolbox's pose: scan rate, after slam_min_travel_m / "
+        "slam_min_turn_rad of motion)", read_only=True))
+    slam_min_travel_m: float = field(default=0.0, metadata=param_meta(
+        "a scan yields a SLAM pose only after this much travel since the last one "
+        "(slam_toolbox minimum_travel_distance; 0 with slam_min_turn_rad 0: every scan)", "m",
+        range=(0.0, math.inf)))
+    slam_min_turn_rad: float = field(default=0.0, metadata=param_meta(
+        "... or this much turning (slam_toolbox minimum_travel_heading)", "rad",
+        range=(0.0, math.inf)))
     # --- navigation stand-in
     nav_allow_unknown: bool = field(default=NavParams.allow_unknown, metadata=param_meta(
         "plan through unknown space (Nav2 allow_unknown)"))
@@ -195,6 +217,20 @@ class SimParams:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {v}")
+        if not self.odom_frame or any(ch.isspace() for ch in self.odom_frame):
+            raise ValueError(f"odom_frame must be a frame name, got {self.odom_frame!r}")
+        if self.odom_frame.lstrip("/") == "map" and (self.odom_drift_scale
+                                                     or self.odom_drift_yaw_radps):
+            raise ValueError("odom_drift_scale / odom_drift_yaw_radps need an odom_frame "
+                             f"other than 'map' (odometry in the map frame is the true pose), "
+                             f"got {self.odom_drift_scale}, {self.odom_drift_yaw_radps}")
+        for name in ("odom_drift_scale", "odom_drift_yaw_radps", "slam_min_travel_m",
+                     "slam_min_turn_rad"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"{name} must be finite, got {getattr(self, name)}")
+        if self.slam_min_travel_m < 0 or self.slam_min_turn_rad < 0:
+            raise ValueError(f"slam_min_travel_m and slam_min_turn_rad must be >= 0, got "
+                             f"{self.slam_min_travel_m}, {self.slam_min_turn_rad}")
         if not self.world:
             raise ValueError("world must name a world or a file, got ''")
         if self.camera_depth_encoding not in DEPTH_ENCODINGS:

@@ -147,6 +147,21 @@ def test_sim_command_scales_the_camera():
     assert args["output_dir"] == "/tmp/o/sim"
 
 
+@pytest.mark.parametrize("real_robot", [True, False])
+def test_demo_runs_the_real_robot_pose_contract_by_default(real_robot):
+    cfg = DemoConfig(out_dir="x", real_robot_pose=real_robot)
+    sim = dict(a.split(":=", 1) for a in sim_command(cfg) if ":=" in a)
+    expl = dict(a.split(":=", 1) for a in explorer_command(cfg) if ":=" in a)
+    if real_robot:
+        assert sim["odom_frame"] == "odom" and sim["slam_pose"] == "true"
+        assert float(sim["odom_drift_scale"]) > 0 and float(sim["slam_min_travel_m"]) > 0
+        assert expl["pose_topic_type"] == "fused"
+    else:
+        assert "odom_frame" not in sim and "slam_pose" not in sim
+        assert expl["pose_topic_type"] == "odom"
+    assert DemoConfig(out_dir="x").real_robot_pose
+
+
 @pytest.mark.parametrize("field, value, match", [
     ("strategy", "greedy", "strategy must be one of"),
     ("real_time_factor", 0.0, "real_time_factor must be finite and > 0"),

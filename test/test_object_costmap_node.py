@@ -253,17 +253,3 @@ def test_invalid_parameter_is_rejected(ros):
     assert not res[0].successful and "rate_hz" in res[0].reason
     res = node.set_parameters([Parameter("rate_hz", value=4.0)])
     assert res[0].successful and node.params.rate_hz == pytest.approx(4.0)
-
-
-def test_pose_at_an_image_stamp_is_interpolated_between_the_bracketing_poses():
-    from explore_seg.object_costmap_node import interpolate_pose
-
-    s = 1_000_000_000
-    poses = [(0, (0.0, 0.0, 3.0)), (s, (1.0, 2.0, -3.0))]     # yaw crosses +-pi
-    x, y, yaw = interpolate_pose(poses, s // 4, s)
-    assert (x, y) == pytest.approx((0.25, 0.5))
-    assert math.cos(yaw) == pytest.approx(math.cos(3.0 + 0.25 * (2 * math.pi - 6.0)))
-    # only one side within the tolerance: the nearest pose; none: None
-    assert interpolate_pose(poses, s // 10, s // 5) == (0.0, 0.0, 3.0)
-    assert interpolate_pose(poses, 3 * s, s // 5) is None
-    assert interpolate_pose([], 0, s) is None

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from pathlib import Path
+
 import pytest
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -97,13 +99,44 @@ def test_explorer_puts_its_default_params_file_before_the_callers_overrides():
 
     pf = default_params_file()
     assert pf is not None
-    _, ros = build_args(["--threads", "2", "--ros-args", "-p", "detector.backend:=oracle"])
+    opts, ros = build_args(["--threads", "2", "--ros-args", "-p", "detector.backend:=oracle"])
     assert ros[:3] == ["--ros-args", "--params-file", str(pf)]
     assert ros.index("--params-file") < ros.index("detector.backend:=oracle")
+    assert ros[3:5] == ["--params-file", opts.overrides_file]
+    Path(opts.overrides_file).unlink()
     _, ros = build_args([])
     assert ros == ["--ros-args", "--params-file", str(pf)]
     _, ros = build_args(["--ros-args", "--params-file", "mine.yaml"])
     assert ros == ["--ros-args", "--params-file", "mine.yaml"]
+
+
+def test_explorer_cli_overrides_beat_the_default_files_node_sections():
+    """explorer.yaml sets detector.backend, strategy and pose_topic_type in node sections;
+    rcl lets those beat a plain ``-p`` (filed under /**): the demo's oracle detector and
+    strategy were silently replaced by the file's (onnx YOLO, paper)."""
+    import rclpy
+    from rclpy.context import Context
+
+    from conftest import DOMAIN_ID
+    from explore_seg.explorer import build_args
+    from explore_seg.object_costmap_node import ObjectCostmapNode
+    from explore_seg.selector_node import TargetSelectorNode
+
+    opts, args = build_args(["--ros-args", "-p", "detector.backend:=oracle", "-p",
+                             "strategy:=nearest", "-p", "pose_topic_type:=fused"])
+    ctx = Context()
+    rclpy.init(args=["explorer"] + args, context=ctx, domain_id=DOMAIN_ID)
+    try:
+        cm = ObjectCostmapNode(context=ctx)
+        sel = TargetSelectorNode(context=ctx)
+        assert cm.get_parameter("detector.backend").value == "oracle"
+        assert cm.params.pose_topic_type == sel.params.pose_topic_type == "fused"
+        assert sel.params.strategy == "nearest"
+        cm.destroy_node()
+        sel.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=ctx)
+        Path(opts.overrides_file).unlink()
 
 
 def test_ranges_become_descriptor_ranges_that_rclpy_enforces(ros):

@@ -78,7 +78,7 @@ def test_a_future_stamped_frame_does_not_stop_the_object_costmap(ros):
     _frame(node, future)
     node._last_depth_ns = future            # ... it was processed
     for k in range(5):
-        node._on_odom(_odom(100 * S + k * S // 10))
+        node._pose_in._on_odom(_odom(100 * S + k * S // 10))
     _frame(node, 100 * S + 2 * S // 10)
     assert _paired_stamp(node) == 100 * S + 2 * S // 10
     assert "jumped back" in node._warn.text("jump_camera")
@@ -87,15 +87,16 @@ def test_a_future_stamped_frame_does_not_stop_the_object_costmap(ros):
 def test_a_sim_clock_reset_resets_stamps_poses_and_pending_frames(ros):
     node = _costmap(ros)
     for k in range(5):
-        node._on_odom(_odom(300 * S + k * S // 10))
+        node._pose_in._on_odom(_odom(300 * S + k * S // 10))
     _frame(node, 300 * S + 3 * S // 10)
     node._last_depth_ns = 300 * S + 3 * S // 10
     # the simulator restarts: its clock begins again at 1 s
     for k in range(3):
-        node._on_odom(_odom(1 * S + k * S // 10, x=2.0))
+        node._pose_in._on_odom(_odom(1 * S + k * S // 10, x=2.0))
     _frame(node, 1 * S + S // 10)
     assert _paired_stamp(node) == 1 * S + S // 10
-    assert all(t < 2 * S for t, _ in node._poses)          # the old time line is gone
+    assert node._pose_in.newest_ns() < 2 * S               # the old time line is gone
+    assert node._pose_at(300 * S) is None
     assert node._pose_at(1 * S + S // 10)[0] == pytest.approx(2.0)
 
 
@@ -104,7 +105,7 @@ def test_odometry_on_another_time_base_is_reported_by_the_stall_watchdog(ros):
     node = _costmap(ros, **{"input.stall_periods": 2})
     node._info = K
     for k in range(5):
-        node._on_odom(_odom(100 * S + k * S // 10))         # an hour behind the camera
+        node._pose_in._on_odom(_odom(100 * S + k * S // 10))         # an hour behind the camera
     for k in range(8):
         _frame(node, 3700 * S + k * S // 2)
         node._tick()
@@ -191,11 +192,11 @@ def test_a_negative_stamp_is_rejected_at_the_boundary(ros):
     with pytest.raises(ValueError, match=r"header.stamp must be >= 0.*sec=-3"):
         convert.grid_from_msg(msg)
     node = _costmap(ros)
-    node._on_odom(_odom(0, sec=-1))
+    node._pose_in._on_odom(_odom(0, sec=-1))
     header = convert.make_header("camera", 0)
     header.stamp.sec = -7
     node._on_depth(convert.image_to_msg(np.zeros((2, 2), np.uint8), "mono8", header))
-    assert not node._depths and not node._poses
+    assert not node._depths and node._pose_in.latest() is None
     assert "sec=-7" in node.last_drop["camera"] and "sec=-1" in node.last_drop["pose"]
 
 
@@ -203,11 +204,11 @@ def test_a_negative_stamp_is_rejected_at_the_boundary(ros):
 @pytest.mark.parametrize("x", [1e300, 1e308, -2e5])
 def test_absurd_poses_are_dropped_by_the_selector_and_the_object_costmap(ros, x):
     sel = _selector(ros)
-    sel._on_odom(_odom(S, x=x))
+    sel._pose_in._on_odom(_odom(S, x=x))
     assert sel._pose is None and "input.max_coordinate_m" in sel._warn.text("pose")
     cm = _costmap(ros)
-    cm._on_odom(_odom(S, x=x))
-    assert not cm._poses and "input.max_coordinate_m" in cm.last_drop["pose"]
+    cm._pose_in._on_odom(_odom(S, x=x))
+    assert cm._pose_in.latest() is None and "input.max_coordinate_m" in cm.last_drop["pose"]
 
 
 # ------------------------------------------------------------------ finding 7
@@ -229,10 +230,10 @@ def test_the_simulator_logs_a_repeated_goal_once(ros, tmp_path):
 def test_the_selector_drops_odometry_in_another_frame(ros):
     node = _selector(ros)
     node._on_map(convert.grid_to_msg(GridMap(np.zeros((10, 10), np.int8), 0.05)))
-    node._on_odom(_odom(S, frame="odom"))
+    node._pose_in._on_odom(_odom(S, frame="odom"))
     assert node._pose is None
     assert "pose frame must be 'map' (the map's), got 'odom'" in node._warn.text("pose")
-    node._on_odom(_odom(S, frame="/map"))
+    node._pose_in._on_odom(_odom(S, frame="/map"))
     assert node._pose is not None
 
 

@@ -12,6 +12,10 @@ from sim_bridge.lockstep import STRATEGY_SPECS
 ROOT = Path(__file__).resolve().parents[2]
 #: Longer side of the animation frames (px).
 GIF_SIDE_PX = 480
+#: Simulator parameters of DemoConfig.real_robot_pose: 3 % odometry distance error, a
+#: 0.01 rad/s gyro bias, SLAM poses after slam_toolbox's default 0.5 m / 0.5 rad of motion.
+REAL_ROBOT_SIM = {"odom_frame": "odom", "odom_drift_scale": 0.03, "odom_drift_yaw_radps": 0.01,
+                  "slam_pose": True, "slam_min_travel_m": 0.5, "slam_min_turn_rad": 0.5}
 
 
 @dataclass(frozen=True)
@@ -38,6 +42,10 @@ class DemoConfig:
     explorer_threads: int = 1
     params_file: str = ""
     stop_coverage_pct: float = 0.0
+    #: The real-robot pose contract: the simulator publishes drifting odometry in 'odom'
+    #: and slam_toolbox-like 'pose' corrections (REAL_ROBOT_SIM), the explorer and the
+    #: monitor fuse them (pose_topic_type 'fused'). False: odometry is the map-frame pose.
+    real_robot_pose: bool = True
     sim_args: tuple[str, ...] = field(default_factory=tuple)
     explorer_args: tuple[str, ...] = field(default_factory=tuple)
 

@@ -53,16 +53,19 @@ def boxes_from_markers(msg) -> list[np.ndarray]:
 class Monitor:
     """Subscriptions of the demo (one rclpy node); the state is read by :func:`run_demo`."""
 
-    def __init__(self, context) -> None:
+    def __init__(self, context, pose_source: str = "odom") -> None:
         from diagnostic_msgs.msg import DiagnosticArray
         from geometry_msgs.msg import PoseStamped
-        from nav_msgs.msg import MapMetaData, OccupancyGrid, Odometry
+        from nav_msgs.msg import MapMetaData, OccupancyGrid
         from rclpy.node import Node
         from sensor_msgs.msg import Image
         from std_msgs.msg import Bool, Float64MultiArray
         from visualization_msgs.msg import MarkerArray
 
-        from explore_seg.qos import MAP_QOS, RELIABLE_QOS
+        from explore_seg.core.limits import InputLimits
+        from explore_seg.core.pose_fusion import PoseFusionParams
+        from explore_seg.pose_input import PoseInput
+        from explore_seg.qos import MAP_QOS, POSE_QOS, RELIABLE_QOS
 
         self.node = Node("demo_monitor", context=context)
         n = self.node
@@ -88,7 +91,12 @@ class Monitor:
         n.create_subscription(PoseStamped, "goal_pose", self._on_goal, RELIABLE_QOS)
         n.create_subscription(Bool, "exploration_done", self._on_done, MAP_QOS)
         n.create_subscription(OccupancyGrid, "map", self._on_map, MAP_QOS)
-        n.create_subscription(Odometry, "odom", self._on_odom, RELIABLE_QOS)
+        # The robot pose as the explorer takes it (odom, or odom fused with SLAM poses).
+        self.pose_input = PoseInput(
+            n, pose_source, PoseFusionParams(), POSE_QOS, map_frame=lambda: "map",
+            limits=InputLimits,
+            warn=lambda key, text: n.get_logger().warn(text, throttle_duration_sec=5.0),
+            drop=lambda text: self._drop("pose", text), on_pose=self._on_pose)
         n.create_subscription(Image, "regions", self._on_regions, MAP_QOS)
         n.create_subscription(MapMetaData, "regions/info", self._on_regions_info, MAP_QOS)
         n.create_subscription(MarkerArray, "object_costmap/markers", self._on_markers,
@@ -130,14 +138,9 @@ class Monitor:
             return
         self._match_regions()
 
-    def _on_odom(self, msg) -> None:
-        from explore_seg import convert
-        try:
-            self.pose = convert.pose2d_from_odometry(msg)
-        except ValueError as err:
-            self._drop("odom", err)
-            return
-        x, y = self.pose[0], self.pose[1]
+    def _on_pose(self, t_ns: int, pose: tuple[float, float, float]) -> None:
+        self.pose = pose
+        x, y = pose[0], pose[1]
         if not self.trail or math.hypot(x - self.trail[-1][0],
                                         y - self.trail[-1][1]) >= self.trail_spacing_m:
             self.trail.append((x, y))

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from scripts.demo_lib.config import ROOT, DemoConfig
+from scripts.demo_lib.config import REAL_ROBOT_SIM, ROOT, DemoConfig
 from sim_bridge.engine import SimParams
 from sim_bridge.lockstep import STRATEGY_SPECS, LockstepParams
 
@@ -29,6 +29,7 @@ def sim_command(cfg: DemoConfig) -> list[str]:
         "camera_fy_px": sp.camera_fy_px * h / sp.camera_height_px,
         "camera_cx_px": (w - 1) / 2.0, "camera_cy_px": (h - 1) / 2.0,
         "output_dir": str(Path(cfg.out_dir) / "sim"),
+        **(REAL_ROBOT_SIM if cfg.real_robot_pose else {}),
     }
     cmd = [sys.executable, "-m", "sim_bridge.node", "--ros-args"]
     for k, v in params.items():
@@ -48,7 +49,8 @@ def explorer_command(cfg: DemoConfig) -> list[str]:
     if cfg.params_file:
         cmd += ["--params-file", cfg.params_file]
     params = {"use_sim_time": True, "strategy": spec.selection,
-              "use_regions": spec.use_regions, "frontier.use_object_costmap": spec.use_objects}
+              "use_regions": spec.use_regions, "frontier.use_object_costmap": spec.use_objects,
+              "pose_topic_type": "fused" if cfg.real_robot_pose else "odom"}
     if spec.use_objects:
         # The oracle backend as in the lock-step runs (LockstepParams): boxes from the
         # simulator's semantic image with 10 % misses and 2 px corner jitter.

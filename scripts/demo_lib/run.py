@@ -46,7 +46,7 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
     # the monitor's context down, and Ctrl-C would not stop the demo and its children.
     rclpy.init(context=ctx, signal_handler_options=SignalHandlerOptions.NO)
     ex = SingleThreadedExecutor(context=ctx)
-    mon = Monitor(ctx)
+    mon = Monitor(ctx, "fused" if cfg.real_robot_pose else "odom")
     ex.add_node(mon.node)
     gif = GifWriter(out / "exploration.gif", max_frames=cfg.gif_max_frames, frame_ms=120,
                     max_side_px=GIF_SIDE_PX)

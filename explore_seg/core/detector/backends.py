@@ -18,6 +18,7 @@ from typing import Protocol
 import numpy as np
 import numpy.typing as npt
 
+from explore_seg.core.detector.devices import DevicePlan, onnx_plan, session_note, torch_plan
 from explore_seg.core.detector.model_files import model_files, read_class_names
 from explore_seg.core.detector.params import DetectorParams
 
@@ -35,6 +36,8 @@ class NetworkBackend(Protocol):
 
     name: str
     input_size: int
+    #: Where it runs (and a note when that is not what was asked for).
+    device: DevicePlan
 
     def infer(self, blob: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
         """Run the network on one letterboxed blob."""
@@ -52,11 +55,16 @@ class TorchBackend:
         Network input side.
     num_threads : int
         Passed to ``torch.set_num_threads`` (process-wide).
+    device : str
+        ``cpu``, ``cuda`` or ``auto`` (:func:`~explore_seg.core.detector.devices.torch_plan`).
+    half : bool
+        fp16 on CUDA.
     """
 
     name = "torch"
 
-    def __init__(self, model_dir: Path, input_size: int, num_threads: int) -> None:
+    def __init__(self, model_dir: Path, input_size: int, num_threads: int,
+                 device: str = "cpu", half: bool = False) -> None:
         import torch
 
         from explore_seg.core.detector.darknet import load_darknet
@@ -66,12 +74,16 @@ class TorchBackend:
         self.input_size = input_size
         torch.set_num_threads(num_threads)
         self._torch = torch
-        self.net = load_darknet(cfg, weights)
+        self.device = torch_plan(device, half, torch.cuda.is_available())
+        self.net = load_darknet(cfg, weights).to(self.device.target)
+        if self.device.half:
+            self.net = self.net.half()
 
     def infer(self, blob: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
+        x = self._torch.from_numpy(blob).to(self.device.target)
         with self._torch.inference_mode():
-            heads = self.net(self._torch.from_numpy(blob))
-        return np.concatenate([h[0].numpy() for h in heads], axis=0)
+            heads = self.net(x.half() if self.device.half else x)
+        return np.concatenate([h[0].float().cpu().numpy() for h in heads], axis=0)
 
 
 def _source_digest(cfg: Path, weights: Path, input_size: int) -> str:
@@ -139,12 +151,14 @@ class OnnxBackend:
         onnxruntime intra-op threads.
     cache_dir : Path, optional
         Where to keep the ONNX file (default: ``model_dir``, falling back to a temp dir).
+    device : str
+        ``cpu``, ``cuda`` or ``auto`` (:func:`~explore_seg.core.detector.devices.onnx_plan`).
     """
 
     name = "onnx"
 
     def __init__(self, model_dir: Path, input_size: int, num_threads: int,
-                 cache_dir: Path | None = None) -> None:
+                 cache_dir: Path | None = None, device: str = "cpu") -> None:
         import onnxruntime as ort
 
         cfg, weights, names = model_files(model_dir)
@@ -160,8 +174,11 @@ class OnnxBackend:
         options.inter_op_num_threads = 1
         options.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
         options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
+        plan = onnx_plan(device, ort.get_available_providers())
         self._session = ort.InferenceSession(str(self.onnx_path), options,
-                                             providers=["CPUExecutionProvider"])
+                                             providers=list(plan.target))
+        used = self._session.get_providers()
+        self.device = DevicePlan(tuple(used), False, session_note(plan, used))
         self._input = self._session.get_inputs()[0].name
 
     @staticmethod
@@ -206,9 +223,11 @@ def make_network(params: DetectorParams, model_dir: Path) -> NetworkBackend:
     onnxruntime or onnx cannot be imported."""
     if params.backend in ("auto", "onnx"):
         try:
-            return OnnxBackend(model_dir, params.input_size, params.num_threads)
+            return OnnxBackend(model_dir, params.input_size, params.num_threads,
+                               device=params.device)
         except ImportError as err:
             if params.backend == "onnx":
                 raise
             LOG.info("onnx backend unavailable (%s): using torch", err)
-    return TorchBackend(model_dir, params.input_size, params.num_threads)
+    return TorchBackend(model_dir, params.input_size, params.num_threads, params.device,
+                        params.half)

@@ -225,7 +225,8 @@ class Yolo(nn.Module):
                                 torch.arange(w, dtype=x.dtype, device=x.device),
                                 indexing="ij")
         grid = torch.stack((gx, gy), dim=-1).view(1, h, w, 1, 2)
-        stride = torch.tensor([input_hw[1] / w, input_hw[0] / h], dtype=x.dtype)
+        stride = torch.tensor([input_hw[1] / w, input_hw[0] / h], dtype=x.dtype,
+                              device=x.device)
         xy = torch.sigmoid(p[..., 0:2])
         if self.scale_x_y != 1.0:
             xy = xy * self.scale_x_y - 0.5 * (self.scale_x_y - 1.0)

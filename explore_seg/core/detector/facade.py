@@ -49,6 +49,10 @@ class Detector:
         self.model_dir = default_model_dir(self.params.model_dir)
         self._network: NetworkBackend | None = None
         self._oracle: OracleBackend | None = None
+        #: Where the network runs (``cpu``, ``cuda fp16``, ``CUDAExecutionProvider``, ...).
+        self.device_name = "cpu"
+        #: One log line when the network could not run where ``device`` asked ('' if it does).
+        self.device_note = ""
         if self.params.backend == "oracle":
             if not sim_class_ids:
                 raise ValueError("backend 'oracle' needs sim_class_ids (sim class name -> id), "
@@ -58,6 +62,8 @@ class Detector:
         else:
             self._network = make_network(self.params, self.model_dir)
             self.backend_name = self._network.name
+            self.device_name = self._network.device.describe()
+            self.device_note = self._network.device.note
 
     @property
     def network(self) -> NetworkBackend | None:

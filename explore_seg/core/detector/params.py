@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from explore_seg.core.detector.devices import DEVICES
 from explore_seg.core.detector.coco import (COCO_NAMES, DARKNET_NAME_ALIASES, DEFAULT_CLASSES,
                                             DEFAULT_ORACLE_CLASS_MAP, parse_oracle_class_map)
 from explore_seg.core.fields import param_meta
@@ -46,6 +47,12 @@ class DetectorParams:
     num_threads: int = field(default=2, metadata=param_meta(
         "CPU threads of the network (torch.set_num_threads is process-wide; onnxruntime "
         "intra-op threads), >= 1", range=(1, 2**31 - 1)))
+    device: str = field(default="cpu", metadata=param_meta(
+        "where the network runs: cpu, cuda (torch on CUDA; onnxruntime with the TensorRT / "
+        "CUDA execution providers) or auto (cuda when present); falls back to the CPU with "
+        "one log line"))
+    half: bool = field(default=False, metadata=param_meta(
+        "torch on CUDA: half-precision (fp16) inference"))
     model_dir: str = field(default="", metadata=param_meta(
         "folder with yolov3-tiny.cfg/.weights and coco.names; empty = "
         "$EXPLORE_SEG_MODEL_DIR, <repo>/models/yolov3-tiny, ~/.cache/explore_seg/yolov3-tiny"))
@@ -72,6 +79,8 @@ class DetectorParams:
     def __post_init__(self) -> None:
         if self.backend not in BACKENDS:
             raise ValueError(f"backend must be one of {BACKENDS}, got {self.backend!r}")
+        if self.device not in DEVICES:
+            raise ValueError(f"device must be one of {DEVICES}, got {self.device!r}")
         if (not NETWORK_STRIDE <= self.input_size <= MAX_INPUT_SIZE
                 or self.input_size % NETWORK_STRIDE):
             raise ValueError(f"input_size must be a multiple of {NETWORK_STRIDE} in "

@@ -9,14 +9,13 @@ from dataclasses import dataclass, field
 from typing import Sequence
 
 from explore_seg.core.fields import param_meta
+from explore_seg.core.pose_fusion import POSE_SOURCE_DOC, POSE_SOURCES
 
 #: Class name given to objects found from laser legs without a detection.
 UNKNOWN_CLASS = "unknown"
 
 #: Values of ``ObjectParams.orientation_method`` (see ``footprint_orientation``).
 ORIENTATION_METHODS = ("pca", "min_area_rect")
-#: Values of ``ObjectCostmapNodeParams.pose_topic_type``.
-POSE_SOURCES = ("odom", "pose")
 
 
 @dataclass(frozen=True)
@@ -316,8 +315,7 @@ class ObjectCostmapNodeParams(ObjectParams):
         "Largest stamp difference between the depth image and the robot pose used for it; "
         "frames without a pose this close are dropped", "s", range=(0.0, math.inf)))
     pose_topic_type: str = field(default="odom", metadata=param_meta(
-        "Where the robot pose in the map frame comes from: 'odom' (Odometry on "
-        "'odom') or 'pose' (PoseWithCovarianceStamped on 'pose')", read_only=True))
+        POSE_SOURCE_DOC, read_only=True))
     map_frame: str = field(default="map", metadata=param_meta(
         "Frame of the published cloud and markers"))
     map_transient_local: bool = field(default=True, metadata=param_meta(

@@ -14,9 +14,11 @@ from dataclasses import dataclass, field
 
 from explore_seg.core.fields import INT_MAX, param_meta
 from explore_seg.core.block_graph import MAX_BLOCK_CELLS
+from explore_seg.core.pose_fusion import POSE_SOURCE_DOC, POSE_SOURCES
 from explore_seg.core.selection.strategies import STRATEGIES
 
-POSE_TOPIC_TYPES = ("odom", "pose")
+#: Robot pose sources (one home: :mod:`explore_seg.core.pose_fusion`).
+POSE_TOPIC_TYPES = POSE_SOURCES
 _INF = math.inf
 
 
@@ -128,9 +130,7 @@ class SelectorNodeParams(SelectionParams):
 
     rate_hz: float = field(default=1.0, metadata=param_meta(
         "decision rate", "Hz", range=(0.0, _INF)))
-    pose_topic_type: str = field(default="odom", metadata=param_meta(
-        "robot pose source: " + " | ".join(POSE_TOPIC_TYPES) + " (odom: Odometry on "
-        "'odom', pose in the map frame; pose: PoseWithCovarianceStamped on 'pose')"))
+    pose_topic_type: str = field(default="odom", metadata=param_meta(POSE_SOURCE_DOC))
     pose_timeout_s: float = field(default=5.0, metadata=param_meta(
         "a pose older than this is not used", "s", range=(0.0, _INF)))
     goal_republish_s: float = _non_negative(

@@ -1,0 +1,82 @@
+"""The simulator's real-robot pose contract (ROS-free): drifting odometry and SLAM poses.
+
+A real robot publishes wheel odometry in an ``odom`` frame that starts at the power-on pose
+(0, 0, 0) and drifts, and slam_toolbox publishes the map-frame ``pose`` only for the scans
+it processes (after ``minimum_travel_distance`` / ``minimum_travel_heading`` of motion;
+none while the robot stands still). :class:`DriftingOdometry` integrates the true motion
+with a distance scale error and a gyro bias while moving; :class:`SlamPoses` decides which
+scans yield a pose. ``sim_bridge`` uses both when ``odom_frame`` is not ``map``.
+"""
+
+from __future__ import annotations
+
+import math
+
+from explore_seg.core.pose_fusion import Pose2D, compose, inverse
+
+#: Below this true displacement per update (m, rad) the robot counts as standing still.
+_STILL_M, _STILL_RAD = 1e-6, 1e-6
+
+
+class DriftingOdometry:
+    """Odometry of a robot whose true map-frame poses are fed in time order.
+
+    ``scale``: travelled distance is multiplied by ``1 + scale``; ``yaw_bias_radps`` is
+    added to the heading while the robot moves (translating or turning).
+
+    Examples
+    --------
+    >>> odo = DriftingOdometry(scale=0.1, yaw_bias_radps=0.0)
+    >>> odo.update(0.0, (5.0, 2.0, 0.0))          # the odom frame starts here
+    (0.0, 0.0, 0.0)
+    >>> odo.update(1.0, (6.0, 2.0, 0.0))          # 1 m true, 1.1 m measured
+    (1.1, 0.0, 0.0)
+    """
+
+    def __init__(self, scale: float, yaw_bias_radps: float) -> None:
+        self.scale = float(scale)
+        self.yaw_bias_radps = float(yaw_bias_radps)
+        self._last: tuple[float, Pose2D] | None = None
+        self._odom: Pose2D = (0.0, 0.0, 0.0)
+
+    def update(self, t_s: float, true_pose: Pose2D) -> Pose2D:
+        """The odometry at ``t_s`` given the true pose then (the first call, or one going
+        back in time, restarts the odom frame at the robot)."""
+        if self._last is None or t_s < self._last[0]:
+            self._last = (t_s, true_pose)
+            self._odom = (0.0, 0.0, 0.0)
+            return self._odom
+        t0, prev = self._last
+        d = compose(inverse(prev), true_pose)
+        if math.hypot(d[0], d[1]) > _STILL_M or abs(d[2]) > _STILL_RAD:
+            k = 1.0 + self.scale
+            d = (d[0] * k, d[1] * k, d[2] + self.yaw_bias_radps * (t_s - t0))
+            self._odom = compose(self._odom, d)
+        self._last = (t_s, true_pose)
+        return self._odom
+
+
+class SlamPoses:
+    """Which scans make a SLAM pose: the first, then one after ``min_travel_m`` of travel
+    or ``min_turn_rad`` of turning since the last (0 and 0: every scan).
+
+    >>> s = SlamPoses(0.5, 0.5)
+    >>> [s.take((x, 0.0, 0.0)) for x in (0.0, 0.2, 0.6, 0.7)]
+    [True, False, True, False]
+    """
+
+    def __init__(self, min_travel_m: float, min_turn_rad: float) -> None:
+        self.min_travel_m = float(min_travel_m)
+        self.min_turn_rad = float(min_turn_rad)
+        self._last: Pose2D | None = None
+
+    def take(self, pose: Pose2D) -> bool:
+        """True when the scan taken at ``pose`` yields a SLAM pose."""
+        last = self._last
+        if last is not None:
+            moved = math.hypot(pose[0] - last[0], pose[1] - last[1])
+            turned = abs(math.atan2(math.sin(pose[2] - last[2]), math.cos(pose[2] - last[2])))
+            if moved < self.min_travel_m and turned < self.min_turn_rad:
+                return False
+        self._last = pose
+        return True
