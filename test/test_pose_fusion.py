@@ -142,7 +142,8 @@ def test_time_going_back_clears_and_reports():
     assert ev is not None and ev.kind == "reset" and "went back" in ev.message
     assert f.resets == 1
     assert f.pose_at(101 * NS, NS) is None                         # the old time line is gone
-    assert f.pose_at(5 * NS, NS // 10) is None                     # no correction on the new one
+    # a new time line starts like a start-up: odometry stands for the map pose until SLAM
+    assert f.pose_at(5 * NS, NS // 10) == (0.0, 0.0, 0.0)
     f.add_map_pose(5 * NS, (1.0, 1.0, 0.0))
     assert f.pose_at(5 * NS, NS // 10) == pytest.approx((1.0, 1.0, 0.0))
 
@@ -221,3 +222,18 @@ def test_pose_at_an_image_stamp_is_interpolated_between_the_bracketing_poses():
     assert poses.at(s // 10, s // 5) == (0.0, 0.0, 3.0)
     assert poses.at(3 * s, s // 5) is None
     assert StampedPoses(s).at(0, s) is None
+
+
+def test_odometry_stands_for_the_map_pose_until_the_first_slam_pose():
+    # slam_toolbox publishes a pose per processed scan only: a robot that stands still after
+    # start-up (or whose first pose was published before we subscribed) has none yet.
+    f = PoseFusion("fused", PoseFusionParams())
+    f.add_odom(0, (0.0, 0.0, 0.0))
+    f.add_odom(10**9, (0.5, 0.0, 0.0))
+    assert f.pose_at(10**9, 10**8) == (0.5, 0.0, 0.0) and f.newest_ns() == 10**9
+    f.add_odom(2 * 10**9, (1.0, 0.0, 0.0))
+    f.add_map_pose(2 * 10**9, (3.0, 1.0, 0.0))     # now SLAM knows better: its frame wins
+    assert f.pose_at(2 * 10**9, 10**8) == pytest.approx((3.0, 1.0, 0.0))
+    off = PoseFusion("fused", PoseFusionParams(odom_until_first_slam=False))
+    off.add_odom(0, (0.0, 0.0, 0.0))
+    assert off.pose_at(0, 10**8) is None and off.latest() is None

@@ -78,6 +78,11 @@ class PoseFusionParams:
         range=(0.0, math.inf)))
     jump_rad: float = field(default=0.3, metadata=param_meta(
         "as jump_m, for the correction's heading", "rad", range=(0.0, math.inf)))
+    odom_until_first_slam: bool = field(default=True, metadata=param_meta(
+        "with 'fused', odometry stands for the map pose until the first SLAM pose arrives "
+        "(slam_toolbox starts map and odom together and publishes a pose only per "
+        "processed scan: a robot standing still after start-up, or whose first pose was "
+        "published before this node subscribed, would otherwise never get a pose)"))
 
     def __post_init__(self) -> None:
         if not self.odom_frame.strip():
@@ -260,9 +265,14 @@ class PoseFusion:
         self._pending = [tp for tp in self._pending if tp[0] <= horizon_ns]
 
     # ----------------------------------------------------------------- queries
+    def _odom_stands_for_map(self) -> bool:
+        """``fused`` before any SLAM pose: odometry is the map pose (see the parameter)."""
+        return (self.source == "fused" and self.params.odom_until_first_slam
+                and not len(self._slam) and not len(self._corr) and not self._pending)
+
     def pose_at(self, t_ns: int, tol_ns: int) -> Pose2D | None:
         """The map-frame pose at ``t_ns`` from inputs within ``tol_ns`` of it; None if none."""
-        if self.source == "odom":
+        if self.source == "odom" or self._odom_stands_for_map():
             return self._odom.at(t_ns, tol_ns)
         if self.source == "fused" and len(self._corr):
             odom = self._odom.at(t_ns, tol_ns)
@@ -280,7 +290,7 @@ class PoseFusion:
 
     def newest_ns(self) -> int | None:
         """Newest stamp a pose can be given for (odometry rate once fused)."""
-        if self.source == "odom":
+        if self.source == "odom" or self._odom_stands_for_map():
             buf = self._odom
         elif self.source == "fused" and len(self._corr) and len(self._odom):
             buf = self._odom
