@@ -14,6 +14,10 @@ published per map update. Each result is published as
   while it has a subscriber;
 * ``~/timing`` (std_msgs/Float64): wall time of the update in milliseconds.
 
+While ``exploration_done`` is true (and ``idle_when_done``), the timer is paused
+(:class:`~explore_seg.done_gate.DoneGate`); the newest map is kept and segmented when the
+flag turns false.
+
 Ids of regions that did not change stay the same between updates (DuDe spec shared/docs/dude.md §12).
 """
 
@@ -34,6 +38,7 @@ from explore_seg.core.grid import GridMap
 from explore_seg.core.limits import InputLimits
 from explore_seg.core.segmentation import (IncrementalSegmenter, SegmentationNodeParams,
                                            SegmentationParams)
+from explore_seg.done_gate import DoneGate
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, map_qos
@@ -86,6 +91,8 @@ class SegmentationNode(Node):
         self.create_subscription(OccupancyGrid, "map", self._on_map,
                                  map_qos(p.map_transient_local))
         self._timer = self.create_timer(p.process_period_s, self._tick)
+        self._done_gate = DoneGate(self, "segmentation", lambda: [self._timer],
+                                   lambda: self.params.idle_when_done)
         self._p.on_change(self._params_changed)
 
     @staticmethod
@@ -104,6 +111,11 @@ class SegmentationNode(Node):
         return self._state
 
     @property
+    def paused(self) -> bool:
+        """True while idle after exploration_done (see :class:`DoneGate`)."""
+        return self._done_gate.paused
+
+    @property
     def segmenter(self) -> IncrementalSegmenter:
         """The segmenter (its ``last_update_info`` tells what the last update did)."""
         return self._seg
@@ -117,7 +129,9 @@ class SegmentationNode(Node):
         if new.process_period_s != old.process_period_s:
             self._timer.cancel()
             self.destroy_timer(self._timer)
-            self._timer = self.create_timer(new.process_period_s, self._tick)
+            self._timer = self._done_gate.adopt(
+                self.create_timer(new.process_period_s, self._tick))
+        self._done_gate.update()                # idle_when_done
 
     def _restart_segmenter(self) -> None:
         """After a failed update: the next one is a full run (no half-updated state)."""

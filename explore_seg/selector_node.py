@@ -13,6 +13,9 @@ One timer ``_tick`` on the ROS clock (``rate_hz``) runs the state machine::
     WAITING_FOR_MAP -> WAITING_FOR_POSE -> SELECTING <-> NAVIGATING -> DONE
     (any) -> STOPPED via ~/stop; STOPPED/DONE -> running via ~/resume or ~/start
 
+In DONE the node idles: the tick returns at once and the pose subscription is dropped
+until ``exploration_done`` turns false again (:class:`~explore_seg.done_gate.DoneGate`).
+
 Bad input never raises out of a callback: malformed messages are dropped (throttled
 warning), the last good map/pose/labels are kept; labels whose geometry differs from the
 map are ignored; a robot outside the map or walled in gets no new goal (the current one
@@ -40,6 +43,7 @@ from explore_seg.core.grid import GridMap, resample_array
 from explore_seg.core.limits import InputLimits
 from explore_seg.core.selection import (REGION_STRATEGIES, Action, Goal, NavOutcome,
                                         SelectorNodeParams)
+from explore_seg.done_gate import DoneGate
 from explore_seg.frontier_msgs import FrontierPublisher
 from explore_seg.frontier_node import FRONTIER_PREFIX
 from explore_seg.nav_client import NavClient
@@ -109,11 +113,14 @@ class TargetSelectorNode(Node):
         self.create_subscription(OccupancyGrid, "object_costmap", self._on_layer, qos)
         self.create_subscription(Image, "regions", self._on_regions, qos)
         self.create_subscription(MapMetaData, "regions/info", self._on_regions_info, qos)
+        # The pose stream is unsubscribed while exploration_done is true (idle after done;
+        # ~/start or ~/resume publish false, which subscribes again).
+        self._done_gate = DoneGate(self, "pose subscription", lambda: [], lambda: True)
         if p.pose_topic_type == "odom":
-            self.create_subscription(Odometry, "odom", self._on_odom, RELIABLE_QOS)
+            self._done_gate.subscribe(Odometry, "odom", self._on_odom, RELIABLE_QOS)
         else:
-            self.create_subscription(PoseWithCovarianceStamped, "pose", self._on_pose,
-                                     RELIABLE_QOS)
+            self._done_gate.subscribe(PoseWithCovarianceStamped, "pose", self._on_pose,
+                                      RELIABLE_QOS)
         self._nav = (NavClient(self, p.nav_action, p.nav_accept_timeout_s, p.cancel_timeout_s,
                                self._warn) if p.nav_action else None)
         self.create_service(Trigger, "~/start", self._srv_start)

@@ -110,6 +110,10 @@ class StallWatchdog:
         #: The last reason reported (empty before the first stall).
         self.last_reason = ""
 
+    def reset(self) -> None:
+        """Start counting afresh (e.g. after the node was paused on purpose)."""
+        self._idle = 0
+
     def tick(self, waiting: bool, produced: bool, reason: Callable[[], str]) -> str | None:
         """Count one period; the reason (computed only then) every ``periods`` stalled
         ticks, else None. ``waiting``: inputs are there but could not be used."""

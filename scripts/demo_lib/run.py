@@ -59,7 +59,7 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
         if cfg.explorer:
             children.append(Child("explorer", explorer_command(cfg),
                                    out / "logs" / "explorer.log", env))
-            _wait_for_explorer(cfg, ex, mon, children[0], t0)
+            wait_for_explorer(cfg, ex, mon, children[0], t0)
         children.insert(0, Child("sim_bridge", sim_command(cfg),
                                   out / "logs" / "sim_bridge.log", env))
         log(f"[demo] world {cfg.world}, strategy {cfg.strategy}, seed {cfg.seed}, "
@@ -97,7 +97,7 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
 STOP = threading.Event()
 
 
-def _wait_for_explorer(cfg: DemoConfig, ex, mon: Monitor, child: Child, t0: float) -> None:
+def wait_for_explorer(cfg: DemoConfig, ex, mon: Monitor, child: Child, t0: float) -> None:
     """Spin until the explorer publishes ``goal_pose`` (its selector is up).
 
     Raises
