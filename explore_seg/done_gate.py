@@ -8,7 +8,7 @@ the input subscriptions made through :meth:`DoneGate.subscribe` (sensor streams:
 camera, scan), which it makes again when the flag turns false (``~/start`` or ``~/resume``
 of the selector); the node keeps its state, and inputs that are not paused (the latched
 map) keep being stored, so the first tick after the pause works on fresh data. Each
-transition is logged once at info level.
+transition is logged at info level (at most once per :data:`LOG_PERIOD_S`).
 
 Why subscriptions too: with the timers cancelled, rclpy's executor still wakes for every
 message (about 1 ms each for the ``explorer`` process's three nodes), and odometry at the
@@ -24,7 +24,11 @@ from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 from std_msgs.msg import Bool
 
+from explore_seg.node_util import WarnThrottle
 from explore_seg.qos import MAP_QOS
+
+#: Seconds between two logged pauses (or resumes) of one node: a flapping flag is one line.
+LOG_PERIOD_S = 5.0
 
 
 class DoneGate:
@@ -50,6 +54,7 @@ class DoneGate:
         self.pauses = 0
         self._specs: list[tuple[tuple[Any, ...], dict[str, Any]]] = []
         self._subs: list[Subscription] = []
+        self._log = WarnThrottle(node, LOG_PERIOD_S)
         node.create_subscription(Bool, "exploration_done", self._on_done, MAP_QOS)
 
     def subscribe(self, *args: Any, **kwargs: Any) -> None:
@@ -79,7 +84,6 @@ class DoneGate:
         if want == self.paused:
             return
         self.paused = want
-        log = self._node.get_logger()
         if want:
             self.pauses += 1
             for t in self._timers():
@@ -87,13 +91,13 @@ class DoneGate:
             for sub in self._subs:
                 self._node.destroy_subscription(sub)
             self._subs = []
-            log.info(f"exploration done: {self._what} paused until exploration_done "
-                     "turns false (idle_when_done)")
+            self._log.info("pause", f"exploration done: {self._what} paused until "
+                                    "exploration_done turns false (idle_when_done)")
             return
         self._subs = [self._node.create_subscription(*a, **kw) for a, kw in self._specs]
         for t in self._timers():
             t.reset()
         if self._on_resume is not None:
             self._on_resume()
-        log.info(f"{self._what} resumed" + ("" if self._done else
-                                            " (exploration_done is false)"))
+        self._log.info("resume", f"{self._what} resumed" + (
+            "" if self._done else " (exploration_done is false)"))

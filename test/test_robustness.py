@@ -183,6 +183,17 @@ def test_inflation_with_a_huge_kernel_is_bounded_and_exact():
     np.testing.assert_array_equal(ref, d2 <= 32 * 32)
 
 
+def test_a_map_spanning_more_than_the_coordinate_limit_is_rejected():
+    # found by the fuzz suite: resolution 1e300 passed, and cell centres became inf/NaN
+    grid = GridMap(np.zeros((4, 3), np.int8), 0.05)
+    msg = convert.grid_to_msg(grid)
+    msg.info.resolution = 1e300
+    with pytest.raises(ValueError, match=r"map spans 4e\+300 m \(3x4 cells at 1e\+300 m\)"):
+        convert.grid_from_msg(msg)
+    msg.info.resolution = 0.05
+    assert convert.grid_from_msg(msg).same_geometry(grid)
+
+
 # ------------------------------------------------------------------ finding 5
 def test_a_negative_stamp_is_rejected_at_the_boundary(ros):
     grid = GridMap(np.zeros((5, 5), np.int8), 0.05)

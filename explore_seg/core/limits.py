@@ -74,6 +74,12 @@ class InputLimits:
         if not (math.isfinite(res) and res >= self.min_resolution_m):
             raise ValueError(f"map resolution {res} m is below input.min_resolution_m = "
                              f"{self.min_resolution_m} m (or not finite)")
+        extent = max(w, h) * res
+        if extent > 2 * self.max_coordinate_m:
+            # e.g. resolution 1e300: cell centres overflow to inf and NaN downstream
+            raise ValueError(f"map spans {extent:.6g} m ({w}x{h} cells at {res:.6g} m), more "
+                             f"than 2 * input.max_coordinate_m = "
+                             f"{2 * self.max_coordinate_m:g} m")
 
     def check_xy(self, x_m: float, y_m: float, what: str) -> None:
         """Raise ``ValueError`` when (x, y) is non-finite or beyond ``max_coordinate_m``."""
