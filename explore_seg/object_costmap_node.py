@@ -280,6 +280,8 @@ class ObjectCostmapNode(Node):
         try:
             convert.check_frame(msg.header.frame_id, self.params.map_frame, "pose")
             pose = to_2d(msg, self._lp.params)
+            if self._grid is not None:
+                self._lp.params.check_near_map(pose[0], pose[1], self._grid)
             t_ns = convert.checked_stamp_ns(msg.header.stamp, "pose")
         except ValueError as err:
             self._drop("pose", str(err))

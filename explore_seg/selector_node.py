@@ -209,6 +209,8 @@ class TargetSelectorNode(Node):
             if self._grid is not None:
                 convert.check_frame(msg.header.frame_id, self._grid.frame_id, "pose")
             pose = to_2d(msg, self._lp.params)
+            if self._grid is not None:
+                self._lp.params.check_near_map(pose[0], pose[1], self._grid)
             self._pose_stamp_ns = convert.checked_stamp_ns(msg.header.stamp, "pose")
         except ValueError as err:
             self._warn("pose", f"dropped {type(msg).__name__}: {err}")

@@ -221,6 +221,21 @@ def test_absurd_poses_are_dropped_by_the_selector_and_the_object_costmap(ros, x)
     assert not cm._poses and "input.max_coordinate_m" in cm.last_drop["pose"]
 
 
+def test_poses_far_outside_the_map_are_dropped_by_the_selector_and_the_object_costmap(ros):
+    grid = GridMap(np.zeros((40, 60), np.int8), 0.05, (1.0, -1.0))    # x 1..4, y -1..1 m
+    sel = _selector(ros, **{"input.pose_map_margin_m": 2.0})
+    cm = _costmap(ros, **{"input.pose_map_margin_m": 2.0})
+    for node in (sel, cm):
+        node._on_map(convert.grid_to_msg(grid))
+        node._on_odom(_odom(S, x=5.5))                       # 1.5 m beyond x = 4: kept
+        node._on_odom(_odom(S, x=168.4))                     # 164 m beyond: dropped
+    assert sel._pose[0] == pytest.approx(5.5)
+    assert "pose (168.400, 0.000) lies 164.40 m outside the map (x 1.00..4.00, y " \
+           "-1.00..1.00 m), more than input.pose_map_margin_m = 2 m" in sel._warn.text("pose")
+    assert [p[0] for _, p in cm._poses] == [pytest.approx(5.5)]
+    assert "164.40 m outside the map" in cm.last_drop["pose"]
+
+
 # ------------------------------------------------------------------ finding 7
 def test_the_simulator_logs_a_repeated_goal_once(ros, tmp_path):
     from sim_bridge.node import SimBridgeNode
