@@ -19,6 +19,9 @@ While ``exploration_done`` is true (and ``idle_when_done``), the timer is paused
 flag turns false.
 
 Ids of regions that did not change stay the same between updates (DuDe spec shared/docs/dude.md §12).
+When the map stamps or the node clock jump back by more than ``input.clock_jump_s`` (a
+simulator restart, a new SLAM session) the incremental state is dropped: the next map is
+segmented from scratch (:class:`~explore_seg.time_guard.TimeGuard`; logged once).
 """
 
 from __future__ import annotations
@@ -42,6 +45,7 @@ from explore_seg.done_gate import DoneGate
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, map_qos
+from explore_seg.time_guard import TimeGuard, jump_warning
 
 #: Seconds between repeated warnings of one kind.
 _WARN_PERIOD_S = 5.0
@@ -83,6 +87,10 @@ class SegmentationNode(Node):
         self.processed = 0
         self.skipped = 0
         self.last_labels: npt.NDArray[np.int32] | None = None
+        self._time = TimeGuard(self._lp.params.clock_jump_s)
+        self._lp.on_change(lambda old, new: setattr(self._time, "jump_s", new.clock_jump_s))
+        #: Clock jumps seen (map stamps or node clock).
+        self.time_jumps = 0
 
         self._pub_regions = self.create_publisher(Image, "regions", MAP_QOS)
         self._pub_info = self.create_publisher(MapMetaData, "regions/info", MAP_QOS)
@@ -91,8 +99,10 @@ class SegmentationNode(Node):
         self.create_subscription(OccupancyGrid, "map", self._on_map,
                                  map_qos(p.map_transient_local))
         self._timer = self.create_timer(p.process_period_s, self._tick)
+        # After a pause the clock has moved on: no jump (the map stamps are kept).
         self._done_gate = DoneGate(self, "segmentation", lambda: [self._timer],
-                                   lambda: self.params.idle_when_done)
+                                   lambda: self.params.idle_when_done,
+                                   lambda: self._time.forget("clock"))
         self._p.on_change(self._params_changed)
 
     @staticmethod
@@ -142,8 +152,20 @@ class SegmentationNode(Node):
             self.skipped += 1
         self._latest = msg
 
+    def _observe(self, stream: str, t_ns: int, expected_gap_ns: int = 0) -> None:
+        """Feed the time model; a jump back restarts the segmenter (a new time line)."""
+        jump = self._time.observe(stream, t_ns, expected_gap_ns)
+        if jump is None:
+            return
+        self.time_jumps += 1
+        if jump.backwards:
+            self._restart_segmenter()
+        self._warn(*jump_warning(jump, "the next map is segmented from scratch"))
+
     @failsafe("segmentation update", on_error="_restart_segmenter")
     def _tick(self) -> None:
+        self._observe("clock", self.get_clock().now().nanoseconds,
+                      int(self.params.process_period_s * 1e9))
         msg, self._latest = self._latest, None
         if msg is None:
             return
@@ -152,6 +174,8 @@ class SegmentationNode(Node):
         except ValueError as err:
             self._warn("map", f"dropped map: {err}")
             return
+        if grid.stamp_ns > 0:                   # 0: an unstamped map, no time line
+            self._observe("map", grid.stamp_ns)
         self._state = State.RUNNING
         t0 = time.perf_counter()
         if not self.params.incremental:

@@ -87,9 +87,18 @@ class TimeGuard:
                 f"{'ahead of' if d > 0 else 'behind'} {b} stamps ({ta / _NS:.3f} vs "
                 f"{tb / _NS:.3f} s); is one source on another clock (use_sim_time)?")
 
-    def forget(self) -> None:
-        """Forget every stream."""
-        self._newest.clear()
+    def forget(self, *streams: str) -> None:
+        """Forget the named streams (every stream when none is named)."""
+        if not streams:
+            self._newest.clear()
+        for name in streams:
+            self._newest.pop(name, None)
+
+
+def jump_warning(jump: Jump, after_back: str) -> tuple[str, str]:
+    """(throttle key, log line) for a jump; ``after_back`` says what a jump back reset."""
+    return (f"jump_{jump.stream}",
+            jump.describe() + (f"; {after_back}" if jump.backwards and after_back else ""))
 
 
 class StallWatchdog:
