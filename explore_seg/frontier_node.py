@@ -31,7 +31,7 @@ from explore_seg.frontier_msgs import FrontierPublisher
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import map_qos
-from explore_seg.time_guard import TimeGuard, jump_warning
+from explore_seg.time_guard import TimeGuard
 
 #: Seconds between repeated warnings of one kind.
 _WARN_PERIOD_S = 5.0
@@ -67,8 +67,6 @@ class FrontierDetectorNode(Node):
         self.failures = 0          # cycles lost to an exception (node_util.failsafe)
         self._time = TimeGuard(self._lp.params.clock_jump_s)
         self._lp.on_change(lambda old, new: setattr(self._time, "jump_s", new.clock_jump_s))
-        #: Clock jumps seen (map, layer or clock).
-        self.time_jumps = 0
 
         self._pub_frontiers = FrontierPublisher(self)
         self._pub_timing = self.create_publisher(Float64MultiArray, "~/timing", 10)
@@ -107,15 +105,17 @@ class FrontierDetectorNode(Node):
         """Feed the time model; map stamps going back drop the layer of the old time line."""
         if t_ns == 0 and stream != "clock":
             return                              # an unstamped map: no time line
-        jump = self._time.observe(stream, t_ns, expected_gap_ns)
-        if jump is None:
-            return
-        self.time_jumps += 1
-        dropped = jump.backwards and stream == "map" and self._layer is not None
-        if dropped:
+        def drop_layer() -> str:
+            if stream != "map" or self._layer is None:
+                return ""
             self._layer = None
-        self._warn(*jump_warning(jump, "object layer of the old time line dropped"
-                                 if dropped else ""))
+            return "object layer of the old time line dropped"
+        self._time.track(stream, t_ns, self._warn, drop_layer, expected_gap_ns)
+
+    @property
+    def time_jumps(self) -> int:
+        """Clock jumps seen (map, layer or clock)."""
+        return self._time.jumps
 
     def _on_map(self, msg: OccupancyGrid) -> None:
         try:

@@ -45,7 +45,7 @@ from explore_seg.done_gate import DoneGate
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, map_qos
-from explore_seg.time_guard import TimeGuard, jump_warning
+from explore_seg.time_guard import TimeGuard
 
 #: Seconds between repeated warnings of one kind.
 _WARN_PERIOD_S = 5.0
@@ -89,8 +89,6 @@ class SegmentationNode(Node):
         self.last_labels: npt.NDArray[np.int32] | None = None
         self._time = TimeGuard(self._lp.params.clock_jump_s)
         self._lp.on_change(lambda old, new: setattr(self._time, "jump_s", new.clock_jump_s))
-        #: Clock jumps seen (map stamps or node clock).
-        self.time_jumps = 0
 
         self._pub_regions = self.create_publisher(Image, "regions", MAP_QOS)
         self._pub_info = self.create_publisher(MapMetaData, "regions/info", MAP_QOS)
@@ -154,13 +152,15 @@ class SegmentationNode(Node):
 
     def _observe(self, stream: str, t_ns: int, expected_gap_ns: int = 0) -> None:
         """Feed the time model; a jump back restarts the segmenter (a new time line)."""
-        jump = self._time.observe(stream, t_ns, expected_gap_ns)
-        if jump is None:
-            return
-        self.time_jumps += 1
-        if jump.backwards:
+        def restart() -> str:
             self._restart_segmenter()
-        self._warn(*jump_warning(jump, "the next map is segmented from scratch"))
+            return "the next map is segmented from scratch"
+        self._time.track(stream, t_ns, self._warn, restart, expected_gap_ns)
+
+    @property
+    def time_jumps(self) -> int:
+        """Clock jumps seen (map stamps or node clock)."""
+        return self._time.jumps
 
     @failsafe("segmentation update", on_error="_restart_segmenter")
     def _tick(self) -> None:

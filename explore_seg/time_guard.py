@@ -56,6 +56,8 @@ class TimeGuard:
     def __init__(self, jump_s: float) -> None:
         self.jump_s = float(jump_s)
         self._newest: dict[str, int] = {}
+        #: Jumps seen by :meth:`track`.
+        self.jumps = 0
 
     def observe(self, stream: str, t_ns: int, expected_gap_ns: int = 0) -> Jump | None:
         """Record ``t_ns`` of ``stream``; a :class:`Jump` when it went back by more than
@@ -71,6 +73,19 @@ class TimeGuard:
             return Jump(stream, last, t_ns)
         self._newest[stream] = max(last, t_ns)
         return None
+
+    def track(self, stream: str, t_ns: int, warn: Callable[[str, str], None],
+              on_back: Callable[[], str] | None = None, expected_gap_ns: int = 0) -> bool:
+        """:meth:`observe`, then on a jump: count it (:attr:`jumps`), call ``on_back`` if
+        it went back (it returns what it reset, for the log line) and ``warn(key, line)``
+        (a throttled warning). True when it jumped."""
+        jump = self.observe(stream, t_ns, expected_gap_ns)
+        if jump is None:
+            return False
+        self.jumps += 1
+        what = on_back() if (jump.backwards and on_back is not None) else ""
+        warn(*jump_warning(jump, what))
+        return True
 
     def newest(self, stream: str) -> int | None:
         """Newest stamp of ``stream`` (ns), None before the first."""

@@ -34,8 +34,8 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from scripts.demo_lib import STOP, Child, DemoConfig, DemoError, Monitor, explorer_command, \
-    sim_command, wait_for_explorer  # noqa: E402
+from scripts.demo_lib import STOP, Child, DemoConfig, DemoError, Monitor, child_env, \
+    explorer_command, sim_command, start_monitor, stop_monitor, wait_for_explorer  # noqa: E402
 
 _TICK = os.sysconf("SC_CLK_TCK")
 _PAGE = os.sysconf("SC_PAGE_SIZE")
@@ -125,21 +125,10 @@ def _line(s: Sample, prev: Sample | None) -> str:
 def soak(cfg: DemoConfig, minutes: float, sample_s: float, after_done_s: float,
          log=print) -> dict:
     """Run the soak (see the module docstring); returns what ``soak.json`` holds."""
-    import rclpy
-    from rclpy.context import Context
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.signals import SignalHandlerOptions
-
     out = Path(cfg.out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
-    env.setdefault("ROS_LOG_DIR", str(out / "logs" / "ros"))
-    ctx = Context()
-    rclpy.init(context=ctx, signal_handler_options=SignalHandlerOptions.NO)
-    ex = SingleThreadedExecutor(context=ctx)
-    mon = Monitor(ctx)
-    ex.add_node(mon.node)
+    env = child_env(out)
+    ctx, ex, mon = start_monitor()
     children: list[Child] = []
     samples: list[Sample] = []
     done_at: Sample | None = None
@@ -176,10 +165,7 @@ def soak(cfg: DemoConfig, minutes: float, sample_s: float, after_done_s: float,
     finally:
         for ch in reversed(children):
             ch.stop()
-        ex.remove_node(mon.node)
-        mon.node.destroy_node()
-        ex.shutdown()
-        rclpy.try_shutdown(context=ctx)
+        stop_monitor(ctx, ex, mon)
     result = {"config": {"world": cfg.world, "strategy": cfg.strategy, "rtf":
                          cfg.real_time_factor, "minutes": minutes, "sample_s": sample_s,
                          "after_done_s": after_done_s},

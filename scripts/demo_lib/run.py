@@ -29,25 +29,12 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
         When a child dies, nothing progresses or the wall timeout passes; the outputs
         gathered so far are written first.
     """
-    import rclpy
-    from rclpy.context import Context
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.signals import SignalHandlerOptions
-
     from sim_bridge.render import GifWriter
 
     out = Path(cfg.out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
-    env.setdefault("ROS_LOG_DIR", str(out / "logs" / "ros"))
-    ctx = Context()
-    # Python's own SIGINT handling (KeyboardInterrupt): rclpy's handler would only shut
-    # the monitor's context down, and Ctrl-C would not stop the demo and its children.
-    rclpy.init(context=ctx, signal_handler_options=SignalHandlerOptions.NO)
-    ex = SingleThreadedExecutor(context=ctx)
-    mon = Monitor(ctx)
-    ex.add_node(mon.node)
+    env = child_env(out)
+    ctx, ex, mon = start_monitor()
     gif = GifWriter(out / "exploration.gif", max_frames=cfg.gif_max_frames, frame_ms=120,
                     max_side_px=GIF_SIDE_PX)
     children: list[Child] = []
@@ -83,13 +70,45 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
         for ch in reversed(children):
             ch.stop()
     metrics = write_outputs(cfg, out, mon, gif, sim_json, stop_reason, error, wall)
+    stop_monitor(ctx, ex, mon)
+    if error:
+        raise DemoError(error)
+    return metrics
+
+
+def child_env(out: Path) -> dict[str, str]:
+    """The children's environment: this repository importable, ROS logs under ``out``."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
+    env.setdefault("ROS_LOG_DIR", str(out / "logs" / "ros"))
+    return env
+
+
+def start_monitor():
+    """(context, executor, :class:`Monitor`) on a private rclpy context."""
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.signals import SignalHandlerOptions
+
+    ctx = Context()
+    # Python's own SIGINT handling (KeyboardInterrupt): rclpy's handler would only shut
+    # the monitor's context down, and Ctrl-C would not stop the demo and its children.
+    rclpy.init(context=ctx, signal_handler_options=SignalHandlerOptions.NO)
+    ex = SingleThreadedExecutor(context=ctx)
+    mon = Monitor(ctx)
+    ex.add_node(mon.node)
+    return ctx, ex, mon
+
+
+def stop_monitor(ctx, ex, mon: Monitor) -> None:
+    """Destroy the monitor node and shut its context down."""
+    import rclpy
+
     ex.remove_node(mon.node)
     mon.node.destroy_node()
     ex.shutdown()
     rclpy.try_shutdown(context=ctx)
-    if error:
-        raise DemoError(error)
-    return metrics
 
 
 #: Set by SIGINT / SIGTERM (see :func:`main`): the demo stops its children, writes its
