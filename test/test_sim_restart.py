@@ -20,8 +20,10 @@ SIM_TIME = Parameter("use_sim_time", value=True)
 def _sim(ros, tmp_path, k: int) -> SimBridgeNode:
     return ros.add(SimBridgeNode(context=ros.context, parameter_overrides=[
         Parameter("world", value="small_cluttered"),
-        # 2x: all nodes share this process's executor; faster, odometry queues up
-        Parameter("real_time_factor", value=2.0), Parameter("enable_camera", value=True),
+        # 2x and a 20 Hz tick (odometry rate): all nodes share this process's executor;
+        # faster, odometry queues up on a loaded machine and frames wait for poses
+        Parameter("real_time_factor", value=2.0), Parameter("tick_period_s", value=0.05),
+        Parameter("enable_camera", value=True),
         Parameter("camera_width_px", value=160), Parameter("camera_height_px", value=120),
         Parameter("camera_fx_px", value=131.0), Parameter("camera_fy_px", value=131.0),
         Parameter("camera_cx_px", value=79.5), Parameter("camera_cy_px", value=59.5),
