@@ -7,7 +7,10 @@ publishes every frontier cell (``frontiers``), one point per group at its cPoint
 (``frontiers/groups``), RViz markers (``frontiers/markers``) and the processing time
 (``~/timing``). Detection parameters are bound under ``frontier.`` (shared with
 ``target_selector``, which detects frontiers itself: the ``explorer`` process does not
-run this node).
+run this node). Time model (:class:`~explore_seg.time_guard.TimeGuard`): when the map stamps
+jump back by more than ``input.clock_jump_s`` (a simulator restart, a new SLAM session) the
+object layer of the old time line is dropped until a new one arrives; jumps of the map,
+layer or clock and a layer whose stamps lie far from the map's are logged once.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from explore_seg.frontier_msgs import FrontierPublisher
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import map_qos
+from explore_seg.time_guard import TimeGuard
 
 #: Seconds between repeated warnings of one kind.
 _WARN_PERIOD_S = 5.0
@@ -61,6 +65,8 @@ class FrontierDetectorNode(Node):
         self.runs = 0
         self._warn = WarnThrottle(self, _WARN_PERIOD_S)
         self.failures = 0          # cycles lost to an exception (node_util.failsafe)
+        self._time = TimeGuard(self._lp.params.clock_jump_s)
+        self._lp.on_change(lambda old, new: setattr(self._time, "jump_s", new.clock_jump_s))
 
         self._pub_frontiers = FrontierPublisher(self)
         self._pub_timing = self.create_publisher(Float64MultiArray, "~/timing", 10)
@@ -95,12 +101,30 @@ class FrontierDetectorNode(Node):
             self.destroy_timer(self._timer)
             self._timer = self.create_timer(1.0 / new.rate_hz, self._tick)
 
+    def _observe(self, stream: str, t_ns: int, expected_gap_ns: int = 0) -> None:
+        """Feed the time model; map stamps going back drop the layer of the old time line."""
+        if t_ns == 0 and stream != "clock":
+            return                              # an unstamped map: no time line
+        def drop_layer() -> str:
+            if stream != "map" or self._layer is None:
+                return ""
+            self._layer = None
+            return "object layer of the old time line dropped"
+        self._time.track(stream, t_ns, self._warn, drop_layer, expected_gap_ns)
+
+    @property
+    def time_jumps(self) -> int:
+        """Clock jumps seen (map, layer or clock)."""
+        return self._time.jumps
+
     def _on_map(self, msg: OccupancyGrid) -> None:
         try:
             self._grid = convert.grid_from_msg(msg, self._lp.params)
             self._dirty = True
         except ValueError as err:
             self._warn("map", f"dropped map: {err}")
+            return
+        self._observe("map", self._grid.stamp_ns)
 
     def _on_layer(self, msg: OccupancyGrid) -> None:
         try:
@@ -108,9 +132,13 @@ class FrontierDetectorNode(Node):
             self._dirty = True
         except ValueError as err:
             self._warn("object_costmap", f"dropped object_costmap: {err}")
+            return
+        self._observe("object_costmap", self._layer.stamp_ns)
 
     @failsafe("frontier detection")
     def _tick(self) -> None:
+        self._observe("clock", self.get_clock().now().nanoseconds,
+                      int(1e9 / self.node_params.rate_hz))
         if self._grid is None:
             self._state = State.WAITING_FOR_MAP
             return
@@ -123,6 +151,9 @@ class FrontierDetectorNode(Node):
         det = detect_frontiers(grid, self._layer, self.params)
         if det.layer_warning:
             self._warn("layer_frame", det.layer_warning)
+        skew = self._time.disagreement("map", "object_costmap") if self._layer else None
+        if skew:
+            self._warn("layer_time", f"object_costmap used, but {skew}")
         self.frontiers = det.frontiers
         t1 = time.perf_counter()
         self.runs += 1

@@ -11,7 +11,9 @@ boxes into an :class:`~explore_seg.core.objects.ObjectMap` and publishes the lay
 markers only while they have subscribers). Frames that arrive while a frame is processed
 are dropped (only the newest few are kept for pairing); when the node processes less than
 half of the frames it could (``rate_hz`` or the camera's rate, whichever is lower) over
-``_LAG_WINDOW_S`` of ROS time, it warns: the layer then lags behind the robot.
+``_LAG_WINDOW_S`` of ROS time, it warns: the layer then lags behind the robot. While
+``exploration_done`` is true (and ``idle_when_done``) the timer is paused
+(:class:`~explore_seg.done_gate.DoneGate`).
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from explore_seg.core.pose_fusion import PoseFusionParams
 from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D,
                                       ObjectCostmapNodeParams, ObjectMap, WallMask,
                                       load_priors, parse_class_ids, process_frame, wall_mask)
+from explore_seg.done_gate import DoneGate
 from explore_seg.node_util import WarnThrottle, config_file, failsafe, run
 from explore_seg.object_inputs import purge_newer, wait_reason
 from explore_seg.params import ParamBinding
@@ -129,11 +132,14 @@ class ObjectCostmapNode(Node):
         self._pub_markers = self.create_publisher(MarkerArray, "object_costmap/markers", 1)
         self._pub_timing = self.create_publisher(Float64MultiArray, "~/timing", 10)
 
-        self.create_subscription(Image, "camera/color/image_raw", self._on_color, SENSOR_QOS)
-        self.create_subscription(Image, "camera/depth/image_raw", self._on_depth, SENSOR_QOS)
-        self.create_subscription(CameraInfo, "camera/color/camera_info", self._on_info,
-                                 SENSOR_QOS)
-        self.create_subscription(LaserScan, "scan", self._on_scan, SENSOR_QOS)
+        # Sensor streams through the gate: unsubscribed while idle after exploration_done.
+        self._done_gate = DoneGate(self, "object costmap", lambda: [self._timer],
+                                   lambda: self.params.idle_when_done, self._resumed)
+        sub = self._done_gate.subscribe
+        sub(Image, "camera/color/image_raw", self._on_color, SENSOR_QOS)
+        sub(Image, "camera/depth/image_raw", self._on_depth, SENSOR_QOS)
+        sub(CameraInfo, "camera/color/camera_info", self._on_info, SENSOR_QOS)
+        sub(LaserScan, "scan", self._on_scan, SENSOR_QOS)
         self.create_subscription(OccupancyGrid, "map", self._on_map,
                                  map_qos(p.map_transient_local))
         # Poses in their own callback group: with a multi-threaded executor they keep
@@ -144,10 +150,10 @@ class ObjectCostmapNode(Node):
             map_frame=lambda: self.params.map_frame, limits=lambda: self._lp.params,
             warn=self._warn, drop=lambda text: self._drop("pose", text),
             on_pose=self._on_robot_pose, on_stamp=self._observe,
-            callback_group=MutuallyExclusiveCallbackGroup())
+            callback_group=MutuallyExclusiveCallbackGroup(), subscribe=sub,
+            near_map=self._check_near_map)
         # Used (and required for pairing) only by the oracle detector backend.
-        self.create_subscription(Image, "camera/semantic/image_raw", self._on_semantic,
-                                 SENSOR_QOS)
+        sub(Image, "camera/semantic/image_raw", self._on_semantic, SENSOR_QOS)
         self._timer = self.create_timer(1.0 / (p.rate_hz * _POLLS_PER_PERIOD), self._tick)
         self._p.on_change(self._params_changed)
         self._dp.on_change(self._detector_params_changed)
@@ -182,8 +188,21 @@ class ObjectCostmapNode(Node):
         if new.rate_hz != old.rate_hz:
             self._timer.cancel()
             self.destroy_timer(self._timer)
-            self._timer = self.create_timer(1.0 / (new.rate_hz * _POLLS_PER_PERIOD),
-                                            self._tick)
+            self._timer = self._done_gate.adopt(self.create_timer(
+                1.0 / (new.rate_hz * _POLLS_PER_PERIOD), self._tick))
+        self._done_gate.update()                # idle_when_done
+
+    @property
+    def paused(self) -> bool:
+        """True while idle after exploration_done (see :class:`DoneGate`)."""
+        return self._done_gate.paused
+
+    def _resumed(self) -> None:
+        """After a pause: the clock moved on and no frame was processed on purpose, so
+        neither is a clock jump, a stall nor a lag."""
+        self._time.forget()
+        self._stall.reset()
+        self._lag_mark = None
 
     def _limits_changed(self, old: InputLimits, new: InputLimits) -> None:
         self._time.jump_s = new.clock_jump_s
@@ -250,6 +269,11 @@ class ObjectCostmapNode(Node):
             self._walls = None                  # recomputed once per map, not per frame
         except ValueError as err:
             self._drop("map", str(err))
+
+    def _check_near_map(self, x: float, y: float) -> None:
+        """ValueError for a pose beyond the map's bounds by more than the margin."""
+        if self._grid is not None:
+            self._lp.params.check_near_map(x, y, self._grid)
 
     def _on_robot_pose(self, t_ns: int, pose: tuple[float, float, float]) -> None:
         self._objects.note_robot_position(pose[0], pose[1])   # swept path: cleared

@@ -36,6 +36,9 @@ class PoseInput:
     checked); ``limits()`` the node's current input limits; ``on_stamp("pose", t_ns)``
     sees every accepted stamp of the stream that sets the pose's rate (the node's time
     model; not the SLAM poses of ``fused``), ``on_pose`` every new newest pose;
+    ``subscribe`` creates the subscriptions (default ``node.create_subscription``; a
+    :class:`~explore_seg.done_gate.DoneGate`'s to drop them while idle after done);
+    ``near_map(x, y)`` raises ValueError for a map-frame pose too far outside the map;
     ``warn(key, text)`` is the node's throttled warning, ``drop(text)`` its (throttled,
     counted) report of a dropped pose message.
     """
@@ -45,20 +48,22 @@ class PoseInput:
                  warn: Callable[[str, str], None], drop: Callable[[str], None],
                  on_pose: PoseCallback | None = None,
                  on_stamp: Callable[[str, int], None] | None = None,
-                 callback_group: Any = None) -> None:
+                 callback_group: Any = None,
+                 subscribe: Callable[..., Any] | None = None,
+                 near_map: Callable[[float, float], None] | None = None) -> None:
         self.fusion = PoseFusion(source, params)
         self._clock = node.get_clock()
         #: ROS time (ns) of the last accepted pose message, None before the first.
         self.arrival_ns: int | None = None
         self._lock = threading.Lock()
         self._map_frame, self._limits, self._warn, self._drop = map_frame, limits, warn, drop
-        self._on_pose, self._on_stamp = on_pose, on_stamp
+        self._on_pose, self._on_stamp, self._near_map = on_pose, on_stamp, near_map
+        sub = subscribe if subscribe is not None else node.create_subscription
         if source in ("odom", "fused"):
-            node.create_subscription(Odometry, "odom", self._on_odom, qos,
-                                     callback_group=callback_group)
+            sub(Odometry, "odom", self._on_odom, qos, callback_group=callback_group)
         if source in ("pose", "fused"):
-            node.create_subscription(PoseWithCovarianceStamped, "pose", self._on_slam, qos,
-                                     callback_group=callback_group)
+            sub(PoseWithCovarianceStamped, "pose", self._on_slam, qos,
+                callback_group=callback_group)
 
     @property
     def source(self) -> str:
@@ -81,6 +86,8 @@ class PoseInput:
             if frame is not None:
                 convert.check_frame(msg.header.frame_id, frame, "pose")
             pose = to_2d(msg, self._limits())
+            if self._near_map is not None and frame is not None:
+                self._near_map(pose[0], pose[1])     # map-frame poses only
             t_ns = convert.checked_stamp_ns(msg.header.stamp, "pose")
             with self._lock:
                 event = add(t_ns, pose)

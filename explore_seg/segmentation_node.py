@@ -14,7 +14,14 @@ published per map update. Each result is published as
   while it has a subscriber;
 * ``~/timing`` (std_msgs/Float64): wall time of the update in milliseconds.
 
+While ``exploration_done`` is true (and ``idle_when_done``), the timer is paused
+(:class:`~explore_seg.done_gate.DoneGate`); the newest map is kept and segmented when the
+flag turns false.
+
 Ids of regions that did not change stay the same between updates (DuDe spec shared/docs/dude.md §12).
+When the map stamps or the node clock jump back by more than ``input.clock_jump_s`` (a
+simulator restart, a new SLAM session) the incremental state is dropped: the next map is
+segmented from scratch (:class:`~explore_seg.time_guard.TimeGuard`; logged once).
 """
 
 from __future__ import annotations
@@ -34,9 +41,11 @@ from explore_seg.core.grid import GridMap
 from explore_seg.core.limits import InputLimits
 from explore_seg.core.segmentation import (IncrementalSegmenter, SegmentationNodeParams,
                                            SegmentationParams)
+from explore_seg.done_gate import DoneGate
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.qos import MAP_QOS, map_qos
+from explore_seg.time_guard import TimeGuard
 
 #: Seconds between repeated warnings of one kind.
 _WARN_PERIOD_S = 5.0
@@ -78,6 +87,8 @@ class SegmentationNode(Node):
         self.processed = 0
         self.skipped = 0
         self.last_labels: npt.NDArray[np.int32] | None = None
+        self._time = TimeGuard(self._lp.params.clock_jump_s)
+        self._lp.on_change(lambda old, new: setattr(self._time, "jump_s", new.clock_jump_s))
 
         self._pub_regions = self.create_publisher(Image, "regions", MAP_QOS)
         self._pub_info = self.create_publisher(MapMetaData, "regions/info", MAP_QOS)
@@ -86,6 +97,10 @@ class SegmentationNode(Node):
         self.create_subscription(OccupancyGrid, "map", self._on_map,
                                  map_qos(p.map_transient_local))
         self._timer = self.create_timer(p.process_period_s, self._tick)
+        # After a pause the clock has moved on: no jump (the map stamps are kept).
+        self._done_gate = DoneGate(self, "segmentation", lambda: [self._timer],
+                                   lambda: self.params.idle_when_done,
+                                   lambda: self._time.forget("clock"))
         self._p.on_change(self._params_changed)
 
     @staticmethod
@@ -104,6 +119,11 @@ class SegmentationNode(Node):
         return self._state
 
     @property
+    def paused(self) -> bool:
+        """True while idle after exploration_done (see :class:`DoneGate`)."""
+        return self._done_gate.paused
+
+    @property
     def segmenter(self) -> IncrementalSegmenter:
         """The segmenter (its ``last_update_info`` tells what the last update did)."""
         return self._seg
@@ -117,7 +137,9 @@ class SegmentationNode(Node):
         if new.process_period_s != old.process_period_s:
             self._timer.cancel()
             self.destroy_timer(self._timer)
-            self._timer = self.create_timer(new.process_period_s, self._tick)
+            self._timer = self._done_gate.adopt(
+                self.create_timer(new.process_period_s, self._tick))
+        self._done_gate.update()                # idle_when_done
 
     def _restart_segmenter(self) -> None:
         """After a failed update: the next one is a full run (no half-updated state)."""
@@ -128,8 +150,22 @@ class SegmentationNode(Node):
             self.skipped += 1
         self._latest = msg
 
+    def _observe(self, stream: str, t_ns: int, expected_gap_ns: int = 0) -> None:
+        """Feed the time model; a jump back restarts the segmenter (a new time line)."""
+        def restart() -> str:
+            self._restart_segmenter()
+            return "the next map is segmented from scratch"
+        self._time.track(stream, t_ns, self._warn, restart, expected_gap_ns)
+
+    @property
+    def time_jumps(self) -> int:
+        """Clock jumps seen (map stamps or node clock)."""
+        return self._time.jumps
+
     @failsafe("segmentation update", on_error="_restart_segmenter")
     def _tick(self) -> None:
+        self._observe("clock", self.get_clock().now().nanoseconds,
+                      int(self.params.process_period_s * 1e9))
         msg, self._latest = self._latest, None
         if msg is None:
             return
@@ -138,6 +174,8 @@ class SegmentationNode(Node):
         except ValueError as err:
             self._warn("map", f"dropped map: {err}")
             return
+        if grid.stamp_ns > 0:                   # 0: an unstamped map, no time line
+            self._observe("map", grid.stamp_ns)
         self._state = State.RUNNING
         t0 = time.perf_counter()
         if not self.params.incremental:

@@ -13,6 +13,9 @@ One timer ``_tick`` on the ROS clock (``rate_hz``) runs the state machine::
     WAITING_FOR_MAP -> WAITING_FOR_POSE -> SELECTING <-> NAVIGATING -> DONE
     (any) -> STOPPED via ~/stop; STOPPED/DONE -> running via ~/resume or ~/start
 
+In DONE the node idles: the tick returns at once and the pose subscription is dropped
+until ``exploration_done`` turns false again (:class:`~explore_seg.done_gate.DoneGate`).
+
 Bad input never raises out of a callback: malformed messages are dropped (throttled
 warning), the last good map/pose/labels are kept; labels whose geometry differs from the
 map are ignored; a robot outside the map or walled in gets no new goal (the current one
@@ -41,6 +44,7 @@ from explore_seg.core.limits import InputLimits
 from explore_seg.core.pose_fusion import PoseFusionParams
 from explore_seg.core.selection import (REGION_STRATEGIES, Action, Goal, NavOutcome,
                                         SelectorNodeParams)
+from explore_seg.done_gate import DoneGate
 from explore_seg.frontier_msgs import FrontierPublisher
 from explore_seg.frontier_node import FRONTIER_PREFIX
 from explore_seg.nav_client import NavClient
@@ -112,11 +116,15 @@ class TargetSelectorNode(Node):
         self.create_subscription(OccupancyGrid, "object_costmap", self._on_layer, qos)
         self.create_subscription(Image, "regions", self._on_regions, qos)
         self.create_subscription(MapMetaData, "regions/info", self._on_regions_info, qos)
+        # The pose stream is unsubscribed while exploration_done is true (idle after done;
+        # ~/start or ~/resume publish false, which subscribes again).
+        self._done_gate = DoneGate(self, "pose subscription", lambda: [], lambda: True)
         self._pose_in = PoseInput(
             self, p.pose_topic_type, self._pfp.params, POSE_QOS,
             map_frame=lambda: None if self._grid is None else self._grid.frame_id,
             limits=lambda: self._lp.params, warn=self._warn,
-            drop=lambda text: self._warn("pose", f"dropped {text}"), on_pose=self._set_pose)
+            drop=lambda text: self._warn("pose", f"dropped {text}"), on_pose=self._set_pose,
+            subscribe=self._done_gate.subscribe, near_map=self._check_near_map)
         self._pfp.on_change(lambda old, new: self._pose_in.set_params(new))
         self._nav = (NavClient(self, p.nav_action, p.nav_accept_timeout_s, p.cancel_timeout_s,
                                self._warn) if p.nav_action else None)
@@ -200,6 +208,11 @@ class TargetSelectorNode(Node):
     def _on_regions_info(self, msg: MapMetaData) -> None:
         self._regions_info = msg
         self._labels_dirty = True
+
+    def _check_near_map(self, x: float, y: float) -> None:
+        """ValueError for a pose beyond the map's bounds by more than the margin."""
+        if self._grid is not None:
+            self._lp.params.check_near_map(x, y, self._grid)
 
     def _set_pose(self, t_ns: int, pose: tuple[float, float, float]) -> None:
         """A new newest map-frame pose (from :class:`PoseInput`)."""

@@ -56,6 +56,8 @@ class TimeGuard:
     def __init__(self, jump_s: float) -> None:
         self.jump_s = float(jump_s)
         self._newest: dict[str, int] = {}
+        #: Jumps seen by :meth:`track`.
+        self.jumps = 0
 
     def observe(self, stream: str, t_ns: int, expected_gap_ns: int = 0) -> Jump | None:
         """Record ``t_ns`` of ``stream``; a :class:`Jump` when it went back by more than
@@ -72,6 +74,19 @@ class TimeGuard:
         self._newest[stream] = max(last, t_ns)
         return None
 
+    def track(self, stream: str, t_ns: int, warn: Callable[[str, str], None],
+              on_back: Callable[[], str] | None = None, expected_gap_ns: int = 0) -> bool:
+        """:meth:`observe`, then on a jump: count it (:attr:`jumps`), call ``on_back`` if
+        it went back (it returns what it reset, for the log line) and ``warn(key, line)``
+        (a throttled warning). True when it jumped."""
+        jump = self.observe(stream, t_ns, expected_gap_ns)
+        if jump is None:
+            return False
+        self.jumps += 1
+        what = on_back() if (jump.backwards and on_back is not None) else ""
+        warn(*jump_warning(jump, what))
+        return True
+
     def newest(self, stream: str) -> int | None:
         """Newest stamp of ``stream`` (ns), None before the first."""
         return self._newest.get(stream)
@@ -87,9 +102,18 @@ class TimeGuard:
                 f"{'ahead of' if d > 0 else 'behind'} {b} stamps ({ta / _NS:.3f} vs "
                 f"{tb / _NS:.3f} s); is one source on another clock (use_sim_time)?")
 
-    def forget(self) -> None:
-        """Forget every stream."""
-        self._newest.clear()
+    def forget(self, *streams: str) -> None:
+        """Forget the named streams (every stream when none is named)."""
+        if not streams:
+            self._newest.clear()
+        for name in streams:
+            self._newest.pop(name, None)
+
+
+def jump_warning(jump: Jump, after_back: str) -> tuple[str, str]:
+    """(throttle key, log line) for a jump; ``after_back`` says what a jump back reset."""
+    return (f"jump_{jump.stream}",
+            jump.describe() + (f"; {after_back}" if jump.backwards and after_back else ""))
 
 
 class StallWatchdog:
@@ -109,6 +133,10 @@ class StallWatchdog:
         self._idle = 0
         #: The last reason reported (empty before the first stall).
         self.last_reason = ""
+
+    def reset(self) -> None:
+        """Start counting afresh (e.g. after the node was paused on purpose)."""
+        self._idle = 0
 
     def tick(self, waiting: bool, produced: bool, reason: Callable[[], str]) -> str | None:
         """Count one period; the reason (computed only then) every ``periods`` stalled

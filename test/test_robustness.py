@@ -184,6 +184,17 @@ def test_inflation_with_a_huge_kernel_is_bounded_and_exact():
     np.testing.assert_array_equal(ref, d2 <= 32 * 32)
 
 
+def test_a_map_spanning_more_than_the_coordinate_limit_is_rejected():
+    # found by the fuzz suite: resolution 1e300 passed, and cell centres became inf/NaN
+    grid = GridMap(np.zeros((4, 3), np.int8), 0.05)
+    msg = convert.grid_to_msg(grid)
+    msg.info.resolution = 1e300
+    with pytest.raises(ValueError, match=r"map spans 4e\+300 m \(3x4 cells at 1e\+300 m\)"):
+        convert.grid_from_msg(msg)
+    msg.info.resolution = 0.05
+    assert convert.grid_from_msg(msg).same_geometry(grid)
+
+
 # ------------------------------------------------------------------ finding 5
 def test_a_negative_stamp_is_rejected_at_the_boundary(ros):
     grid = GridMap(np.zeros((5, 5), np.int8), 0.05)
@@ -209,6 +220,21 @@ def test_absurd_poses_are_dropped_by_the_selector_and_the_object_costmap(ros, x)
     cm = _costmap(ros)
     cm._pose_in._on_odom(_odom(S, x=x))
     assert cm._pose_in.latest() is None and "input.max_coordinate_m" in cm.last_drop["pose"]
+
+
+def test_poses_far_outside_the_map_are_dropped_by_the_selector_and_the_object_costmap(ros):
+    grid = GridMap(np.zeros((40, 60), np.int8), 0.05, (1.0, -1.0))    # x 1..4, y -1..1 m
+    sel = _selector(ros, **{"input.pose_map_margin_m": 2.0})
+    cm = _costmap(ros, **{"input.pose_map_margin_m": 2.0})
+    for node in (sel, cm):
+        node._on_map(convert.grid_to_msg(grid))
+        node._on_odom(_odom(S, x=5.5))                       # 1.5 m beyond x = 4: kept
+        node._on_odom(_odom(S, x=168.4))                     # 164 m beyond: dropped
+    assert sel._pose[0] == pytest.approx(5.5)
+    assert "pose (168.400, 0.000) lies 164.40 m outside the map (x 1.00..4.00, y " \
+           "-1.00..1.00 m), more than input.pose_map_margin_m = 2 m" in sel._warn.text("pose")
+    assert [p[0] for _, p in cm._poses] == [pytest.approx(5.5)]
+    assert "164.40 m outside the map" in cm.last_drop["pose"]
 
 
 # ------------------------------------------------------------------ finding 7

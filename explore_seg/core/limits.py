@@ -13,7 +13,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from typing import TYPE_CHECKING
+
+import numpy as np  # noqa: F401 - used by the doctest
+
 from explore_seg.core.fields import INT_MAX, param_meta
+
+if TYPE_CHECKING:
+    from explore_seg.core.grid import GridMap
 
 
 @dataclass(frozen=True)
@@ -43,6 +50,10 @@ class InputLimits:
     max_coordinate_m: float = field(default=100_000.0, metadata=param_meta(
         "poses and map origins farther than this from their frame's origin are rejected",
         "m", range=(0.0, math.inf)))
+    pose_map_margin_m: float = field(default=5.0, metadata=param_meta(
+        "robot poses farther than this outside the current map's bounds are dropped (a pose "
+        "of another frame or a wild estimate); checked once a map has been received", "m",
+        range=(0.0, math.inf)))
     clock_jump_s: float = field(default=5.0, metadata=param_meta(
         "a stamp or the node clock going back (sim reset) or ahead (future-stamped input) by "
         "more than this is a clock jump: time-keyed state is reset and it is logged once; "
@@ -53,6 +64,9 @@ class InputLimits:
         "logs why it waits", "", range=(1, INT_MAX)))
 
     def __post_init__(self) -> None:
+        if not (math.isfinite(self.pose_map_margin_m) and self.pose_map_margin_m >= 0):
+            raise ValueError(f"pose_map_margin_m must be finite and >= 0, "
+                             f"got {self.pose_map_margin_m}")
         for name in ("min_resolution_m", "max_coordinate_m", "clock_jump_s"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
@@ -74,6 +88,12 @@ class InputLimits:
         if not (math.isfinite(res) and res >= self.min_resolution_m):
             raise ValueError(f"map resolution {res} m is below input.min_resolution_m = "
                              f"{self.min_resolution_m} m (or not finite)")
+        extent = max(w, h) * res
+        if extent > 2 * self.max_coordinate_m:
+            # e.g. resolution 1e300: cell centres overflow to inf and NaN downstream
+            raise ValueError(f"map spans {extent:.6g} m ({w}x{h} cells at {res:.6g} m), more "
+                             f"than 2 * input.max_coordinate_m = "
+                             f"{2 * self.max_coordinate_m:g} m")
 
     def check_xy(self, x_m: float, y_m: float, what: str) -> None:
         """Raise ``ValueError`` when (x, y) is non-finite or beyond ``max_coordinate_m``."""
@@ -83,6 +103,30 @@ class InputLimits:
         if abs(x_m) > lim or abs(y_m) > lim:
             raise ValueError(f"{what}: position ({x_m:.6g}, {y_m:.6g}) is beyond "
                              f"input.max_coordinate_m = {lim:g} m")
+
+    def check_near_map(self, x_m: float, y_m: float, grid: GridMap) -> None:
+        """Raise ``ValueError`` when (x, y) lies more than ``pose_map_margin_m`` outside
+        ``grid``'s bounds (its rotated rectangle); the message names pose, map and margin.
+
+        >>> from explore_seg.core.grid import GridMap
+        >>> g = GridMap(np.zeros((20, 10), np.int8), 0.5)           # 5 m x 10 m
+        >>> InputLimits().check_near_map(9.0, 3.0, g)               # 4 m out: fine
+        >>> InputLimits(pose_map_margin_m=1.0).check_near_map(9.0, 3.0, g)
+        Traceback (most recent call last):
+        ...
+        ValueError: pose (9.000, 3.000) lies 4.00 m outside the map (x 0.00..5.00, y 0.00..10.00 m), more than input.pose_map_margin_m = 1 m
+        """
+        r, c = grid.world_to_cell_float(x_m, y_m)
+        out_r = max(0.0, -float(r), float(r) - grid.height)
+        out_c = max(0.0, -float(c), float(c) - grid.width)
+        out_m = math.hypot(out_r, out_c) * grid.resolution_m
+        if out_m > self.pose_map_margin_m:
+            h, w = grid.height - 0.5, grid.width - 0.5          # corner (edge) cells
+            xs, ys = grid.cells_to_world([-0.5, -0.5, h, h], [-0.5, w, -0.5, w])
+            x0, x1, y0, y1 = xs.min(), xs.max(), ys.min(), ys.max()
+            raise ValueError(f"pose ({x_m:.3f}, {y_m:.3f}) lies {out_m:.2f} m outside the map "
+                             f"(x {x0:.2f}..{x1:.2f}, y {y0:.2f}..{y1:.2f} m), more than "
+                             f"input.pose_map_margin_m = {self.pose_map_margin_m:g} m")
 
 
 def normalize_frame(frame_id: str, default: str = "") -> str:

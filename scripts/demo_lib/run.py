@@ -29,25 +29,12 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
         When a child dies, nothing progresses or the wall timeout passes; the outputs
         gathered so far are written first.
     """
-    import rclpy
-    from rclpy.context import Context
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.signals import SignalHandlerOptions
-
     from sim_bridge.render import GifWriter
 
     out = Path(cfg.out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
-    env.setdefault("ROS_LOG_DIR", str(out / "logs" / "ros"))
-    ctx = Context()
-    # Python's own SIGINT handling (KeyboardInterrupt): rclpy's handler would only shut
-    # the monitor's context down, and Ctrl-C would not stop the demo and its children.
-    rclpy.init(context=ctx, signal_handler_options=SignalHandlerOptions.NO)
-    ex = SingleThreadedExecutor(context=ctx)
-    mon = Monitor(ctx, "fused" if cfg.real_robot_pose else "odom")
-    ex.add_node(mon.node)
+    env = child_env(out)
+    ctx, ex, mon = start_monitor("fused" if cfg.real_robot_pose else "odom")
     gif = GifWriter(out / "exploration.gif", max_frames=cfg.gif_max_frames, frame_ms=120,
                     max_side_px=GIF_SIDE_PX)
     children: list[Child] = []
@@ -59,7 +46,7 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
         if cfg.explorer:
             children.append(Child("explorer", explorer_command(cfg),
                                    out / "logs" / "explorer.log", env))
-            _wait_for_explorer(cfg, ex, mon, children[0], t0)
+            wait_for_explorer(cfg, ex, mon, children[0], t0)
         children.insert(0, Child("sim_bridge", sim_command(cfg),
                                   out / "logs" / "sim_bridge.log", env))
         log(f"[demo] world {cfg.world}, strategy {cfg.strategy}, seed {cfg.seed}, "
@@ -83,13 +70,46 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
         for ch in reversed(children):
             ch.stop()
     metrics = write_outputs(cfg, out, mon, gif, sim_json, stop_reason, error, wall)
+    stop_monitor(ctx, ex, mon)
+    if error:
+        raise DemoError(error)
+    return metrics
+
+
+def child_env(out: Path) -> dict[str, str]:
+    """The children's environment: this repository importable, ROS logs under ``out``."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
+    env.setdefault("ROS_LOG_DIR", str(out / "logs" / "ros"))
+    return env
+
+
+def start_monitor(pose_source: str = "odom"):
+    """(context, executor, :class:`Monitor`) on a private rclpy context; the monitor
+    follows the robot through ``pose_source`` (odom | fused)."""
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.signals import SignalHandlerOptions
+
+    ctx = Context()
+    # Python's own SIGINT handling (KeyboardInterrupt): rclpy's handler would only shut
+    # the monitor's context down, and Ctrl-C would not stop the demo and its children.
+    rclpy.init(context=ctx, signal_handler_options=SignalHandlerOptions.NO)
+    ex = SingleThreadedExecutor(context=ctx)
+    mon = Monitor(ctx, pose_source)
+    ex.add_node(mon.node)
+    return ctx, ex, mon
+
+
+def stop_monitor(ctx, ex, mon: Monitor) -> None:
+    """Destroy the monitor node and shut its context down."""
+    import rclpy
+
     ex.remove_node(mon.node)
     mon.node.destroy_node()
     ex.shutdown()
     rclpy.try_shutdown(context=ctx)
-    if error:
-        raise DemoError(error)
-    return metrics
 
 
 #: Set by SIGINT / SIGTERM (see :func:`main`): the demo stops its children, writes its
@@ -97,7 +117,7 @@ def run_demo(cfg: DemoConfig, log=print) -> dict[str, Any]:
 STOP = threading.Event()
 
 
-def _wait_for_explorer(cfg: DemoConfig, ex, mon: Monitor, child: Child, t0: float) -> None:
+def wait_for_explorer(cfg: DemoConfig, ex, mon: Monitor, child: Child, t0: float) -> None:
     """Spin until the explorer publishes ``goal_pose`` (its selector is up).
 
     Raises

@@ -309,6 +309,9 @@ class ObjectCostmapNodeParams(ObjectParams):
         "Camera frames processed per second, at most (a camera at this rate has every "
         "frame processed, a faster one the newest after each 0.9 / rate_hz); frames "
         "arriving while one is processed are dropped, never queued", "Hz", range=(0.0, math.inf)))
+    idle_when_done: bool = field(default=True, metadata=param_meta(
+        "pause frame processing while exploration_done (from target_selector) is true "
+        "(false: keep the layer updated, e.g. for navigation after exploring)"))
     sync_tolerance_s: float = field(default=0.05, metadata=param_meta(
         "Largest stamp difference for pairing colour with depth", "s", range=(0.0, math.inf)))
     pose_tolerance_s: float = field(default=0.2, metadata=param_meta(

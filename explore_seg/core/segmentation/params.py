@@ -139,6 +139,9 @@ class SegmentationNodeParams(SegmentationParams):
         "update the segmentation incrementally (false: full batch on every map)"))
     process_period_s: float = field(default=0.1, metadata=param_meta(
         "period of the timer that processes the latest map", "s", range=(0.0, math.inf)))
+    idle_when_done: bool = field(default=True, metadata=param_meta(
+        "pause segmenting while exploration_done (from target_selector) is true; the "
+        "newest map is segmented when it turns false"))
 
     def __post_init__(self) -> None:
         super().__post_init__()
