@@ -126,7 +126,7 @@ def test_fuzz_target_selector(ros):
     node._on_layer(good["object_costmap"])                          # noqa: SLF001
     sent = node.goals_sent
     now = node.get_clock().now().nanoseconds
-    node._on_odom(_odom(-0.5 + 0.45, -0.2 + 0.75, now))             # noqa: SLF001 - cell R
+    node._pose_in._on_odom(_odom(-0.5 + 0.45, -0.2 + 0.75, now))             # noqa: SLF001 - cell R
     tick(node)
     assert node.goals_sent == sent + 1 and node.state is State.NAVIGATING
     gx, gy = node.manager.goal.xy_m
@@ -168,7 +168,7 @@ def test_fuzz_object_costmap(ros):
         t = 50 * 10**9 + k * 10**9 // 2
         h = convert.make_header("camera_color_optical_frame", t)
         for dt in (-10**7, 10**7):
-            node._on_odom(_odom(ROBOT[0], ROBOT[1], t + dt))        # noqa: SLF001
+            node._pose_in._on_odom(_odom(ROBOT[0], ROBOT[1], t + dt))        # noqa: SLF001
         node._on_color(convert.image_to_msg(rgb, "rgb8", h))        # noqa: SLF001
         node._on_depth(convert.image_to_msg(depth, "32FC1", h))     # noqa: SLF001
         node._on_semantic(convert.image_to_msg(sem, "mono8", h))    # noqa: SLF001

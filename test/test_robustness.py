@@ -228,12 +228,12 @@ def test_poses_far_outside_the_map_are_dropped_by_the_selector_and_the_object_co
     cm = _costmap(ros, **{"input.pose_map_margin_m": 2.0})
     for node in (sel, cm):
         node._on_map(convert.grid_to_msg(grid))
-        node._on_odom(_odom(S, x=5.5))                       # 1.5 m beyond x = 4: kept
-        node._on_odom(_odom(S, x=168.4))                     # 164 m beyond: dropped
+        node._pose_in._on_odom(_odom(S, x=5.5))                       # 1.5 m beyond x = 4: kept
+        node._pose_in._on_odom(_odom(S + S // 10, x=168.4))           # 164 m beyond: dropped
     assert sel._pose[0] == pytest.approx(5.5)
     assert "pose (168.400, 0.000) lies 164.40 m outside the map (x 1.00..4.00, y " \
            "-1.00..1.00 m), more than input.pose_map_margin_m = 2 m" in sel._warn.text("pose")
-    assert [p[0] for _, p in cm._poses] == [pytest.approx(5.5)]
+    assert cm._pose_in.latest()[1][0] == pytest.approx(5.5)     # the far one was not taken
     assert "164.40 m outside the map" in cm.last_drop["pose"]
 
 

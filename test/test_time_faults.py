@@ -99,7 +99,7 @@ def test_selector_clock_reset_forgets_the_pose_and_restarts_the_goal_timers(ros)
     node = _selector(ros)
     node._check_clock(1000 * S)
     node._on_map(convert.grid_to_msg(_corridor()[0], stamp=1000 * S))
-    node._on_odom(_odom(1000 * S, x=0.5))
+    node._pose_in._on_odom(_odom(1000 * S, x=0.5))
     assert node._pose is not None
     node._check_clock(4 * S)                                 # /clock restarted
     assert node._pose is None
