@@ -17,7 +17,7 @@ import numpy.typing as npt
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from explore_seg.core.paths import check_resolution, check_start, grid_csr
+from explore_seg.core.paths import check_resolution, check_start, grid_csr, nearest_true
 
 #: Largest block side supported by :func:`block_distances` (its lookup table has
 #: 2**(k*k) entries).
