@@ -37,25 +37,38 @@ WALL_FIELDS = ("wall_time_s", "timings_ms")
 
 def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int],
            max_sim_time_s: float) -> None:
-    """Run every world x strategy x seed and write their results (see the module doc)."""
+    """Run every world x strategy x seed and write their results (see the module doc).
+
+    The file is rewritten after every run; runs already in it are kept and not run again
+    (an interrupted record continues). A run that raises is recorded with its error.
+    """
     from bench.tasks import fix_explorer_params, run_task
     from bench.worlds import PAPER_CAMERA_MOUNT, load, sim_time_limit
 
     fix_explorer_params()
-    runs: list[dict[str, Any]] = []
+    runs: list[dict[str, Any]] = (json.loads(path.read_text())["runs"] if path.is_file()
+                                  else [])
+    have = {r["key"] for r in runs}
     for w in worlds:
         world, gt = load(w)
         limit = sim_time_limit(float(gt.explorable_area_m2), max_sim_time_s)
         for s in strategies:
             for seed in seeds:
+                key = f"{w}/{s}/{seed}"
+                if key in have:
+                    continue
                 t0 = time.perf_counter()
-                d = run_task((w, s, seed, limit, None, PAPER_CAMERA_MOUNT, None))
+                try:
+                    d = run_task((w, s, seed, limit, None, PAPER_CAMERA_MOUNT, None))
+                    result = {k: v for k, v in d.items() if k not in WALL_FIELDS}
+                    what = f"{d['coverage_pct']:.2f} % {d['stop_reason']}"
+                except Exception as err:    # recorded: a change may fix or cause it
+                    result = {"error": f"{type(err).__name__}: {err}"}
+                    what = result["error"]
                 wall = time.perf_counter() - t0
-                runs.append({"key": f"{w}/{s}/{seed}", "wall_s": round(wall, 2),
-                             "result": {k: v for k, v in d.items() if k not in WALL_FIELDS}})
-                print(f"{w}/{s}/{seed}: {wall:.1f} s, {d['coverage_pct']:.2f} % "
-                      f"{d['stop_reason']}", file=sys.stderr, flush=True)
-    path.write_text(json.dumps({"runs": runs}, indent=0))
+                runs.append({"key": key, "wall_s": round(wall, 2), "result": result})
+                path.write_text(json.dumps({"runs": runs}, indent=0))
+                print(f"{key}: {wall:.1f} s, {what}", file=sys.stderr, flush=True)
 
 
 def compare(before: Path, after: Path) -> int:
