@@ -54,6 +54,21 @@ def _call(fn: Callable[..., Any], args: tuple, explorer_params: Any) -> Any:
     return fn(*args)
 
 
+class RemoteTraceback(Exception):
+    """The traceback of a task that raised on a Ray worker, as text (as
+    :mod:`multiprocessing` gives it in ``__cause__``)."""
+
+
+def _unwrap(err: BaseException) -> BaseException:
+    """The exception a task raised (what the process pool reports) from Ray's
+    ``RayTaskError``, with the worker's traceback as its ``__cause__``."""
+    cause = getattr(err, "cause", None)
+    if not isinstance(cause, BaseException):
+        return err
+    cause.__cause__ = RemoteTraceback(str(err))
+    return cause
+
+
 class RayPool:
     """``apply_async``/``imap_unordered`` on Ray tasks (one CPU each); see the module doc."""
 
@@ -109,7 +124,7 @@ class RayPool:
                 if callback is not None:
                     callback(fut.result())
             elif error_callback is not None:
-                error_callback(err)
+                error_callback(_unwrap(err))
 
         ref.future().add_done_callback(done)
         return ref
