@@ -4,13 +4,15 @@ PY := .venv/bin/python
 OUT ?= out/demo
 BENCH_OUT ?= out/bench
 RUNS ?= 20
+QUICK_OUT ?= out/bench-quick
 
-.PHONY: help setup test demo bench build clean
+.PHONY: help setup test demo bench bench-quick build clean
 
 help:
 	@echo "make demo   - headless exploration demo on the embedded cluttered house -> $(OUT)/"
 	@echo "make test   - the test suite (private network namespace where possible)"
 	@echo "make bench  - benchmarks: strategies x worlds x $(RUNS) runs -> $(BENCH_OUT)/, BENCHMARKS.md"
+	@echo "make bench-quick - a representative subset (~10 min on 2 cores) -> $(QUICK_OUT)/QUICK.md, ratios vs bench/results"
 	@echo "make build  - colcon build of the package into build/ install/"
 	@echo "make setup  - only the idempotent set-up (venv, apt packages, detector weights)"
 
@@ -25,6 +27,9 @@ demo: setup
 
 bench: setup
 	@bash scripts/run_bench.sh $(BENCH_OUT) $(RUNS)
+
+bench-quick: setup
+	@bash scripts/run_bench.sh --quick $(QUICK_OUT)
 
 build: setup
 	@unset _ROS_WHEELS_BOOTSTRAP_COMPLETE; . .venv/bin/activate && colcon build --base-paths . --build-base build --install-base install

@@ -17,7 +17,7 @@ setup(
         (f"share/{PACKAGE}/worlds", glob("worlds/*")),
     ],
     install_requires=["setuptools"],
-    extras_require={"test": ["pytest"]},
+    extras_require={"test": ["pytest"], "ray": ["ray==2.60.0"]},
     zip_safe=True,
     maintainer="explore_seg developers",
     maintainer_email="explore-seg@example.org",

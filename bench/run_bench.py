@@ -27,6 +27,12 @@ Usage::
     .venv/bin/python bench/run_bench.py --runs 3 --worlds house --strategies paper,nearest
     .venv/bin/python bench/run_bench.py --report-only --out out/bench
     .venv/bin/python bench/run_bench.py --ros 2 --runs 2 --worlds small_house
+    .venv/bin/python bench/run_bench.py --executor ray --address auto --jobs 64 --runs 20
+
+Executors (:mod:`bench.executors`): ``--executor process`` (default) forks ``--jobs``
+worker processes; ``--executor ray`` runs the same tasks on a local Ray (``--jobs`` CPUs)
+or, with ``--address``, on a Ray cluster (at most ``--jobs`` runs in flight). The records,
+resume and merge are the same, and so are the results of every run.
 
 Stopping: SIGINT/SIGTERM stop at once (the runs in flight are lost); ``kill -USR1 PID``
 finishes the runs in flight and starts no new ones. Either way the runs so far are
@@ -37,6 +43,7 @@ reported, the part is marked interrupted, and ``--resume`` continues.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import os
 import shlex
@@ -51,11 +58,12 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from bench import records, report, store  # noqa: E402
+from bench.executors import EXECUTORS, make_pool  # noqa: E402
 from bench.crosscheck import compare_with_ros, time_yolo  # noqa: E402
 from bench.progress import Progress, hms  # noqa: E402
 from bench.rows import runs_csv_rows  # noqa: E402
 from bench.tasks import catch_stop_signals, explorer_params, fix_explorer_params, \
-    restore_signals, run_drainable, tour_task, worker_pool  # noqa: E402
+    restore_signals, run_drainable, tour_task  # noqa: E402
 from bench.worlds import MAX_SIM_TIME_S, MIN_SIM_TIME_S, PAPER_CAMERA_MOUNT, \
     TIME_PER_AREA_S, default_worlds, load, sim_params_for, sim_time_limit, \
     world_path  # noqa: E402
@@ -80,7 +88,14 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                     "(default: generated + shared worlds)")
     ap.add_argument("--strategies", default=",".join(STRATEGIES),
                     help=f"comma-separated, from {','.join(STRATEGIES)}")
-    ap.add_argument("--jobs", type=int, default=2, help="worker processes")
+    ap.add_argument("--jobs", type=int, default=2,
+                    help="worker processes; with --executor ray: runs in flight")
+    ap.add_argument("--executor", default="process", choices=EXECUTORS,
+                    help="process: a pool of forked processes on this machine; ray: Ray "
+                         "tasks (a local Ray, or the cluster at --address)")
+    ap.add_argument("--address", default="",
+                    help="with --executor ray: the Ray cluster to join ('auto', HOST:6379 "
+                         "or ray://HOST:10001; default: start a local Ray)")
     ap.add_argument("--out", default="out/bench", help="output folder")
     ap.add_argument("--md", default=str(ROOT / "BENCHMARKS.md"),
                     help="where to write BENCHMARKS.md ('' = not at all)")
@@ -125,6 +140,11 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                          "with the same settings (e.g. a part run on another machine) to "
                          "--out; its parts are listed with --out's")
     a = ap.parse_args(argv)
+    if a.address and a.executor != "ray":
+        ap.error("--address needs --executor ray")
+    if a.executor == "ray" and importlib.util.find_spec("ray") is None:
+        ap.error("--executor ray needs Ray: pip install -r requirements-ray.txt "
+                 "(or pip install -e .[ray])")
     if a.merge and not a.resume:
         ap.error("--merge needs --resume")
     if a.no_runs and not a.resume:
@@ -252,7 +272,7 @@ def main(argv: list[str] | None = None) -> int:
                       f"--worlds/--strategies: {', '.join(stray)}", file=sys.stderr)
                 return 2
         else:
-            with worker_pool(a.jobs) as pool:
+            with make_pool(a.executor, a.jobs, a.address) as pool:
                 try:
                     _run_all(a, out, specs, strategies, areas, pool, tours, results, counter,
                              failed)
@@ -279,6 +299,7 @@ def main(argv: list[str] | None = None) -> int:
                                a.nav_margin)
         (out / "ros.json").write_text(json.dumps(ros, indent=1))
     part = {"command": command, "started": meta["started"], "code": meta["code"],
+            "executor": a.executor,
             "runs_run": counter[0], "wall_s": round(time.monotonic() - t_start, 1)}
     if interrupted:
         part["interrupted"] = True

@@ -41,8 +41,7 @@ def fill_gaps(labels: npt.NDArray[np.int32], domain: npt.NDArray[np.bool_],
     lab = labels[r0:r1, c0:c1]
     tgt = todo[r0:r1, c0:c1].copy()
     # grey dilation on ranks (float32 is exact below 2**24; ids may be larger)
-    uniq, inv = np.unique(lab, return_inverse=True)
-    rank = inv.reshape(lab.shape).astype(np.float32)
+    uniq, rank = _ranks(lab)
     k = np.ones((3, 3), np.uint8)
     for _ in range(max_iter):
         grown = cv2.dilate(rank, k)
@@ -55,6 +54,22 @@ def fill_gaps(labels: npt.NDArray[np.int32], domain: npt.NDArray[np.bool_],
             break
     filled = todo[r0:r1, c0:c1] & (rank > 0)
     lab[filled] = uniq[rank[filled].astype(np.int64)]
+
+
+def _ranks(lab: npt.NDArray[np.int32]
+           ) -> tuple[npt.NDArray[np.int32], npt.NDArray[np.float32]]:
+    """``np.unique(lab, return_inverse=True)`` with the inverse as float32 ranks, through a
+    look-up table over the ids (labels are small non-negative ids; the sort of
+    ``np.unique`` dominated the segmentation's time), ``np.unique`` for other ids."""
+    top = int(lab.max()) if lab.size else 0
+    if lab.size == 0 or int(lab.min()) < 0 or top > 4 * lab.size + 65536:
+        uniq, inv = np.unique(lab, return_inverse=True)
+        return uniq, inv.reshape(lab.shape).astype(np.float32)
+    present = np.zeros(top + 1, dtype=bool)
+    present[lab] = True
+    uniq = np.flatnonzero(present).astype(lab.dtype)
+    lut = (np.cumsum(present) - 1).astype(np.float32)
+    return uniq, lut[lab]
 
 
 def label_counts(values: npt.NDArray[np.integer]) -> dict[int, int]:
