@@ -151,7 +151,7 @@ class ObjectCostmapNode(Node):
             warn=self._warn, drop=lambda text: self._drop("pose", text),
             on_pose=self._on_robot_pose, on_stamp=self._observe,
             callback_group=MutuallyExclusiveCallbackGroup(), subscribe=sub,
-            near_map=self._check_near_map)
+            grid=lambda: self._grid)
         # Used (and required for pairing) only by the oracle detector backend.
         sub(Image, "camera/semantic/image_raw", self._on_semantic, SENSOR_QOS)
         self._timer = self.create_timer(1.0 / (p.rate_hz * _POLLS_PER_PERIOD), self._tick)
@@ -269,11 +269,6 @@ class ObjectCostmapNode(Node):
             self._walls = None                  # recomputed once per map, not per frame
         except ValueError as err:
             self._drop("map", str(err))
-
-    def _check_near_map(self, x: float, y: float) -> None:
-        """ValueError for a pose beyond the map's bounds by more than the margin."""
-        if self._grid is not None:
-            self._lp.params.check_near_map(x, y, self._grid)
 
     def _on_robot_pose(self, t_ns: int, pose: tuple[float, float, float]) -> None:
         self._objects.note_robot_position(pose[0], pose[1])   # swept path: cleared

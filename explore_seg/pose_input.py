@@ -22,6 +22,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile
 
 from explore_seg import convert
+from explore_seg.core.grid import GridMap
 from explore_seg.core.limits import InputLimits
 from explore_seg.core.pose_fusion import Pose2D, PoseFusion, PoseFusionParams
 
@@ -38,7 +39,8 @@ class PoseInput:
     model; not the SLAM poses of ``fused``), ``on_pose`` every new newest pose;
     ``subscribe`` creates the subscriptions (default ``node.create_subscription``; a
     :class:`~explore_seg.done_gate.DoneGate`'s to drop them while idle after done);
-    ``near_map(x, y)`` raises ValueError for a map-frame pose too far outside the map;
+    ``grid()`` is the node's current map (None before one): a map-frame pose beyond its
+    bounds by more than the limits' margin is dropped;
     ``warn(key, text)`` is the node's throttled warning, ``drop(text)`` its (throttled,
     counted) report of a dropped pose message.
     """
@@ -50,14 +52,14 @@ class PoseInput:
                  on_stamp: Callable[[str, int], None] | None = None,
                  callback_group: Any = None,
                  subscribe: Callable[..., Any] | None = None,
-                 near_map: Callable[[float, float], None] | None = None) -> None:
+                 grid: Callable[[], GridMap | None] | None = None) -> None:
         self.fusion = PoseFusion(source, params)
         self._clock = node.get_clock()
         #: ROS time (ns) of the last accepted pose message, None before the first.
         self.arrival_ns: int | None = None
         self._lock = threading.Lock()
         self._map_frame, self._limits, self._warn, self._drop = map_frame, limits, warn, drop
-        self._on_pose, self._on_stamp, self._near_map = on_pose, on_stamp, near_map
+        self._on_pose, self._on_stamp, self._grid = on_pose, on_stamp, grid
         sub = subscribe if subscribe is not None else node.create_subscription
         if source in ("odom", "fused"):
             sub(Odometry, "odom", self._on_odom, qos, callback_group=callback_group)
@@ -86,8 +88,10 @@ class PoseInput:
             if frame is not None:
                 convert.check_frame(msg.header.frame_id, frame, "pose")
             pose = to_2d(msg, self._limits())
-            if self._near_map is not None and frame is not None:
-                self._near_map(pose[0], pose[1])     # map-frame poses only
+            grid_now = self._grid() if self._grid is not None else None
+            in_map_frame = stream == "pose" or self.source == "odom"
+            if grid_now is not None and in_map_frame:
+                self._limits().check_near_map(pose[0], pose[1], grid_now)
             t_ns = convert.checked_stamp_ns(msg.header.stamp, "pose")
             with self._lock:
                 event = add(t_ns, pose)

@@ -124,7 +124,7 @@ class TargetSelectorNode(Node):
             map_frame=lambda: None if self._grid is None else self._grid.frame_id,
             limits=lambda: self._lp.params, warn=self._warn,
             drop=lambda text: self._warn("pose", f"dropped {text}"), on_pose=self._set_pose,
-            subscribe=self._done_gate.subscribe, near_map=self._check_near_map)
+            subscribe=self._done_gate.subscribe, grid=lambda: self._grid)
         self._pfp.on_change(lambda old, new: self._pose_in.set_params(new))
         self._nav = (NavClient(self, p.nav_action, p.nav_accept_timeout_s, p.cancel_timeout_s,
                                self._warn) if p.nav_action else None)
@@ -208,11 +208,6 @@ class TargetSelectorNode(Node):
     def _on_regions_info(self, msg: MapMetaData) -> None:
         self._regions_info = msg
         self._labels_dirty = True
-
-    def _check_near_map(self, x: float, y: float) -> None:
-        """ValueError for a pose beyond the map's bounds by more than the margin."""
-        if self._grid is not None:
-            self._lp.params.check_near_map(x, y, self._grid)
 
     def _set_pose(self, t_ns: int, pose: tuple[float, float, float]) -> None:
         """A new newest map-frame pose (from :class:`PoseInput`)."""

@@ -21,7 +21,7 @@ import numpy.typing as npt
 
 from explore_seg.core.fields import param_meta
 from sim_bridge.sensors.common import require_positive
-from sim_bridge.world import Primitive, World
+from sim_bridge.world import World
 
 
 @dataclass(frozen=True)
