@@ -1,7 +1,8 @@
 """``object_costmap`` node: furniture boxes from YOLO + depth (+ laser legs) as a map layer.
 
 Callbacks only store the newest inputs. A timer on the ROS clock (``_POLLS_PER_PERIOD``
-times per ``1 / rate_hz``) takes the newest colour/depth pair whose stamps match
+times per ``1 / rate_hz``), and a guard condition woken when a depth image arrives or a
+pose reaches a waiting image's stamp, take the newest colour/depth pair whose stamps match
 (``sync_tolerance_s``) and lie at least ``_MIN_GAP_PERIODS / rate_hz`` after the last one
 processed (so a camera at ``rate_hz`` has every frame processed, a faster one about
 ``rate_hz`` of them), the robot pose nearest to it, runs the detector and
@@ -49,7 +50,7 @@ from explore_seg.qos import MAP_QOS, POSE_QOS, SENSOR_QOS, map_qos
 from explore_seg.time_guard import StallWatchdog, TimeGuard
 
 #: Colour/depth/semantic messages kept for stamp pairing (older ones are dropped).
-_PAIR_BUFFER = 4
+_PAIR_BUFFER = 8
 #: Seconds between repeated warnings of one kind.
 _WARN_PERIOD_S = 5.0
 #: Timer ticks per 1 / rate_hz (a frame is taken soon after it arrives).
@@ -155,6 +156,11 @@ class ObjectCostmapNode(Node):
         # Used (and required for pairing) only by the oracle detector backend.
         sub(Image, "camera/semantic/image_raw", self._on_semantic, SENSOR_QOS)
         self._timer = self.create_timer(1.0 / (p.rate_hz * _POLLS_PER_PERIOD), self._tick)
+        # Woken as soon as a frame arrives or a pose reaches a waiting frame's stamp (in the
+        # timer's callback group): on sim time a busy executor fires a timer at most once
+        # per clock update, so a timer alone lets frames age out of the buffer.
+        self._wake = self.create_guard_condition(self._on_wake)
+        self._pose_seen_ns: int | None = None
         self._p.on_change(self._params_changed)
         self._dp.on_change(self._detector_params_changed)
         self._lp.on_change(self._limits_changed)
@@ -221,6 +227,7 @@ class ObjectCostmapNode(Node):
         if self._timed("camera", msg):
             self._depths.append(msg)
             self.frames_received += 1
+            self._wake.trigger()
 
     def _on_semantic(self, msg: Image) -> None:
         if self._timed("camera", msg):
@@ -272,6 +279,15 @@ class ObjectCostmapNode(Node):
 
     def _on_robot_pose(self, t_ns: int, pose: tuple[float, float, float]) -> None:
         self._objects.note_robot_position(pose[0], pose[1])   # swept path: cleared
+        # A frame that waited for a pose at or after its stamp can be processed now.
+        prev, self._pose_seen_ns = self._pose_seen_ns, t_ns
+        if prev is not None and any(prev < _stamp_ns(d) <= t_ns for d in list(self._depths)):
+            self._wake.trigger()
+
+    @failsafe("object costmap update")
+    def _on_wake(self) -> None:
+        if not self.paused:
+            self._tick_inner()
 
     # ------------------------------------------------------------------- tick
     @failsafe("object costmap update")
@@ -435,8 +451,10 @@ class ObjectCostmapNode(Node):
         self.frames_processed += 1
         self._publish(t_ns)
         timing = Float64MultiArray()
-        timing.layout.dim = [MultiArrayDimension(label="detect_ms,update_ms", size=2, stride=2)]
-        timing.data = [(t1 - t0) * 1e3, (t2 - t1) * 1e3]
+        timing.layout.dim = [MultiArrayDimension(
+            label="detect_ms,update_ms,frames_received,frames_processed", size=4, stride=4)]
+        timing.data = [(t1 - t0) * 1e3, (t2 - t1) * 1e3, float(self.frames_received),
+                       float(self.frames_processed)]
         self._pub_timing.publish(timing)
 
     def _scan_points(self, t_ns: int, frame_pose: tuple[float, float, float]):

@@ -19,7 +19,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue  # n
 from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 
 from scripts.demo_lib import DemoConfig, boxes_from_markers, explorer_command, \
-    metrics_from_diagnostics, sim_command  # noqa: E402
+    metrics_from_diagnostics, nav_outcomes, sim_command  # noqa: E402
 
 DEMO = ROOT / "scripts" / "demo.py"
 
@@ -56,6 +56,10 @@ def test_demo_explores_small_house_through_ros(tmp_path):
         h = json.loads(line)
         assert 0.0 <= h["t"] <= m["sim_time_s"] + 1.0
         assert all(np.asarray(b).shape == (4, 2) for b in h["boxes"])
+    # The node's own frame counts and navigation's goal outcomes reach the metrics.
+    assert 0 <= m["object_frames_received_processed"] <= m["object_frames_received"]
+    nav = m["nav_outcomes"]
+    assert sum(nav["counts"].values()) >= 1 and len(nav["abort_wait_s"]) == nav["counts"]["aborted"]
     for log in ("sim_bridge.log", "explorer.log"):
         # Both stop on SIGINT without a traceback (rclpy's shutdown race included).
         assert "Traceback" not in (out / "logs" / log).read_text(), log
@@ -105,6 +109,20 @@ def test_metrics_from_diagnostics():
     assert m == {"coverage_pct": 12.5, "nav_state": "active", "collisions": 2.0}
     with pytest.raises(ValueError, match="no 'sim_bridge' status"):
         metrics_from_diagnostics(DiagnosticArray(status=[other]))
+
+
+def test_nav_outcomes_tells_preempted_from_given_up_goals():
+    # (status, end s, a new goal in the same status): 6 = ABORTED, 4 = SUCCEEDED,
+    # 5 = CANCELED.
+    ends = [(6, 10.0, True),    # replaced by a newer goal: preempted by the explorer
+            (6, 20.0, False),   # navigation gave up; the next goal came 30 s later
+            (4, 30.0, False), (5, 60.0, True),
+            (6, 70.0, False)]   # given up, no goal after it
+    out = nav_outcomes(ends, [1.9, 5.0, 11.5, 50.0, 54.0])
+    assert out["counts"] == {"succeeded": 1, "canceled": 1, "aborted": 2, "preempted": 1}
+    assert out["abort_wait_s"] == [30.0, None]
+    assert out["abort_wait_mean_s"] == 30.0 and out["abort_wait_median_s"] == 30.0
+    assert nav_outcomes([], [1.0])["abort_wait_mean_s"] is None
 
 
 def test_boxes_from_markers():

@@ -9,7 +9,7 @@
 
 from scripts.demo_lib.config import GIF_SIDE_PX, ROOT, DemoConfig, DemoError
 from scripts.demo_lib.monitor import Monitor, boxes_from_markers, metrics_from_diagnostics, \
-    progress_line
+    nav_outcomes, progress_line
 from scripts.demo_lib.outputs import write_outputs
 from scripts.demo_lib.processes import Child, explorer_command, ros_value, sim_command
 from scripts.demo_lib.run import STOP, child_env, run_demo, start_monitor, stop_monitor, \
@@ -17,5 +17,5 @@ from scripts.demo_lib.run import STOP, child_env, run_demo, start_monitor, stop_
 
 __all__ = ["GIF_SIDE_PX", "ROOT", "STOP", "Child", "DemoConfig", "DemoError", "Monitor",
            "boxes_from_markers", "child_env", "start_monitor", "stop_monitor", "explorer_command", "metrics_from_diagnostics",
-           "progress_line", "ros_value", "run_demo", "sim_command", "wait_for_explorer",
+           "nav_outcomes", "progress_line", "ros_value", "run_demo", "sim_command", "wait_for_explorer",
            "write_outputs"]

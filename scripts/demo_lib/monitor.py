@@ -50,10 +50,52 @@ def boxes_from_markers(msg) -> list[np.ndarray]:
     return out
 
 
+#: action_msgs/GoalStatus terminal codes.
+_TERMINAL = {4: "succeeded", 5: "canceled", 6: "aborted"}
+
+
+def nav_outcomes(ends: list[tuple[int, float, bool]], goal_times: list[float]) -> dict:
+    """Goals navigation ended, by outcome, and for each goal navigation gave up on the
+    sim seconds until the next goal was published (None: none came).
+
+    Parameters
+    ----------
+    ends : list of (status code, end time s, replaced)
+        One entry per goal: its terminal action_msgs/GoalStatus code, when the monitor
+        saw it end, and whether a new goal appeared in that same status array.
+    goal_times : list of float
+        When the monitor received each ``goal_pose`` (s).
+
+    Returns
+    -------
+    dict
+        ``counts`` (succeeded / canceled / aborted / preempted), ``abort_wait_s`` (per
+        aborted goal, in end order), and its mean and median. An aborted goal that a new
+        goal replaced was preempted by the explorer (a newer ``goal_pose``), not given up
+        by navigation: it counts as ``preempted``.
+    """
+    counts = {name: 0 for name in _TERMINAL.values()}
+    counts["preempted"] = 0
+    waits: list[float | None] = []
+    for status, t, replaced in sorted(ends, key=lambda e: e[1]):
+        name = _TERMINAL[status]
+        if name == "aborted" and replaced:
+            name = "preempted"
+        counts[name] += 1
+        if name == "aborted":
+            nxt = [g for g in goal_times if g > t]
+            waits.append(round(min(nxt) - t, 2) if nxt else None)
+    done = [w for w in waits if w is not None]
+    return {"counts": counts, "abort_wait_s": waits,
+            "abort_wait_mean_s": round(float(np.mean(done)), 2) if done else None,
+            "abort_wait_median_s": round(float(np.median(done)), 2) if done else None}
+
+
 class Monitor:
     """Subscriptions of the demo (one rclpy node); the state is read by :func:`run_demo`."""
 
-    def __init__(self, context, pose_source: str = "odom") -> None:
+    def __init__(self, context, pose_source: str = "odom",
+                 nav_action: str = "navigate_to_pose") -> None:
         from diagnostic_msgs.msg import DiagnosticArray
         from geometry_msgs.msg import PoseStamped
         from nav_msgs.msg import MapMetaData, OccupancyGrid
@@ -67,7 +109,10 @@ class Monitor:
         from explore_seg.pose_input import PoseInput
         from explore_seg.qos import MAP_QOS, POSE_QOS, RELIABLE_QOS
 
-        self.node = Node("demo_monitor", context=context)
+        from rclpy.parameter import Parameter
+        # On sim time: goal and navigation-outcome times are sim seconds.
+        self.node = Node("demo_monitor", context=context, parameter_overrides=[
+            Parameter("use_sim_time", Parameter.Type.BOOL, True)])
         n = self.node
         self.metrics: dict[str, float | str] = {}
         self.metrics_wall = time.monotonic()
@@ -101,10 +146,24 @@ class Monitor:
         n.create_subscription(MapMetaData, "regions/info", self._on_regions_info, MAP_QOS)
         n.create_subscription(MarkerArray, "object_costmap/markers", self._on_markers,
                               RELIABLE_QOS)
-        # One timing message per camera frame the object costmap processed.
+        # One timing message per camera frame the object costmap processed; it carries the
+        # node's own counts of depth frames received and processed.
         self.object_frames = 0
+        self.object_frames_received = 0
+        self.object_frames_counted = 0
+        self.object_frame_ms: list[float] = []      # detection + update per processed frame
         n.create_subscription(Float64MultiArray, "object_costmap/timing",
                               self._on_object_timing, 10)
+        # How navigation ended each goal (the action's status topic) and when the next goal
+        # came: the time a goal that navigation gave up on costs before the robot moves on.
+        from action_msgs.msg import GoalStatusArray
+
+        from explore_seg.qos import ACTION_STATUS_QOS
+        self.nav_ends: dict[bytes, tuple[int, float, bool]] = {}
+        self._nav_seen: dict[bytes, float] = {}      # goal id -> first seen in a status
+        self.goal_times: list[float] = []
+        n.create_subscription(GoalStatusArray, nav_action + "/_action/status",
+                              self._on_nav_status, ACTION_STATUS_QOS)
 
     def _drop(self, what: str, err: Exception) -> None:
         self.dropped[what] = str(err)
@@ -125,6 +184,25 @@ class Monitor:
 
     def _on_goal(self, msg) -> None:
         self.goals.append((msg.pose.position.x, msg.pose.position.y))
+        # The monitor's own (sim) clock, as for the outcomes: the explorer's stamps and the
+        # simulator's acceptance stamps come from other processes' clocks, which lag
+        # differently under load.
+        self.goal_times.append(self.node.get_clock().now().nanoseconds * 1e-9)
+
+    def _on_nav_status(self, msg) -> None:
+        now_s = self.node.get_clock().now().nanoseconds * 1e-9
+        ids = [bytes(st.goal_info.goal_id.uuid) for st in msg.status_list]
+        # A goal aborted in the same status array that brings a new goal was replaced by
+        # it (Nav2 and the stand-in end a preempted goal as ABORTED).
+        new_goal = any(gid not in self._nav_seen for gid in ids)
+        for gid, st in zip(ids, msg.status_list):
+            self._nav_seen.setdefault(gid, now_s)
+            if st.status in _TERMINAL and gid not in self.nav_ends:
+                self.nav_ends[gid] = (int(st.status), now_s, new_goal)
+
+    def nav_outcomes(self) -> dict:
+        """:func:`nav_outcomes` of what the monitor saw."""
+        return nav_outcomes(list(self.nav_ends.values()), self.goal_times)
 
     def _on_done(self, msg) -> None:
         self.done = self.done or bool(msg.data)
@@ -177,6 +255,11 @@ class Monitor:
 
     def _on_object_timing(self, msg) -> None:
         self.object_frames += 1
+        if len(msg.data) >= 2:
+            self.object_frame_ms.append(float(msg.data[0]) + float(msg.data[1]))
+        if len(msg.data) >= 4:          # [detect ms, update ms, received, processed]
+            self.object_frames_received = int(msg.data[2])
+            self.object_frames_counted = int(msg.data[3])
 
     def _on_markers(self, msg) -> None:
         boxes = boxes_from_markers(msg)

@@ -54,6 +54,15 @@ def write_outputs(cfg: DemoConfig, out: Path, mon: Monitor, gif, sim_json: dict[
         # Camera frames the object costmap processed, of those rendered (sim time x rate):
         # below the rendered count the layer lags (CPU too slow for the real-time factor).
         "object_frames_processed": mon.object_frames,
+        # The node's own counts: depth frames that reached its callback, and processed.
+        "object_frames_received": mon.object_frames_received,
+        "object_frames_received_processed": mon.object_frames_counted,
+        "object_frame_ms_p50_p95": ([round(float(np.percentile(mon.object_frame_ms, q)), 1)
+                                     for q in (50, 95)] if mon.object_frame_ms else None),
+        # How navigation ended goals, and the sim seconds from each abort to the next goal.
+        "nav_outcomes": mon.nav_outcomes(),
+        "nav_raw": {"ends": sorted(mon.nav_ends.values(), key=lambda e: e[1]),
+                    "goal_times": mon.goal_times},
         "camera_frames_rendered": (int(mon.sim_time_s * cfg.camera_rate_hz)
                                    if STRATEGY_SPECS[cfg.strategy].use_objects else 0),
         "objects": [np.round(b, 3).tolist() for b in mon.boxes],
