@@ -2,7 +2,7 @@
 time limit of a run and the simulator parameters (camera mount, navigation margin).
 
 World specs: the generated worlds (``house``, ``maze``, ``house_cluttered``,
-``small_house``, ``small_cluttered``), ``shared/NAME`` for ``<shared>/worlds/NAME.world.yaml``
+``office_floor``, ``small_house``, ``small_cluttered``), ``shared/NAME`` for ``<shared>/worlds/NAME.world.yaml``
 and ``eb/NAME`` for the Explore-Bench map ``<shared>/worlds/explore_bench/NAME.yaml``
 (``<shared>`` = ``$EXPLORE_SEG_SHARED`` or ``../shared`` beside the repository), or a
 path to a world file.
@@ -20,7 +20,7 @@ from sim_bridge.observable import with_observable
 
 ROOT = Path(__file__).resolve().parents[1]
 
-GENERATED_WORLDS = ("house", "maze", "house_cluttered")
+GENERATED_WORLDS = ("house", "maze", "house_cluttered", "office_floor")
 SHARED_WORLDS = ("house", "house_cluttered", "house_cluttered_plus", "maze")
 #: Sim time limit per m^2 of explorable area, and its bounds (s).
 TIME_PER_AREA_S = 5.0

@@ -4,9 +4,11 @@ Thin wiring around the ROS-free decision core :class:`explore_seg.core.explorer.
 it detects frontiers from ``map`` (+ ``object_costmap``) itself (no ``frontier_detector``
 needed; it publishes the same ``frontiers`` topics), computes path lengths robot ->
 cPoints in one sweep, scores them (``strategy``: the paper's eq. 1-3 with region labels
-from ``regions``, nearest, or explore_lite) and keeps, switches, blacklists and finishes.
-Its parameters: :class:`~explore_seg.core.selection.SelectorNodeParams` and the detection
-parameters :class:`~explore_seg.core.frontiers.FrontierParams` under ``frontier.``.
+from ``regions``, nearest, explore_lite, or rrt_exploration, whose candidates come from
+RRTs) and keeps, switches, blacklists and finishes. Its parameters:
+:class:`~explore_seg.core.selection.SelectorNodeParams`, the detection parameters
+:class:`~explore_seg.core.frontiers.FrontierParams` under ``frontier.`` and the RRT
+detector's :class:`~explore_seg.core.rrt.RrtParams` under ``rrt.``.
 
 One timer ``_tick`` on the ROS clock (``rate_hz``) runs the state machine::
 
@@ -42,6 +44,7 @@ from explore_seg.core.frontiers import Frontier, FrontierParams
 from explore_seg.core.grid import GridMap, resample_array
 from explore_seg.core.limits import InputLimits
 from explore_seg.core.pose_fusion import PoseFusionParams
+from explore_seg.core.rrt import RrtParams
 from explore_seg.core.selection import (REGION_STRATEGIES, Action, Goal, NavOutcome,
                                         SelectorNodeParams)
 from explore_seg.done_gate import DoneGate
@@ -83,8 +86,9 @@ class TargetSelectorNode(Node):
         self._fp = ParamBinding(self, FrontierParams(), prefix=FRONTIER_PREFIX)
         self._lp = ParamBinding(self, InputLimits(), prefix="input.")
         self._pfp = ParamBinding(self, PoseFusionParams(), prefix="pose_fusion.")
+        self._rp = ParamBinding(self, RrtParams(), prefix="rrt.")
         p = self._p.params
-        self._explorer = Explorer(self._fp.params, p)
+        self._explorer = Explorer(self._fp.params, p, self._rp.params)
         self._grid: GridMap | None = None
         self._layer: GridMap | None = None
         self._regions_img: Image | None = None
@@ -134,6 +138,7 @@ class TargetSelectorNode(Node):
         self._timer = self.create_timer(1.0 / p.rate_hz, self._tick)
         self._p.on_change(self._params_changed)
         self._fp.on_change(lambda old, new: self._explorer.set_params(frontier=new))
+        self._rp.on_change(lambda old, new: self._explorer.set_params(rrt=new))
         self._publish_done(False)
 
     # ---------------------------------------------------------------- helpers

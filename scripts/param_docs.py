@@ -36,8 +36,8 @@ NODE_PARAMS: dict[str, list[tuple[str, str]]] = {
     "object_costmap": [("", "explore_seg.core.objects:ObjectCostmapNodeParams"),
                        ("detector.", "explore_seg.core.detector:DetectorParams"), _LIMITS,
                        _POSE_FUSION],
-    "target_selector": [("", "explore_seg.core.selection:SelectorNodeParams"), _LIMITS,
-                        _POSE_FUSION],
+    "target_selector": [("", "explore_seg.core.selection:SelectorNodeParams"),
+                        ("rrt.", "explore_seg.core.rrt:RrtParams"), _LIMITS, _POSE_FUSION],
     "sim_bridge": [("", "sim_bridge.engine:SimParams")],
 }
 #: README heading of a NODE_PARAMS key that is not a node.

@@ -12,6 +12,7 @@ from pathlib import Path
 from explore_seg.core.frontiers import FrontierParams
 from explore_seg.core.objects import ObjectCostmapNodeParams
 from explore_seg.core.param_files import dataclass_from_values, load_node_params
+from explore_seg.core.rrt import RrtParams
 from explore_seg.core.segmentation import SegmentationNodeParams
 from explore_seg.core.selection import SelectorNodeParams
 
@@ -24,6 +25,7 @@ class ExplorerParams:
     selection: SelectorNodeParams = field(default_factory=SelectorNodeParams)
     segmentation: SegmentationNodeParams = field(default_factory=SegmentationNodeParams)
     objects: ObjectCostmapNodeParams = field(default_factory=ObjectCostmapNodeParams)
+    rrt: RrtParams = field(default_factory=RrtParams)
 
 
 #: ExplorerParams field -> (node whose section sets it, parameter prefix). The frontier
@@ -31,7 +33,8 @@ class ExplorerParams:
 _SECTIONS = {"frontier": ("target_selector", "frontier."),
              "selection": ("target_selector", ""),
              "segmentation": ("segmentation", ""),
-             "objects": ("object_costmap", "")}
+             "objects": ("object_costmap", ""),
+             "rrt": ("target_selector", "rrt.")}
 
 
 def default_explorer_params_file() -> Path | None:

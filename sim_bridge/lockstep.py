@@ -18,9 +18,9 @@ run:
 
 Strategies (:data:`STRATEGY_SPECS`): ``paper`` (eq. 1-3, regions and object costmap),
 ``paper_noseg`` (regions off, i.e. gamma = 0), ``paper_noobj`` (no object costmap),
-``nearest`` and ``explore_lite``. The two baselines run as their original packages
-would: no object costmap anywhere (not in frontier detection, not in the planner) and
-no regions.
+``nearest``, ``explore_lite`` and ``rrt_exploration`` (its RRTs seeded with the run's
+seed). The three baselines run as their original packages would: no object costmap
+anywhere (not in frontier detection, not in the planner) and no regions.
 
 A run stops at completion (coverage >= ``coverage_target_pct`` of the ground-truth
 explorable area, measured by the engine's metrics), when the goal manager reports
@@ -84,7 +84,7 @@ class StrategySpec:
     Attributes
     ----------
     selection : str
-        ``SelectionParams.strategy`` (paper | nearest | explore_lite).
+        ``SelectionParams.strategy`` (paper | nearest | explore_lite | rrt_exploration).
     use_regions : bool
         Run the segmentation and use regionGain.
     use_objects : bool
@@ -110,6 +110,10 @@ STRATEGY_SPECS: dict[str, StrategySpec] = {
                             "nearest frontier by path length (no object costmap)"),
     "explore_lite": StrategySpec("explore_lite", False, False,
                                  "explore_lite cost 3 * dist - 1 * length (no object costmap)"),
+    "rrt_exploration": StrategySpec("rrt_exploration", False, False,
+                                    "Umari & Mukhopadhyay 2017: local + global RRT frontier "
+                                    "points, mean shift, revenue 3 * gain - dist (no object "
+                                    "costmap)"),
 }
 STRATEGIES: tuple[str, ...] = tuple(STRATEGY_SPECS)
 
@@ -400,7 +404,7 @@ def run_exploration(world: World, strategy: str, seed: int, *,
     if ground_truth is None and sp.compute_coverage:
         ground_truth = worlds.ground_truth(run_world, resolution_m=sp.map_resolution_m)
     engine = SimEngine(run_world, sp, ground_truth=ground_truth)
-    explorer = Explorer(fr_p, sel_p)
+    explorer = Explorer(fr_p, sel_p, replace(ep.rrt, seed=int(seed) & 0x7FFFFFFF))
     segmenter = IncrementalSegmenter(ep.segmentation) if spec.use_regions else None
     objects = (_ObjectPipeline(engine, obj_p, seed, p)
                if spec.use_objects else None)

@@ -27,7 +27,8 @@ class SimParams:
     """
 
     world: str = field(default="small_house", metadata=param_meta(
-        "world name (house, house_cluttered, maze, small_house, small_cluttered) or a "
+        "world name (house, house_cluttered, maze, small_house, small_cluttered, "
+        "office_floor) or a "
         "path to a *.world.yaml / map_server *.yaml", read_only=True))
     seed: int = field(default=0, metadata=param_meta(
         "seed of the sensor and pose noise", read_only=True))

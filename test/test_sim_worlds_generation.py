@@ -150,7 +150,8 @@ def test_maze_rejects_bad_options(kwargs, match):
 
 
 def test_default_worlds():
-    assert WORLD_NAMES == ("house", "house_cluttered", "maze", "small_house", "small_cluttered")
+    assert WORLD_NAMES == ("house", "house_cluttered", "maze", "small_house", "small_cluttered",
+                           "office_floor")
     small = default_world("small_house")
     assert 3 <= sum(k == "room" for k in small.room_kinds.values()) <= 4
     xs = [p.x for p in small.primitives]

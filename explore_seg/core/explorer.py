@@ -12,6 +12,10 @@ goal manager once, for every caller: the ``target_selector`` node, the lock-step
 4. lets the :class:`~explore_seg.core.selection.GoalManager` keep, switch, blacklist or
    finish, under the strategy of :class:`~explore_seg.core.selection.SelectionParams`.
 
+Under an RRT strategy (``rrt_exploration``) step 1 is the RRT frontier detector instead
+(:class:`~explore_seg.core.rrt.RrtFrontierDetector`, run at every step: its trees grow
+per decision); the path graphs are still built once per map.
+
 It returns an :class:`ExplorerStep`: the action (new goal / keep / wait / done), the goal,
 the frontiers with their distances and costs (for markers and metrics), what was
 blacklisted or switched, warnings for the caller to log, and the time spent.
@@ -44,8 +48,9 @@ import numpy.typing as npt
 from explore_seg.core.frontiers import (Frontier, FrontierParams, find_frontiers,
                                         object_obstacles, traversable_mask)
 from explore_seg.core.grid import GridMap, metres_to_cells
-from explore_seg.core.selection import (Action, Goal, GoalManager, NavOutcome, PathGraphs,
-                                        Selection, SelectionParams)
+from explore_seg.core.rrt import RrtFrontierDetector, RrtParams
+from explore_seg.core.selection import (RRT_STRATEGIES, Action, Goal, GoalManager, NavOutcome,
+                                        PathGraphs, Selection, SelectionParams)
 
 #: Keys of :attr:`ExplorerStep.warnings` (the caller throttles its log per key).
 WARN_LAYER_FRAME = "layer_frame"
@@ -64,12 +69,14 @@ class Detection:
     layer_warning: str = ""
 
 
-def detect_frontiers(grid: GridMap, layer: GridMap | None, params: FrontierParams
-                     ) -> Detection:
+def detect_frontiers(grid: GridMap, layer: GridMap | None, params: FrontierParams,
+                     groups: bool = True) -> Detection:
     """Frontiers of ``grid`` with the object layer's occupied cells as obstacles.
 
     The layer is used when ``params.use_object_costmap`` and it is in the map's frame
     (else ignored, with ``layer_warning`` saying why); it may have any size or origin.
+    ``groups=False``: only the masks (no frontier groups; the RRT strategies find their
+    candidates themselves).
     """
     extra = None
     warning = ""
@@ -80,8 +87,8 @@ def detect_frontiers(grid: GridMap, layer: GridMap | None, params: FrontierParam
         else:
             extra = object_obstacles(layer, grid, params.object_occupied_threshold)
     passable = traversable_mask(grid, extra, params)
-    return Detection(find_frontiers(grid, extra, params, passable=passable), extra, passable,
-                     warning)
+    frontiers = find_frontiers(grid, extra, params, passable=passable) if groups else []
+    return Detection(frontiers, extra, passable, warning)
 
 
 @dataclass(frozen=True)
@@ -105,7 +112,8 @@ class ExplorerStep:
     robot_rc : (int, int)
         The robot's cell.
     detected : bool
-        True when frontiers and path graphs were recomputed in this step.
+        True when frontiers and path graphs were recomputed in this step (the candidates:
+        at every step under an RRT strategy).
     blacklisted : int
         Goals added to the blacklist in this step.
     switched : bool
@@ -141,12 +149,18 @@ class Explorer:
         Detection (thresholds, robot radius, object layer use).
     selection : SelectionParams
         Strategy and goal handling.
+    rrt : RrtParams
+        The RRT frontier detector's (used by the RRT strategies only).
     """
 
     def __init__(self, frontier: FrontierParams = FrontierParams(),
-                 selection: SelectionParams = SelectionParams()) -> None:
+                 selection: SelectionParams = SelectionParams(),
+                 rrt: RrtParams = RrtParams()) -> None:
         self._fp = frontier
         self._sp = selection
+        self._rp = rrt
+        self._rrt: RrtFrontierDetector | None = None
+        self._det: Detection | None = None
         self.manager = GoalManager(selection)
         self._key: tuple[GridMap, GridMap | None] | None = None
         self._frontiers: list[Frontier] = []
@@ -166,6 +180,16 @@ class Explorer:
         return self._sp
 
     @property
+    def rrt_params(self) -> RrtParams:
+        """Current RRT detector parameters."""
+        return self._rp
+
+    @property
+    def rrt_detector(self) -> RrtFrontierDetector | None:
+        """The RRT frontier detector (None unless an RRT strategy ran a step)."""
+        return self._rrt
+
+    @property
     def frontiers(self) -> list[Frontier]:
         """Frontiers of the last map seen by :meth:`step`."""
         return self._frontiers
@@ -181,13 +205,19 @@ class Explorer:
         return self.manager.done
 
     def set_params(self, frontier: FrontierParams | None = None,
-                   selection: SelectionParams | None = None) -> None:
-        """Apply new parameters; frontiers and paths are recomputed at the next step."""
+                   selection: SelectionParams | None = None,
+                   rrt: RrtParams | None = None) -> None:
+        """Apply new parameters; frontiers and paths are recomputed at the next step (new
+        RRT or detection parameters restart the RRT detector: new trees, no points)."""
         if frontier is not None:
             self._fp = frontier
+            self._rrt = None
         if selection is not None:
             self._sp = selection
             self.manager.set_params(selection)
+        if rrt is not None:
+            self._rp = rrt
+            self._rrt = None
         self._key = None
 
     def reset(self, clear_blacklist: bool = False) -> None:
@@ -226,11 +256,21 @@ class Explorer:
 
     # ------------------------------------------------------------------- step
     def _detect(self, grid: GridMap, layer: GridMap | None) -> None:
-        det = detect_frontiers(grid, layer, self._fp)
+        det = detect_frontiers(grid, layer, self._fp,
+                               groups=self._sp.strategy not in RRT_STRATEGIES)
+        self._det = det
         self._layer_warning = det.layer_warning
         self._frontiers = det.frontiers
         self._graph = PathGraphs(grid, det.extra_obstacles, self._fp, self._sp, det.passable)
         self._key = (grid, layer)
+
+    def _detect_rrt(self, grid: GridMap, xy: tuple[float, float]) -> None:
+        """Grow the RRTs and filter their points into this step's candidates."""
+        det = self._det
+        assert det is not None
+        if self._rrt is None:
+            self._rrt = RrtFrontierDetector(self._rp, self._fp)
+        self._frontiers = self._rrt.update(grid, xy, det.passable, det.extra_obstacles)
 
     def step(self, now_s: float, grid: GridMap, pose: tuple[float, float, float],
              layer: GridMap | None = None,
@@ -262,10 +302,13 @@ class Explorer:
         detected = self._key is None or self._key[0] is not grid or self._key[1] is not layer
         if detected:
             self._detect(grid, layer)
+        x, y, yaw = (float(v) for v in pose)
+        if self._sp.strategy in RRT_STRATEGIES:
+            self._detect_rrt(grid, (x, y))
+            detected = True
         if self._layer_warning:
             warnings.append((WARN_LAYER_FRAME, self._layer_warning))
         t1 = time.perf_counter()
-        x, y, yaw = (float(v) for v in pose)
         manager = self.manager
         if manager.start_xy_m is None:
             manager.set_start((x, y), yaw)

@@ -118,6 +118,10 @@ class Frontier:
         Mean of the group's cells (cell units / world).
     cells : ndarray of int64, shape (K, 2)
         (row, col) of the group's frontier cells.
+    info_gain_m2 : float
+        Unknown area the frontier promises, when its detector measured it (the RRT
+        detector of ``rrt_exploration``: unknown cells within ``info_radius_m``, which are
+        then its ``cells``); NaN otherwise.
     """
 
     id: int
@@ -129,6 +133,7 @@ class Frontier:
     centroid_rc: tuple[float, float]
     centroid_xy_m: tuple[float, float]
     cells: npt.NDArray[np.int64] = field(repr=False)
+    info_gain_m2: float = math.nan
 
 
 _KERNELS = {4: np.array([[0, 1, 0], [1, 1, 1], [0, 1, 0]], np.uint8),
@@ -299,6 +304,14 @@ def _cpoint(rep_rc: tuple[int, int], passable: npt.NDArray[np.bool_], grid: Grid
         if ok.size:
             return int(chunk[ok[0], 0]), int(chunk[ok[0], 1])
     return None
+
+
+def passable_in_sight(rep_rc: tuple[int, int], passable: npt.NDArray[np.bool_], grid: GridMap,
+                      extra_obstacles: npt.NDArray[np.bool_] | None, occupied_threshold: int,
+                      radius_cells: int) -> tuple[int, int] | None:
+    """The passable cell nearest to ``rep_rc`` within ``radius_cells`` whose straight
+    segment from ``rep_rc`` crosses no obstacle (how a cPoint is placed); None if none."""
+    return _cpoint(rep_rc, passable, grid, extra_obstacles, occupied_threshold, radius_cells)
 
 
 def group_frontiers(grid: GridMap, frontier_mask: npt.NDArray[np.bool_],

@@ -3,8 +3,9 @@
 * :mod:`~sim_bridge.worlds.files`: :func:`load_world` / :func:`save_world`
   (``explore_seg_world/1`` YAML, map_server YAML + PGM/PNG, Explore-Bench layout).
 * :mod:`~sim_bridge.worlds.house`, :mod:`~sim_bridge.worlds.maze`: seeded worlds sized like
-  the paper's (20 x 20 m house, 40 x 40 m maze); :mod:`~sim_bridge.worlds.furniture` and
-  :mod:`~sim_bridge.worlds.walls` build their parts.
+  the paper's (20 x 20 m house, 40 x 40 m maze); :mod:`~sim_bridge.worlds.office`: a
+  60 x 40 m office floor; :mod:`~sim_bridge.worlds.floor` (plan -> world),
+  :mod:`~sim_bridge.worlds.furniture` and :mod:`~sim_bridge.worlds.walls` build their parts.
 * :mod:`~sim_bridge.worlds.catalog`: :func:`default_world` names the worlds the demo and the
   tests use (:data:`WORLD_NAMES`).
 * :mod:`~sim_bridge.worlds.truth`: :func:`ground_truth` rasters and the explorable region;
@@ -22,13 +23,14 @@ from sim_bridge.worlds.files import (KNOWN_CLASSES, MAP_WALL_HEIGHT_M, WORLD_FOR
 from sim_bridge.worlds.furniture import Rect
 from sim_bridge.worlds.house import HouseOptions, generate_house
 from sim_bridge.worlds.maze import generate_maze
+from sim_bridge.worlds.office import OFFICE_SIZE_M, generate_office_floor
 from sim_bridge.worlds.truth import (FOOTPRINT_TALL_Z_M, FOOTPRINT_Z_M, GT_RESOLUTION_M,
                                      LIDAR_PLANE_Z_M, GroundTruth, flood_inside, ground_truth)
 
 __all__ = [
     "CELL_OVERLAP_M", "FOOTPRINT_TALL_Z_M", "FOOTPRINT_Z_M", "GT_RESOLUTION_M", "KNOWN_CLASSES",
-    "LIDAR_PLANE_Z_M", "MAP_WALL_HEIGHT_M", "SMALL_HOUSE_SIZE_M", "SMALL_ROOM_WIDTH_M",
+    "LIDAR_PLANE_Z_M", "MAP_WALL_HEIGHT_M", "OFFICE_SIZE_M", "SMALL_HOUSE_SIZE_M", "SMALL_ROOM_WIDTH_M",
     "WORLD_FORMAT", "WORLD_NAMES", "GroundTruth", "HouseOptions", "Rect", "default_world",
-    "flood_inside", "generate_house", "generate_maze", "ground_truth", "load_world",
+    "flood_inside", "generate_house", "generate_maze", "generate_office_floor", "ground_truth", "load_world",
     "raster_geometry", "rasterize", "save_world", "world_to_dict",
 ]

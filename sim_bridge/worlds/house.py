@@ -7,32 +7,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
-from scipy import ndimage
 
 from explore_seg.core.fields import param_meta
-from explore_seg.core.grid import OCCUPIED_THRESHOLD
-from sim_bridge.world import Primitive, World, WorldObject, raster_geometry
-from sim_bridge.worlds.furniture import Rect, furnish_room
-from sim_bridge.worlds.truth import GT_RESOLUTION_M, ground_truth
-from sim_bridge.worlds.walls import Wall, add_door, bounds_around
-
-
-def _snap(v: float, step: float = 0.05) -> float:
-    return round(round(v / step) * step, 6)
-
-
-def _split_lengths(rng: np.random.Generator, total: float, lo: float, hi: float) -> list[float]:
-    """Widths in [lo, hi] (snapped to 0.05 m) that sum to ``total`` (> lo)."""
-    out: list[float] = []
-    left = total
-    while left > hi:
-        w = _snap(float(rng.uniform(lo, min(hi, left - lo))))
-        out.append(w)
-        left = round(left - w, 6)
-    out.append(left)
-    return out
-
+from sim_bridge.world import World
+from sim_bridge.worlds.furniture import Rect
+from sim_bridge.worlds.floor import assemble_floor, snap, split_lengths
+from sim_bridge.worlds.walls import Wall
 
 @dataclass(frozen=True)
 class HouseOptions:
@@ -95,8 +75,8 @@ def _house_layout(rng: np.random.Generator, width: float, height: float, o: Hous
     """Canonical layout (corridor along x): walls, rooms (rect, kind), doors (room pairs)
     and the start pose. Rects are centre-line rectangles."""
     hw, hh = width / 2, height / 2
-    cw = _snap(float(rng.uniform(*o.corridor_width_m)))
-    shift = _snap(float(rng.uniform(-0.15, 0.15)) * height)
+    cw = snap(float(rng.uniform(*o.corridor_width_m)))
+    shift = snap(float(rng.uniform(-0.15, 0.15)) * height)
     cy0, cy1 = shift - cw / 2, shift + cw / 2
     rooms: list[tuple[Rect, str]] = [((-hw, cy0, hw, cy1), "corridor")]
     walls = [Wall(-hw, -hh, hw, -hh), Wall(-hw, hh, hw, hh), Wall(-hw, -hh, -hw, hh),
@@ -106,7 +86,7 @@ def _house_layout(rng: np.random.Generator, width: float, height: float, o: Hous
         near, far = (cy0, -hh) if side < 0 else (cy1, hh)
         depth = abs(far - near)
         x = -hw
-        columns = _split_lengths(rng, width, *o.room_width_m)
+        columns = split_lengths(rng, width, *o.room_width_m)
         prev_front: int | None = None
         for k, cwid in enumerate(columns):
             x0, x1 = x, round(x + cwid, 6)
@@ -115,7 +95,7 @@ def _house_layout(rng: np.random.Generator, width: float, height: float, o: Hous
                 walls.append(Wall(x0, min(near, far), x0, max(near, far)))
             split = depth > o.split_depth_m and rng.random() < 0.7
             if split:
-                d = _snap(depth * float(rng.uniform(0.4, 0.6)))
+                d = snap(depth * float(rng.uniform(0.4, 0.6)))
                 mid = near + side * d
                 walls.append(Wall(x0, mid, x1, mid))
                 front = (x0, min(near, mid), x1, max(near, mid))
@@ -131,41 +111,8 @@ def _house_layout(rng: np.random.Generator, width: float, height: float, o: Hous
             if prev_front is not None and rng.random() < o.extra_door_prob:
                 links.append((prev_front, fi))
             prev_front = fi
-    start = (_snap(float(rng.uniform(-0.3, 0.3)) * width), shift, 0.0)
+    start = (snap(float(rng.uniform(-0.3, 0.3)) * width), shift, 0.0)
     return walls, rooms, links, start
-
-
-def _shared_edge(a: Rect, b: Rect) -> tuple[tuple[float, float], tuple[float, float]] | None:
-    """Common boundary segment of two touching rectangles (None when they do not share one)."""
-    eps = 1e-6
-    for ax, bx in ((a[2], b[0]), (a[0], b[2])):
-        if abs(ax - bx) < eps:
-            lo, hi = max(a[1], b[1]), min(a[3], b[3])
-            if hi - lo > eps:
-                return (ax, lo), (ax, hi)
-    for ay, by in ((a[3], b[1]), (a[1], b[3])):
-        if abs(ay - by) < eps:
-            lo, hi = max(a[0], b[0]), min(a[2], b[2])
-            if hi - lo > eps:
-                return (lo, ay), (hi, ay)
-    return None
-
-
-def _rotate90(x: float, y: float) -> tuple[float, float]:
-    return -y, x
-
-
-def _paint_rooms(rooms: list[tuple[Rect, str]], bounds: tuple[float, float, float, float],
-                 res: float) -> npt.NDArray[np.int32]:
-    h, w = raster_geometry(bounds, res)
-    labels = np.zeros((h, w), np.int32)
-    xs = bounds[0] + (np.arange(w) + 0.5) * res
-    ys = bounds[1] + (np.arange(h) + 0.5) * res
-    for k, (r, _) in enumerate(rooms, start=1):
-        cols = (xs >= r[0]) & (xs < r[2])
-        rows = (ys >= r[1]) & (ys < r[3])
-        labels[np.ix_(rows, cols)] = k
-    return labels
 
 
 def generate_house(seed: int, size_m: tuple[float, float] = (20.0, 20.0),
@@ -216,74 +163,7 @@ def generate_house(seed: int, size_m: tuple[float, float] = (20.0, 20.0),
     vertical = bool(rng.random() < 0.5)
     cw, ch = (height, width) if vertical else (width, height)
     walls, rooms, links, start = _house_layout(rng, cw, ch, o)
-    # doors between linked rooms (canonical frame)
-    for a, b in links:
-        edge = _shared_edge(rooms[a][0], rooms[b][0])
-        if edge is None:
-            continue
-        (ex0, ey0), (ex1, ey1) = edge
-        length = math.hypot(ex1 - ex0, ey1 - ey0)
-        dw = _snap(float(rng.uniform(*o.door_width_m)))
-        margin = o.wall_thickness_m / 2 + 0.2
-        if length < dw + 2 * margin:
-            continue
-        s0 = float(rng.uniform(margin, length - margin - dw))
-        ux, uy = (ex1 - ex0) / length, (ey1 - ey0) / length
-        add_door(walls, (ex0 + ux * s0, ey0 + uy * s0),
-                  (ex0 + ux * (s0 + dw), ey0 + uy * (s0 + dw)))
-    if vertical:
-        for w in walls:
-            w.x0, w.y0 = _rotate90(w.x0, w.y0)
-            w.x1, w.y1 = _rotate90(w.x1, w.y1)
-        rooms = [((-r[3], r[0], -r[1], r[2]), kind) for r, kind in rooms]
-        sx, sy = _rotate90(start[0], start[1])
-        start = (sx, sy, math.pi / 2)
-    prims: list[Primitive] = []
-    lintel = o.lintel_z_m if o.lintels else None
-    for k, w in enumerate(walls):
-        prims.extend(w.boxes(f"wall_{k}", o.wall_thickness_m, o.wall_height_m, lintel))
-    # door keep-out zones
-    blocked: list[Rect] = []
-    for w in walls:
-        ux, uy = (w.x1 - w.x0) / w.length, (w.y1 - w.y0) / w.length
-        for d0, d1 in w.doors:
-            pts = [(w.x0 + ux * s + uy * n, w.y0 + uy * s - ux * n)
-                   for s in (d0 - 0.2, d1 + 0.2) for n in (-o.door_keepout_m, o.door_keepout_m)]
-            blocked.append((min(p[0] for p in pts), min(p[1] for p in pts),
-                            max(p[0] for p in pts), max(p[1] for p in pts)))
-    objects: list[WorldObject] = []
-    counters: dict[str, int] = {}
-    t2 = o.wall_thickness_m / 2
-    for rect, kind in rooms:
-        if kind != "room":
-            continue
-        interior = (rect[0] + t2, rect[1] + t2, rect[2] - t2, rect[3] - t2)
-        p, objs = furnish_room(rng, interior, blocked, cluttered, o.furniture_clearance_m,
-                               o.place_tries, counters)
-        prims.extend(p)
-        objects.extend(objs)
-    hw, hh = width / 2, height / 2
-    bounds = bounds_around(-hw - t2, -hh - t2, hw + t2, hh + t2, o.margin_m)
-    world = World(name=f"house{'_cluttered' if cluttered else ''}_s{seed}", bounds=bounds,
-                  start_pose=start, primitives=prims, objects=objects,
-                  description=f"generated house seed={seed} size={width}x{height} m"
-                              f"{' cluttered' if cluttered else ''}")
-    gt = ground_truth(world)
-    dist = ndimage.distance_transform_edt(gt.footprint_tall.data < OCCUPIED_THRESHOLD) \
-        * GT_RESOLUTION_M
-    r, c = gt.start_cell
-    if dist[r, c] < o.start_clearance_m:     # never expected: the corridor holds no furniture
-        ok = gt.inside & (dist >= o.start_clearance_m)
-        if not ok.any():
-            raise ValueError(f"no start cell with clearance {o.start_clearance_m} m (seed {seed})")
-        rr, cc = np.nonzero(ok)
-        k = int(np.argmax(dist[rr, cc]))
-        x, y = gt.lidar.cell_to_world(rr[k], cc[k])
-        world.start_pose = (x, y, start[2])
-        gt = ground_truth(world)
-    labels = _paint_rooms(rooms, bounds, GT_RESOLUTION_M)
-    free = gt.inside & (gt.lidar.data < OCCUPIED_THRESHOLD)
-    world.room_labels = np.where(free, labels, 0).astype(np.int32)
-    world.room_resolution_m = GT_RESOLUTION_M
-    world.room_kinds = {k: kind for k, (_, kind) in enumerate(rooms, start=1)}
-    return world
+    return assemble_floor(rng, walls, rooms, links, start, o, (width, height), cluttered,
+                          vertical, f"house{'_cluttered' if cluttered else ''}_s{seed}",
+                          f"generated house seed={seed} size={width}x{height} m"
+                          f"{' cluttered' if cluttered else ''}")

@@ -20,11 +20,11 @@ from explore_seg.core.selection.params import (POSE_TOPIC_TYPES, SelectionParams
                                                SelectorNodeParams)
 from explore_seg.core.selection.regions import frontier_regions, region_at
 from explore_seg.core.selection.strategies import (COST_FUNCTIONS, REGION_STRATEGIES,
-                                                   STRATEGIES, CostInputs)
+                                                   RRT_STRATEGIES, STRATEGIES, CostInputs)
 
 __all__ = [
     "Action", "COST_FUNCTIONS", "CostInputs", "Goal", "GoalManager", "NavOutcome", "POSE_TOPIC_TYPES",
-    "PathGraphs", "REGION_STRATEGIES", "STRATEGIES", "Selection", "SelectionParams",
+    "PathGraphs", "REGION_STRATEGIES", "RRT_STRATEGIES", "STRATEGIES", "Selection", "SelectionParams",
     "SelectorNodeParams", "StepResult", "compute_costs", "frontier_distances",
     "frontier_regions", "goal_yaw", "region_at", "select_goal",
 ]

@@ -1,7 +1,7 @@
 """Frontier costs and the choice of the cheapest (Kim, Kim & Lee, RA-L 2022, Alg. 2 and
 eq. 1-3).
 
-Three strategies (:data:`~explore_seg.core.selection.strategies.COST_FUNCTIONS`) score every frontier group ``i`` (lower is better; unreachable = inf):
+The strategies (:data:`~explore_seg.core.selection.strategies.COST_FUNCTIONS`) score every frontier group ``i`` (lower is better; unreachable = inf):
 
 * ``paper`` (eq. 1-3)::
 
@@ -23,6 +23,10 @@ Three strategies (:data:`~explore_seg.core.selection.strategies.COST_FUNCTIONS`)
   path length to the cPoint in metres, where explore_lite uses the straight-line distance
   to the nearest frontier cell multiplied by the map resolution (metres * m/cell, a unit
   bug noted in STYLE.md).
+* ``rrt_exploration``: ``cost_i = dist_i - info_multiplier * gain_i`` (minus the revenue
+  of rrt_exploration's assigner; ``gain_i`` = the candidate's ``info_gain_m2``, times
+  ``hysteresis_gain`` within ``hysteresis_radius_m``). Its candidates are not frontier
+  cell groups but the RRT detector's cluster centres (:mod:`explore_seg.core.rrt`).
 
 alpha, beta, gamma: the paper's numeric values could not be recovered from the material
 available to us (the seed code hard-codes a different, unweighted objective). The
@@ -116,7 +120,8 @@ def compute_costs(frontiers: Sequence[Frontier], dist_m: npt.ArrayLike,
         dist_m=d, finite=finite,
         size_cells=np.asarray([f.size_cells for f in frontiers], dtype=np.float64),
         length_m=np.asarray([f.length_m for f in frontiers], dtype=np.float64),
-        regions=reg, robot_region=int(robot_region))
+        regions=reg, robot_region=int(robot_region),
+        info_gain_m2=np.asarray([f.info_gain_m2 for f in frontiers], dtype=np.float64))
     costs[finite] = COST_FUNCTIONS[params.strategy](inputs, params)
     return costs
 

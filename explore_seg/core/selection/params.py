@@ -41,6 +41,15 @@ class SelectionParams:
         "explore_lite: weight of the path length", "1/m", default=3.0)
     gain_scale: float = _non_negative(
         "explore_lite: weight of the frontier length", "1/m", default=1.0)
+    info_multiplier: float = _non_negative(
+        "rrt_exploration: weight of a candidate's information gain (unknown area, m^2) "
+        "against its path length in the revenue", "1/m", default=3.0)
+    hysteresis_radius_m: float = _non_negative(
+        "rrt_exploration: candidates within this path length of the robot have their "
+        "information gain multiplied by hysteresis_gain", "m", default=3.0)
+    hysteresis_gain: float = _non_negative(
+        "rrt_exploration: information gain factor of candidates near the robot (> 1 keeps "
+        "it exploring where it is)", default=2.0)
     region_search_radius_m: float = _non_negative(
         "a cell without region takes the nearest labelled cell's within this radius", "m",
         default=0.3)
@@ -98,6 +107,7 @@ class SelectionParams:
         if self.strategy not in STRATEGIES:
             raise ValueError(f"strategy must be one of {STRATEGIES}, got {self.strategy!r}")
         for name in ("alpha", "beta", "gamma", "potential_scale", "gain_scale",
+                     "info_multiplier", "hysteresis_radius_m", "hysteresis_gain",
                      "region_search_radius_m", "start_search_radius_m", "hysteresis_margin",
                      "progress_min_m", "goal_reached_tolerance_m", "frontier_match_radius_m",
                      "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",

@@ -33,6 +33,9 @@ class CostInputs:
         Region of each cPoint; None when regionGain is off (no labels or no robot region).
     robot_region : int
         Region of the robot (0 = unknown).
+    info_gain_m2 : ndarray of float64, shape (N,), or None
+        Unknown area each frontier promises (``Frontier.info_gain_m2``; NaN where its
+        detector did not measure it); None when not given.
     """
 
     dist_m: npt.NDArray[np.float64]
@@ -41,6 +44,7 @@ class CostInputs:
     length_m: npt.NDArray[np.float64]
     regions: npt.NDArray[np.int64] | None
     robot_region: int
+    info_gain_m2: npt.NDArray[np.float64] | None = None
 
 
 #: ``cost(inputs, params) -> costs of the finite groups`` (shape ``(finite.sum(),)``).
@@ -72,13 +76,37 @@ def explore_lite_cost(inp: CostInputs, params: Any) -> npt.NDArray[np.float64]:
     return params.potential_scale * inp.dist_m[f] - params.gain_scale * inp.length_m[f]
 
 
+def rrt_exploration_cost(inp: CostInputs, params: Any) -> npt.NDArray[np.float64]:
+    """rrt_exploration's assigner (Umari & Mukhopadhyay 2017), as a cost (-revenue)::
+
+        revenue = info_multiplier * gain - dist
+        gain    = info_gain_m2 * (hysteresis_gain if dist <= hysteresis_radius_m else 1)
+
+    ``info_gain_m2``: unknown area within ``rrt.info_radius_m`` of the cluster centre
+    (NaN counts as 0). Deviations: ``dist`` is the path length to the cPoint, where the
+    assigner uses the straight-line distance robot -> centre for both terms; the assigner's
+    second bonus (centres near the robot's current goal while it is busy) is left to the
+    goal manager's ``hysteresis_margin``, as for every strategy.
+    """
+    f = inp.finite
+    d = inp.dist_m[f]
+    gain = np.zeros(len(d)) if inp.info_gain_m2 is None else \
+        np.nan_to_num(np.asarray(inp.info_gain_m2, dtype=np.float64)[f], nan=0.0)
+    gain = np.where(d <= params.hysteresis_radius_m, gain * params.hysteresis_gain, gain)
+    return d - params.info_multiplier * gain
+
+
 #: Strategy name -> cost function. The first entry is listed first in the docs.
 COST_FUNCTIONS: dict[str, CostFunction] = {
     "paper": paper_cost,
     "nearest": nearest_cost,
     "explore_lite": explore_lite_cost,
+    "rrt_exploration": rrt_exploration_cost,
 }
 #: Strategies ``SelectionParams.strategy`` accepts.
 STRATEGIES: tuple[str, ...] = tuple(COST_FUNCTIONS)
+#: Strategies whose candidates come from the RRT frontier detector
+#: (:mod:`explore_seg.core.rrt`) instead of frontier cell groups.
+RRT_STRATEGIES: frozenset[str] = frozenset({"rrt_exploration"})
 #: Strategies whose cost has a region term (the node logs once when it is inactive).
 REGION_STRATEGIES: frozenset[str] = frozenset({"paper"})
