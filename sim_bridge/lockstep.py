@@ -75,6 +75,9 @@ from sim_bridge.world import World
 
 #: Layer name of the object costmap in the navigation stand-in.
 OBJECT_LAYER = "object_costmap"
+#: One black pixel, broadcast to the image passed to the oracle detector (which reads
+#: only the semantic and instance images).
+_BLACK = np.zeros(3, dtype=np.uint8)
 
 
 @dataclass(frozen=True)
@@ -306,7 +309,11 @@ class _ObjectPipeline:
         tf[:3, :3] = fr.rotation
         tf[:3, 3] = fr.translation
         t0 = time.perf_counter()
-        dets = self.detector.detect(fr.rgb, semantic=fr.semantic, instance=fr.instance)
+        # The oracle reads the semantic and instance images only: it gets a blank view of
+        # the image's shape, and the frame's colour image is never shaded.
+        rgb = (fr.rgb if self.detector.network is not None
+               else np.broadcast_to(_BLACK, fr.semantic.shape + (3,)))
+        dets = self.detector.detect(rgb, semantic=fr.semantic, instance=fr.instance)
         t1 = time.perf_counter()
         depth = DepthFrame(fr.depth_m, self.intrinsics, tf)
         res = process_frame(depth, dets, self.priors, self.params, scan_points_map(self.engine),
