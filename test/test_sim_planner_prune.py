@@ -63,7 +63,7 @@ def test_pruned_search_declines_what_it_cannot_certify():
     the search returns no cells (the caller searches on)."""
     cost = np.ones((40, 40))
     cost[5:40, 20] = np.inf
-    cells, g = planner._pruned_search(cost, (30, 5), (30, 35), 0.05, 1.8)
+    cells, g, _ = planner._pruned_search(cost, (30, 5), (30, 35), 0.05, 1.8)
     assert cells is None and g == np.inf
     ref = plan_path(cost, (30, 5), (30, 35), 0.05, 0.5, prune=False)
     got = plan_path(cost, (30, 5), (30, 35), 0.05, 0.5)

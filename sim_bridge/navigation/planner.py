@@ -66,12 +66,13 @@ def plan_path(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
     the whole grid. The path is the steepest descent of the window's cost-distance field
     from the goal (:func:`~explore_seg.core.paths.extract_path`).
 
-    With ``prune`` (default) each window is first searched only where a path of cost
-    ``<= U`` can pass, for growing guesses ``U < L`` (A*'s pruning with the admissible
-    octile-distance heuristic, see :func:`_pruned_search`); a result is used only when
-    it is certified to equal the whole window's (same cost, same cells), else the next
-    guess or the whole window is searched. Results never depend on ``prune`` or
-    ``cost_hint``; only the work does.
+    With ``prune`` (default) the grid is first searched only where a path of cost
+    ``<= U`` can pass, for growing guesses ``U`` (A*'s pruning with the admissible
+    octile-distance heuristic, see :func:`_pruned_plan`); a result is used only when it
+    is certified to equal the windows' (same cost, same cells, bit for bit), else the
+    windows are searched as described. Results never depend on ``prune`` or
+    ``cost_hint``; only the work does (on long winding paths, as in a maze, the
+    windows' search also skips the windows too small to hold the path).
 
     Parameters
     ----------
@@ -95,36 +96,69 @@ def plan_path(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
     h, w = cost.shape
     (sr, sc), (gr, gc) = start_rc, goal_rc
     budget = 1.5 * math.hypot(gr - sr, gc - sc) * resolution_m + window_margin_m
-    straight = _octile((sr, sc), (gr, gc)) * resolution_m
-    guess = 1.6 * straight + 4.0 * resolution_m
-    if cost_hint is not None and math.isfinite(cost_hint):
-        guess = max(guess, 1.1 * cost_hint + 4.0 * resolution_m)
+    if prune:
+        found = _pruned_plan(cost, start_rc, goal_rc, resolution_m, budget, cost_hint)
+        if found is not None:
+            return found
     while True:
-        half = budget / resolution_m / 2.0 + 1.0
-        cr, cc = (sr + gr) / 2.0, (sc + gc) / 2.0
-        r0, r1 = max(0, int(cr - half)), min(h, int(math.ceil(cr + half)) + 1)
-        c0, c1 = max(0, int(cc - half)), min(w, int(math.ceil(cc + half)) + 1)
+        r0, r1, c0, c1 = _window(start_rc, goal_rc, budget, resolution_m, (h, w))
         whole = r0 == 0 and c0 == 0 and r1 == h and c1 == w
-        win = cost[r0:r1, c0:c1]
-        s_loc, g_loc = (sr - r0, sc - c0), (gr - r0, gc - c0)
-        limit = math.inf if whole else budget
-        # A guess whose region's box (about guess / resolution cells square) would cover
-        # most of the window saves little: the window is searched whole instead.
-        while prune and guess < limit and (guess / resolution_m) ** 2 < 0.8 * win.size:
-            cells, g = _pruned_search(win, s_loc, g_loc, resolution_m, guess)
-            if cells is not None:
-                return cells + np.array([r0, c0], dtype=np.int64), g
-            # g (a path's cost in the window) bounds the window's cost from above.
-            guess = (max(1.1 * g + 4.0 * resolution_m, 1.3 * guess) if math.isfinite(g)
-                     else 2.0 * guess)
-        dist = cost_distance_field(win, s_loc, resolution_m, limit)
-        g = float(dist[g_loc])
+        dist = cost_distance_field(cost[r0:r1, c0:c1], (sr - r0, sc - c0), resolution_m,
+                                   math.inf if whole else budget)
+        g = float(dist[gr - r0, gc - c0])
         if math.isfinite(g) and (g <= budget or whole):
-            cells = extract_path(dist, g_loc)
+            cells = extract_path(dist, (gr - r0, gc - c0))
             return cells + np.array([r0, c0], dtype=np.int64), g
         if whole:
             return None
         budget *= 2.0
+
+
+def _window(start_rc: tuple[int, int], goal_rc: tuple[int, int], budget: float,
+            resolution_m: float, shape: tuple[int, int]) -> tuple[int, int, int, int]:
+    """Rows r0:r1 and columns c0:c1 of :func:`plan_path`'s search window for a budget."""
+    (sr, sc), (gr, gc) = start_rc, goal_rc
+    half = budget / resolution_m / 2.0 + 1.0
+    cr, cc = (sr + gr) / 2.0, (sc + gc) / 2.0
+    return (max(0, int(cr - half)), min(shape[0], int(math.ceil(cr + half)) + 1),
+            max(0, int(cc - half)), min(shape[1], int(math.ceil(cc + half)) + 1))
+
+
+def _pruned_plan(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
+                 goal_rc: tuple[int, int], resolution_m: float, budget: float,
+                 cost_hint: float | None) -> tuple[npt.NDArray[np.int64], float] | None:
+    """:func:`plan_path`'s result from pruned searches (:func:`_pruned_search`) for
+    growing bounds, or None when none could be certified (the caller then searches the
+    windows whole).
+
+    A certified cost ``g`` is the cheapest over the whole grid. The windows' search
+    stops at the first window whose budget is ``>= g`` (a path of cost ``<= budget``
+    lies in the window; earlier windows only have costlier ones), and the descent there
+    equals the certified one when the pruned region lies inside that window.
+    """
+    h, w = cost.shape
+    res = resolution_m
+    guess = 1.6 * _octile(start_rc, goal_rc) * res + 4.0 * res
+    if cost_hint is not None and math.isfinite(cost_hint):
+        guess = max(guess, 1.1 * cost_hint + 4.0 * res)
+    # A bound whose region's box (about bound / resolution cells square) covers most of
+    # the grid saves little over the windows' search.
+    while (guess / res) ** 2 < 0.5 * h * w:
+        cells, g, box = _pruned_search(cost, start_rc, goal_rc, res, guess)
+        if cells is not None:
+            b = budget
+            while True:
+                win = _window(start_rc, goal_rc, b, res, (h, w))
+                if win == (0, h, 0, w) or g <= b:
+                    break
+                b *= 2.0
+            r0, r1, c0, c1 = win
+            if r0 <= box[0] and box[1] <= r1 and c0 <= box[2] and box[3] <= c1:
+                return cells, g
+            return None
+        # g (a path's cost) bounds the cheapest cost from above.
+        guess = max(1.1 * g + 4.0 * res, 1.3 * guess) if math.isfinite(g) else 2.0 * guess
+    return None
 
 
 def _octile(a: tuple[int, int], b: tuple[int, int]) -> float:
@@ -147,11 +181,12 @@ _PRUNE_SLACK = 1e-9
 
 def _pruned_search(cost: npt.NDArray[np.float64], start: tuple[int, int],
                    goal: tuple[int, int], resolution_m: float, bound: float
-                   ) -> tuple[npt.NDArray[np.int64] | None, float]:
+                   ) -> tuple[npt.NDArray[np.int64] | None, float, tuple[int, int, int, int]]:
     """The window's cheapest path found with the cells where a path of cost <= ``bound``
-    can pass, and its cost; ``(None, c)`` when that cannot be certified to equal the
-    whole window's result (``c``: the cost of a path found in the region, an upper bound
-    of the window's, or ``inf``).
+    can pass, its cost and the box (r0, r1, c0, c1) of the region searched; no cells
+    when that cannot be certified to equal the whole grid's (or a window's holding the
+    box) result; the cost is then that of a path found in the region (an upper bound of
+    the cheapest) or ``inf``.
 
     Let ``o_s(p)``, ``o_g(p)`` be the octile distances (m) of ``p`` to start and goal.
     A move costs at least its length, so every cell ``p`` on a cheapest path to ``n``
@@ -173,7 +208,7 @@ def _pruned_search(cost: npt.NDArray[np.float64], start: tuple[int, int],
     lim_cells = (bound + slack) / res
     (sr, sc), (gr, gc) = start, goal
     if _octile(start, goal) > lim_cells:
-        return None, math.inf
+        return None, math.inf, (0, 0, 0, 0)
     # The region keeps 2 cells more, so that the side cells of every diagonal move of
     # such a path are in it too (a diagonal needs both passable). Its bounding box:
     # o_s + o_g >= |r - sr| + |r - gr| (and so for columns).
@@ -192,9 +227,10 @@ def _pruned_search(cost: npt.NDArray[np.float64], start: tuple[int, int],
     dist = cost_distance_field(sub, s_loc, res, bound + slack)
     g = float(dist[g_loc])
     cert_lim = bound - slack
+    box = (r0, r1, c0, c1)
     if not g <= cert_lim:
-        return None, g
-    return _certified_descent(dist, g_loc, o_g * res, cert_lim, (r0, c0), (h, w), res), g
+        return None, g, box
+    return _certified_descent(dist, g_loc, o_g * res, cert_lim, (r0, c0), (h, w), res), g, box
 
 
 def _certified_descent(dist: npt.NDArray[np.float64], goal: tuple[int, int],
