@@ -75,6 +75,8 @@ from sim_bridge.world import World
 
 #: Layer name of the object costmap in the navigation stand-in.
 OBJECT_LAYER = "object_costmap"
+#: Occupied threshold of the wall mask (:func:`explore_seg.core.objects.wall_mask`'s).
+WALL_OCCUPIED_THRESHOLD = 65
 #: One black pixel, broadcast to the image passed to the oracle detector (which reads
 #: only the semantic and instance images).
 _BLACK = np.zeros(3, dtype=np.uint8)
@@ -284,13 +286,23 @@ class _ObjectPipeline:
         self._last_stamp = -1.0
         self._published: list[tuple[float, ...]] = []
         self._walls: tuple[int, WallMask] | None = None   # (map version, its wall mask)
+        self._walls_occ: npt.NDArray[np.bool_] | None = None   # its occupied cells
 
     def _wall_mask(self) -> WallMask:
         """The wall mask of the engine's map, computed once per map version (as the node
-        computes it once per map message)."""
+        computes it once per map message); a new version whose occupied cells are those
+        of the last computed one reuses its walls (they depend on nothing else)."""
         version = self.engine.map_version
         if self._walls is None or self._walls[0] != version:
-            self._walls = (version, wall_mask(self.engine.map, self.params))
+            grid = self.engine.map
+            occ = grid.data >= WALL_OCCUPIED_THRESHOLD
+            last = self._walls_occ
+            if (self._walls is not None and last is not None and last.shape == occ.shape
+                    and np.array_equal(last, occ)):
+                walls = WallMask(grid, self._walls[1].mask)
+            else:
+                walls = wall_mask(grid, self.params, WALL_OCCUPIED_THRESHOLD)
+            self._walls, self._walls_occ = (version, walls), occ
         return self._walls[1]
 
     def update(self, timings: dict[str, list[float]]) -> bool:
