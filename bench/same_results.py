@@ -2,9 +2,10 @@
 
 ``record`` runs every world x strategy x seed once (one process, in order) and writes, per
 run, its full :meth:`RunResult.to_dict` without the wall-clock fields (wall time, per-update
-timings) plus its wall seconds, to a JSON file. ``compare`` reads two such files (before and
-after a change) and reports every run whose results differ (coverage curve, goals,
-collisions, milestones, ...: any field) and the wall seconds per run before/after.
+timings) plus its wall seconds, process CPU seconds and the 1-minute load average at its
+end, to a JSON file. ``compare`` reads two such files (before and after a change) and
+reports every run whose results differ (coverage curve, goals, collisions, milestones, ...:
+any field) and the wall and CPU seconds per run before/after.
 
 Usage::
 
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -58,6 +60,7 @@ def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int
                 if key in have:
                     continue
                 t0 = time.perf_counter()
+                c0 = time.process_time()
                 try:
                     d = run_task((w, s, seed, limit, None, PAPER_CAMERA_MOUNT, None))
                     result = {k: v for k, v in d.items() if k not in WALL_FIELDS}
@@ -66,33 +69,47 @@ def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int
                     result = {"error": f"{type(err).__name__}: {err}"}
                     what = result["error"]
                 wall = time.perf_counter() - t0
-                runs.append({"key": key, "wall_s": round(wall, 2), "result": result})
+                cpu = time.process_time() - c0
+                runs.append({"key": key, "wall_s": round(wall, 2), "cpu_s": round(cpu, 2),
+                             "load1": round(os.getloadavg()[0], 2), "result": result})
                 path.write_text(json.dumps({"runs": runs}, indent=0))
-                print(f"{key}: {wall:.1f} s, {what}", file=sys.stderr, flush=True)
+                print(f"{key}: {wall:.1f} s wall, {cpu:.1f} s CPU, {what}", file=sys.stderr,
+                      flush=True)
 
 
 def compare(before: Path, after: Path) -> int:
-    """Print per run: identical or the differing fields, wall s before/after; 0 = all same."""
+    """Print per run: identical or the differing fields, wall and CPU s before/after (CPU
+    where both files have it); 0 = all same."""
     a = {r["key"]: r for r in json.loads(before.read_text())["runs"]}
     b = {r["key"]: r for r in json.loads(after.read_text())["runs"]}
     bad = 0
-    tot_a = tot_b = 0.0
-    print(f"{'run':44s} {'before s':>9s} {'after s':>8s} {'speed-up':>8s}  results")
+    tot = {"wall_s": [0.0, 0.0], "cpu_s": [0.0, 0.0]}
+    print(f"{'run':40s} {'wall before':>11s} {'after':>7s} {'x':>6s} {'CPU before':>10s} "
+          f"{'after':>7s} {'x':>6s}  results")
+
+    def col(k: str, ra: dict[str, Any], rb: dict[str, Any]) -> str:
+        va, vb = ra.get(k), rb.get(k)
+        if va is None or vb is None:
+            return f"{'-':>11s} {'-':>7s} {'-':>6s}" if k == "wall_s" else \
+                f"{'-':>10s} {'-':>7s} {'-':>6s}"
+        tot[k][0] += va
+        tot[k][1] += vb
+        w = 11 if k == "wall_s" else 10
+        return f"{va:{w}.1f} {vb:7.1f} {va / max(vb, 1e-9):5.2f}x"
+
     for key in a:
         if key not in b:
-            print(f"{key:44s} missing after")
+            print(f"{key:40s} missing after")
             bad += 1
             continue
         ra, rb = a[key]["result"], b[key]["result"]
         diff = sorted(k for k in set(ra) | set(rb) if ra.get(k) != rb.get(k))
         bad += bool(diff)
-        wa, wb = a[key]["wall_s"], b[key]["wall_s"]
-        tot_a += wa
-        tot_b += wb
-        print(f"{key:44s} {wa:9.1f} {wb:8.1f} {wa / max(wb, 1e-9):7.2f}x  "
+        print(f"{key:40s} {col('wall_s', a[key], b[key])} {col('cpu_s', a[key], b[key])}  "
               + ("identical" if not diff else "DIFFERENT: " + ", ".join(diff)))
-    print(f"{'total':44s} {tot_a:9.1f} {tot_b:8.1f} {tot_a / max(tot_b, 1e-9):7.2f}x  "
-          f"{len(a) - bad}/{len(a)} identical")
+    (wa, wb), (ca, cb) = tot["wall_s"], tot["cpu_s"]
+    print(f"{'total':40s} {wa:11.1f} {wb:7.1f} {wa / max(wb, 1e-9):5.2f}x {ca:10.1f} {cb:7.1f} "
+          f"{ca / max(cb, 1e-9):5.2f}x  {len(a) - bad}/{len(a)} identical")
     return 1 if bad else 0
 
 

@@ -75,6 +75,11 @@ from sim_bridge.world import World
 
 #: Layer name of the object costmap in the navigation stand-in.
 OBJECT_LAYER = "object_costmap"
+#: Occupied threshold of the wall mask (:func:`explore_seg.core.objects.wall_mask`'s).
+WALL_OCCUPIED_THRESHOLD = 65
+#: One black pixel, broadcast to the image passed to the oracle detector (which reads
+#: only the semantic and instance images).
+_BLACK = np.zeros(3, dtype=np.uint8)
 
 
 @dataclass(frozen=True)
@@ -285,13 +290,23 @@ class _ObjectPipeline:
         self._last_stamp = -1.0
         self._published: list[tuple[float, ...]] = []
         self._walls: tuple[int, WallMask] | None = None   # (map version, its wall mask)
+        self._walls_occ: npt.NDArray[np.bool_] | None = None   # its occupied cells
 
     def _wall_mask(self) -> WallMask:
         """The wall mask of the engine's map, computed once per map version (as the node
-        computes it once per map message)."""
+        computes it once per map message); a new version whose occupied cells are those
+        of the last computed one reuses its walls (they depend on nothing else)."""
         version = self.engine.map_version
         if self._walls is None or self._walls[0] != version:
-            self._walls = (version, wall_mask(self.engine.map, self.params))
+            grid = self.engine.map
+            occ = grid.data >= WALL_OCCUPIED_THRESHOLD
+            last = self._walls_occ
+            if (self._walls is not None and last is not None and last.shape == occ.shape
+                    and np.array_equal(last, occ)):
+                walls = WallMask(grid, self._walls[1].mask)
+            else:
+                walls = wall_mask(grid, self.params, WALL_OCCUPIED_THRESHOLD)
+            self._walls, self._walls_occ = (version, walls), occ
         return self._walls[1]
 
     def update(self, timings: dict[str, list[float]]) -> bool:
@@ -310,7 +325,11 @@ class _ObjectPipeline:
         tf[:3, :3] = fr.rotation
         tf[:3, 3] = fr.translation
         t0 = time.perf_counter()
-        dets = self.detector.detect(fr.rgb, semantic=fr.semantic, instance=fr.instance)
+        # The oracle reads the semantic and instance images only: it gets a blank view of
+        # the image's shape, and the frame's colour image is never shaded.
+        rgb = (fr.rgb if self.detector.network is not None
+               else np.broadcast_to(_BLACK, fr.semantic.shape + (3,)))
+        dets = self.detector.detect(rgb, semantic=fr.semantic, instance=fr.instance)
         t1 = time.perf_counter()
         depth = DepthFrame(fr.depth_m, self.intrinsics, tf)
         res = process_frame(depth, dets, self.priors, self.params, scan_points_map(self.engine),

@@ -110,6 +110,9 @@ class ScanMapper:
                               int(math.floor(cy / res)) - n // 2)
         self._log_odds = np.zeros((n, n), dtype=np.float32)
         self._observed = np.zeros((n, n), dtype=bool)
+        # The published trinary values, kept up to date cell by cell as scans touch them
+        # (a copy is published; rebuilding it from the log-odds costs a pass over the map).
+        self._trinary = np.full((n, n), UNKNOWN, dtype=np.int8)
         self._frame_id = frame_id
         self._chunk_cells = max(1, int(round(p.grow_chunk_m / res)))
         self._max_cells = max(n, int(round(p.max_size_m / res)))
@@ -146,11 +149,8 @@ class ScanMapper:
         key = (self._version, int(stamp_ns))
         if self._cached is not None and self._cached_key == key:
             return self._cached
-        thr = self.params.occupied_threshold_log_odds
-        data = np.full(self._log_odds.shape, UNKNOWN, dtype=np.int8)
-        data[self._observed] = FREE
-        data[self._observed & (self._log_odds > thr)] = OCCUPIED
-        self._cached = GridMap(data, self.params.resolution_m, self.origin_xy_m, 0.0,
+        self._cached = GridMap(self._trinary.copy(), self.params.resolution_m,
+                               self.origin_xy_m, 0.0,
                                self._frame_id, int(stamp_ns))
         self._cached_key = key
         return self._cached
@@ -179,6 +179,8 @@ class ScanMapper:
             return
         self._log_odds = np.pad(self._log_odds, ((down, up), (left, right)))
         self._observed = np.pad(self._observed, ((down, up), (left, right)))
+        self._trinary = np.pad(self._trinary, ((down, up), (left, right)),
+                               constant_values=UNKNOWN)
         self._origin_cells = (ox - left, oy - down)
 
     # ------------------------------------------------------------ integration
@@ -290,4 +292,7 @@ class ScanMapper:
         touched = np.concatenate([free_idx, hit_idx])
         if touched.size:
             lo[touched] = np.clip(lo[touched], p.log_odds_min, p.log_odds_max)
+            # Every touched cell is observed: free, or occupied above the threshold.
+            self._trinary.reshape(-1)[touched] = np.where(
+                lo[touched] > p.occupied_threshold_log_odds, OCCUPIED, FREE)
             self._version += 1

@@ -151,3 +151,38 @@ def test_post_overhang_must_be_at_one_height_and_attached_to_the_post():
     linked = unknown_objects(frame, face_scan(1.8, -0.2, 0.2),
                              replace(POSTS_ON, post_link_m=1.0), (), PRIORS[UNKNOWN_CLASS])
     assert linked[0].footprint()[:, 1].max() > 0.45        # the table's edge taken in
+
+
+def _scan_legs_by_cluster(scan_xy, params, robot_xy):
+    """The rule of scan_legs, one cluster at a time (the reference of its vectorised form)."""
+    from scipy.spatial import cKDTree
+
+    from explore_seg.core.objects.legs import _scan_clusters
+
+    pts, labels, counts, widths = _scan_clusters(scan_xy, params, robot_xy)
+    out = []
+    for lab in np.flatnonzero((counts >= params.leg_min_points)
+                              & (widths >= params.leg_min_width_m)
+                              & (widths <= params.leg_max_width_m)):
+        sel = pts[labels == lab]
+        centre = sel.mean(axis=0)
+        radius = params.leg_isolation_m + 0.5 * float(widths[lab])
+        if len(cKDTree(pts).query_ball_point(centre, radius)) <= len(sel):
+            out.append(centre)
+    return np.array(out, dtype=np.float64).reshape(-1, 2)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_scan_legs_equals_the_per_cluster_rule_on_random_scans(seed):
+    rng = np.random.default_rng(seed)
+    p = ObjectParams()
+    # Legs (tight blobs), wall lines and scattered points around a robot at the origin.
+    parts = [c + rng.normal(0.0, 0.01, (int(rng.integers(3, 8)), 2))
+             for c in rng.uniform(-3.0, 3.0, (12, 2))]
+    parts += [np.column_stack([np.linspace(-3, 3, 150), np.full(150, y)]) for y in (-3.5, 3.2)]
+    parts.append(rng.uniform(-4.0, 4.0, (40, 2)))
+    scan = np.vstack(parts)
+    got = scan_legs(scan, p, (0.0, 0.0))
+    ref = _scan_legs_by_cluster(scan, p, (0.0, 0.0))
+    assert len(ref) > 0
+    assert got.shape == ref.shape and np.array_equal(got, ref)

@@ -211,3 +211,22 @@ def test_class_ids_are_invertible():
 def test_camera_params_validate(kwargs, match):
     with pytest.raises(ValueError, match=match):
         CameraParams(**kwargs)
+
+
+def test_colour_image_is_shaded_on_first_access_only(monkeypatch):
+    """The oracle detector reads no colours: a frame whose rgb is never read costs no
+    shading; once read, it is kept, and it does not change when a consumer edits the
+    frame's semantic image."""
+    parts, obj = table_with_legs(1.5, 0.0)
+    cam = DepthCamera(room_4x4(parts, [obj]),
+                      CameraParams(width=64, height=48, fx=52.5, fy=52.5, cx=31.5, cy=23.5))
+    calls = []
+    colour = cam._colour
+    monkeypatch.setattr(cam, "_colour", lambda *a: calls.append(1) or colour(*a))
+    f = cam.render((0.0, 0.0, 0.0))
+    assert calls == [] and f.semantic.any()
+    rgb = f.rgb
+    assert calls == [1] and f.rgb is rgb and rgb.shape == (48, 64, 3)
+    g = cam.render((0.0, 0.0, 0.0))
+    g.semantic[:] = 0
+    assert np.array_equal(g.rgb, rgb)

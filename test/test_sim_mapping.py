@@ -96,3 +96,23 @@ def test_scripted_tour_map_converges_to_ground_truth():
     mapped = cv2.dilate((grid.data >= 65).astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
     assert mapped[faces].mean() >= 0.9
     assert eng.metrics.coverage_pct >= 90.0
+
+
+def test_published_grid_equals_the_log_odds_thresholded_after_random_scans_and_growth():
+    """The trinary map kept cell by cell equals the one rebuilt from the log-odds."""
+    rng = np.random.default_rng(3)
+    p = MappingParams(initial_size_m=2.0, grow_chunk_m=1.0)
+    m = ScanMapper((0.0, 0.0), p)
+    for k in range(40):
+        pose = (float(rng.uniform(-1, 1)), float(rng.uniform(-1, 1)), float(rng.uniform(-3, 3)))
+        ranges = rng.uniform(0.2, 4.0, 90)
+        ranges[rng.random(90) < 0.2] = np.inf
+        m.integrate_scan(pose, ranges, -math.pi, 2 * math.pi / 90, 3.5, 0.1)
+        g = m.grid(k)
+        lo = m.log_odds
+        ref = np.full(lo.shape, -1, np.int8)
+        observed = m._observed
+        ref[observed] = 0
+        ref[observed & (lo > p.occupied_threshold_log_odds)] = 100
+        assert np.array_equal(g.data, ref)
+    assert m.shape[0] > 40 and (g.data == 100).any() and (g.data == 0).any()

@@ -84,6 +84,9 @@ class Navigator:
         self._retries_left = 0
         self._plan_cost: npt.NDArray[np.float64] | None = None
         self._plan_grid: GridMap | None = None
+        # Cost of the last plan per (goal cell, downsampling): only a hint that saves
+        # planning work (plan_path's result does not depend on it).
+        self._goal_cost: dict[tuple[tuple[int, int], int], float] = {}
 
     # ---------------------------------------------------------------- inputs
     @property
@@ -258,13 +261,15 @@ class Navigator:
         if k > 1:  # a coarse cell is known when all its fine cells are
             known = np.isfinite(coarsen(np.where(known, 0.0, np.inf), start, goal, k)[0])
         g_rc = self._reachable_goal(coarse, g_rc, res * k, known)
-        found = (plan_path(coarse, s_rc, g_rc, res * k, p.plan_window_margin_m)
+        found = (plan_path(coarse, s_rc, g_rc, res * k, p.plan_window_margin_m,
+                           cost_hint=self._goal_cost.get((g_rc, k)))
                  if g_rc is not None else None)
         if found is None:
             self._finish(NavState.ABORTED, f"no path to ({gx:.2f}, {gy:.2f}): goal "
                                            "unreachable or blocked")
             return False
         cells, new_cost = found
+        self._goal_cost = {(g_rc, k): new_cost}     # the next plan's first guess
         rows = (cells[:, 0].astype(np.float64) + 0.5) * k - 0.5
         cols = (cells[:, 1].astype(np.float64) + 0.5) * k - 0.5
         x, y = grid.cells_to_world(rows, cols)

@@ -16,7 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.paths import cost_distance_field, extract_path, inflate
+from explore_seg.core.paths import SQRT2, cost_distance_field, extract_path, inflate
 from sim_bridge.navigation.params import NavParams
 
 
@@ -54,7 +54,8 @@ def cost_grid(blocked: npt.NDArray[np.bool_], unknown: npt.NDArray[np.bool_] | N
 
 
 def plan_path(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
-              goal_rc: tuple[int, int], resolution_m: float, window_margin_m: float
+              goal_rc: tuple[int, int], resolution_m: float, window_margin_m: float,
+              cost_hint: float | None = None, prune: bool = True
               ) -> tuple[npt.NDArray[np.int64], float] | None:
     """Cheapest path from start to goal over a cost grid, searched in a growing window.
 
@@ -62,7 +63,29 @@ def plan_path(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
     ellipse of points whose distances to start and goal sum to <= L. The search runs on
     that ellipse's bounding box for ``L = 1.5 * |goal - start| + window_margin_m``; a
     path found there with cost <= L is the global optimum. Otherwise L doubles, up to
-    the whole grid.
+    the whole grid. The path is the steepest descent of the window's cost-distance field
+    from the goal (:func:`~explore_seg.core.paths.extract_path`).
+
+    With ``prune`` (default) the grid is first searched only where a path of cost
+    ``<= U`` can pass, for growing guesses ``U`` (A*'s pruning with the admissible
+    octile-distance heuristic, see :func:`_pruned_plan`); a result is used only when it
+    is certified to equal the windows' (same cost, same cells, bit for bit), else the
+    windows are searched as described. Results never depend on ``prune`` or
+    ``cost_hint``; only the work does (on long winding paths, as in a maze, the
+    windows' search also skips the windows too small to hold the path).
+
+    Parameters
+    ----------
+    cost : ndarray of float64, shape (H, W)
+        Per-metre cost, >= 1, ``inf`` = lethal (see :func:`cost_grid`).
+    start_rc, goal_rc : (int, int)
+    resolution_m : float
+    window_margin_m : float
+    cost_hint : float, optional
+        Expected cost of the path (e.g. the last plan's to the same goal): the first
+        guess of ``U``.
+    prune : bool
+        False searches every window whole (the reference the tests compare with).
 
     Returns
     -------
@@ -73,11 +96,12 @@ def plan_path(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
     h, w = cost.shape
     (sr, sc), (gr, gc) = start_rc, goal_rc
     budget = 1.5 * math.hypot(gr - sr, gc - sc) * resolution_m + window_margin_m
+    if prune:
+        found = _pruned_plan(cost, start_rc, goal_rc, resolution_m, budget, cost_hint)
+        if found is not None:
+            return found
     while True:
-        half = budget / resolution_m / 2.0 + 1.0
-        cr, cc = (sr + gr) / 2.0, (sc + gc) / 2.0
-        r0, r1 = max(0, int(cr - half)), min(h, int(math.ceil(cr + half)) + 1)
-        c0, c1 = max(0, int(cc - half)), min(w, int(math.ceil(cc + half)) + 1)
+        r0, r1, c0, c1 = _window(start_rc, goal_rc, budget, resolution_m, (h, w))
         whole = r0 == 0 and c0 == 0 and r1 == h and c1 == w
         dist = cost_distance_field(cost[r0:r1, c0:c1], (sr - r0, sc - c0), resolution_m,
                                    math.inf if whole else budget)
@@ -88,6 +112,170 @@ def plan_path(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
         if whole:
             return None
         budget *= 2.0
+
+
+def _window(start_rc: tuple[int, int], goal_rc: tuple[int, int], budget: float,
+            resolution_m: float, shape: tuple[int, int]) -> tuple[int, int, int, int]:
+    """Rows r0:r1 and columns c0:c1 of :func:`plan_path`'s search window for a budget."""
+    (sr, sc), (gr, gc) = start_rc, goal_rc
+    half = budget / resolution_m / 2.0 + 1.0
+    cr, cc = (sr + gr) / 2.0, (sc + gc) / 2.0
+    return (max(0, int(cr - half)), min(shape[0], int(math.ceil(cr + half)) + 1),
+            max(0, int(cc - half)), min(shape[1], int(math.ceil(cc + half)) + 1))
+
+
+def _pruned_plan(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
+                 goal_rc: tuple[int, int], resolution_m: float, budget: float,
+                 cost_hint: float | None) -> tuple[npt.NDArray[np.int64], float] | None:
+    """:func:`plan_path`'s result from pruned searches (:func:`_pruned_search`) for
+    growing bounds, or None when none could be certified (the caller then searches the
+    windows whole).
+
+    A certified cost ``g`` is the cheapest over the whole grid. The windows' search
+    stops at the first window whose budget is ``>= g`` (a path of cost ``<= budget``
+    lies in the window; earlier windows only have costlier ones), and the descent there
+    equals the certified one when the pruned region lies inside that window.
+    """
+    h, w = cost.shape
+    res = resolution_m
+    guess = 1.6 * _octile(start_rc, goal_rc) * res + 4.0 * res
+    if cost_hint is not None and math.isfinite(cost_hint):
+        guess = max(guess, 1.1 * cost_hint + 4.0 * res)
+    # A bound whose region's box (about bound / resolution cells square) covers most of
+    # the grid saves little over the windows' search.
+    while (guess / res) ** 2 < 0.5 * h * w:
+        cells, g, box = _pruned_search(cost, start_rc, goal_rc, res, guess)
+        if cells is not None:
+            b = budget
+            while True:
+                win = _window(start_rc, goal_rc, b, res, (h, w))
+                if win == (0, h, 0, w) or g <= b:
+                    break
+                b *= 2.0
+            r0, r1, c0, c1 = win
+            if r0 <= box[0] and box[1] <= r1 and c0 <= box[2] and box[3] <= c1:
+                return cells, g
+            return None
+        # g (a path's cost) bounds the cheapest cost from above.
+        guess = max(1.1 * g + 4.0 * res, 1.3 * guess) if math.isfinite(g) else 2.0 * guess
+    return None
+
+
+def _octile(a: tuple[int, int], b: tuple[int, int]) -> float:
+    """Octile distance between two cells, in cells (the shortest 8-connected length)."""
+    dr, dc = abs(a[0] - b[0]), abs(a[1] - b[1])
+    return max(dr, dc) + (SQRT2 - 1.0) * min(dr, dc)
+
+
+def _octile_field(rows: npt.NDArray[np.int64], cols: npt.NDArray[np.int64],
+                  rc: tuple[int, int]) -> npt.NDArray[np.float64]:
+    """Octile distance (cells) of every (row, col) of an open grid to ``rc``."""
+    dr = np.abs(rows - rc[0]).astype(np.float64)
+    dc = np.abs(cols - rc[1]).astype(np.float64)
+    return np.maximum(dr, dc) + (SQRT2 - 1.0) * np.minimum(dr, dc)
+
+
+#: Relative slack of the pruning bounds (covers the rounding of summed edge costs).
+_PRUNE_SLACK = 1e-9
+
+
+def _pruned_search(cost: npt.NDArray[np.float64], start: tuple[int, int],
+                   goal: tuple[int, int], resolution_m: float, bound: float
+                   ) -> tuple[npt.NDArray[np.int64] | None, float, tuple[int, int, int, int]]:
+    """The window's cheapest path found with the cells where a path of cost <= ``bound``
+    can pass, its cost and the box (r0, r1, c0, c1) of the region searched; no cells
+    when that cannot be certified to equal the whole grid's (or a window's holding the
+    box) result; the cost is then that of a path found in the region (an upper bound of
+    the cheapest) or ``inf``.
+
+    Let ``o_s(p)``, ``o_g(p)`` be the octile distances (m) of ``p`` to start and goal.
+    A move costs at least its length, so every cell ``p`` on a cheapest path to ``n``
+    has ``o_s(p) + o_g(p) <= d(n) + o_g(n)``: searching only the region ``R`` where
+    ``o_s + o_g <= bound`` (with the Dijkstra limit ``bound``) gives the exact field
+    value ``v(n) = d(n)`` for every ``n`` with ``d(n) + o_g(n) <= bound`` (certified
+    when ``v(n) + o_g(n) <= bound``), and for every other cell ``d(n) > bound - o_g(n)``
+    (``R`` keeps a margin of 2 cells for the side cells of diagonal moves).
+    The descent from the goal (:func:`~explore_seg.core.paths.extract_path`, same
+    neighbour order and strict comparison) is replayed on ``v``; it equals the whole
+    window's when at every step each neighbour is either certified or provably no
+    better than the best so far. Edge costs are computed by the same code
+    (:func:`~explore_seg.core.paths.cost_distance_field`) from the same cell costs, so
+    certified values are bit-identical.
+    """
+    h, w = cost.shape
+    res = float(resolution_m)
+    slack = bound * _PRUNE_SLACK
+    lim_cells = (bound + slack) / res
+    (sr, sc), (gr, gc) = start, goal
+    if _octile(start, goal) > lim_cells:
+        return None, math.inf, (0, 0, 0, 0)
+    # The region keeps 2 cells more, so that the side cells of every diagonal move of
+    # such a path are in it too (a diagonal needs both passable). Its bounding box:
+    # o_s + o_g >= |r - sr| + |r - gr| (and so for columns).
+    span = lim_cells + 2.0
+    r_lo = int(math.floor((sr + gr - span) / 2.0))
+    r_hi = int(math.ceil((sr + gr + span) / 2.0)) + 1
+    c_lo = int(math.floor((sc + gc - span) / 2.0))
+    c_hi = int(math.ceil((sc + gc + span) / 2.0)) + 1
+    r0, r1, c0, c1 = max(0, r_lo), min(h, r_hi), max(0, c_lo), min(w, c_hi)
+    rows = np.arange(r0, r1, dtype=np.int64)[:, None]
+    cols = np.arange(c0, c1, dtype=np.int64)[None, :]
+    o_g = _octile_field(rows, cols, goal)
+    region = _octile_field(rows, cols, start) + o_g <= span
+    sub = np.where(region, cost[r0:r1, c0:c1], np.inf)
+    s_loc, g_loc = (sr - r0, sc - c0), (gr - r0, gc - c0)
+    dist = cost_distance_field(sub, s_loc, res, bound + slack)
+    g = float(dist[g_loc])
+    cert_lim = bound - slack
+    box = (r0, r1, c0, c1)
+    if not g <= cert_lim:
+        return None, g, box
+    return _certified_descent(dist, g_loc, o_g * res, cert_lim, (r0, c0), (h, w), res), g, box
+
+
+def _certified_descent(dist: npt.NDArray[np.float64], goal: tuple[int, int],
+                       o_g_m: npt.NDArray[np.float64], cert_lim: float,
+                       offset: tuple[int, int], full_shape: tuple[int, int],
+                       resolution_m: float) -> npt.NDArray[np.int64] | None:
+    """:func:`~explore_seg.core.paths.extract_path` on a field ``dist`` that is exact
+    only where ``dist + o_g_m <= cert_lim`` (see :func:`_pruned_search`); ``dist`` covers
+    the box at ``offset`` of a window of ``full_shape``, whose other cells count as
+    uncertified. Returns the cells in window coordinates, or None when an uncertified
+    neighbour could have been chosen."""
+    hb, wb = dist.shape
+    h, w = full_shape
+    r0, c0 = offset
+    gr, gc = goal[0] + r0, goal[1] + c0          # goal in window coordinates
+    r, c = goal
+    path = [(r, c)]
+    limit = h * w
+    while dist[r, c] > 0 and len(path) < limit:
+        best = (dist[r, c], r, c)
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                if not (dr or dc):
+                    continue
+                rr, cc = r + dr, c + dc
+                ar, ac = rr + r0, cc + c0
+                if not (0 <= ar < h and 0 <= ac < w):
+                    continue                    # outside the window: never a neighbour
+                if 0 <= rr < hb and 0 <= cc < wb:
+                    v, og = dist[rr, cc], o_g_m[rr, cc]
+                    if v + og <= cert_lim:      # exact value
+                        if v < best[0]:
+                            best = (v, rr, cc)
+                        continue
+                else:
+                    og = _octile((ar, ac), (gr, gc)) * resolution_m
+                # Uncertified: its true value exceeds cert_lim - og (see _pruned_search);
+                # it cannot be chosen when that is no better than the best so far.
+                if not cert_lim - og >= best[0]:
+                    return None
+        if best[1] == r and best[2] == c:
+            break
+        r, c = best[1], best[2]
+        path.append((r, c))
+    return np.asarray(path[::-1], dtype=np.int64) + np.array([r0, c0], dtype=np.int64)
 
 
 def path_cost(xy: npt.NDArray[np.float64], cost: npt.NDArray[np.float64], grid: GridMap

@@ -13,8 +13,10 @@ within ``range_max_m``.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 import numpy.typing as npt
@@ -106,26 +108,36 @@ def camera_pose_in_world(robot_pose: tuple[float, float, float], params: CameraP
 class CameraFrame:
     """One rendered RGB-D frame.
 
+    The colour image is shaded on first access of :attr:`rgb` (then kept): a consumer
+    that reads only depth, semantic and instance images (the oracle detector) does not
+    pay for it.
+
     Attributes
     ----------
     depth_m : ndarray of float32, shape (H, W)
         Optical z of the first surface (m); NaN where none within range.
-    rgb : ndarray of uint8, shape (H, W, 3)
-        Colour per class, shaded by face orientation and distance; floor checkered.
     semantic : ndarray of uint8, shape (H, W)
         :data:`CLASS_IDS` id per pixel (0 = floor / nothing).
     instance : ndarray of int32, shape (H, W)
         Index into ``world.objects`` of the object seen, -1 for walls, floor, nothing.
     rotation, translation : ndarray of float64
         Camera optical frame in the world (``p_world = rotation @ p_opt + translation``).
+    shade : callable
+        Returns the colour image (:attr:`rgb`); called at most once.
     """
 
     depth_m: npt.NDArray[np.float32]
-    rgb: npt.NDArray[np.uint8]
     semantic: npt.NDArray[np.uint8]
     instance: npt.NDArray[np.int32]
     rotation: npt.NDArray[np.float64]
     translation: npt.NDArray[np.float64]
+    shade: Callable[[], npt.NDArray[np.uint8]] = field(repr=False, compare=False)
+
+    @functools.cached_property
+    def rgb(self) -> npt.NDArray[np.uint8]:
+        """ndarray of uint8, shape (H, W, 3): colour per class, shaded by face orientation
+        and distance; floor checkered."""
+        return self.shade()
 
 
 # 12 edges of a prism given as 8 corners: bottom 0..3, top 4..7
@@ -358,8 +370,11 @@ class DepthCamera:
         if p.depth_noise_std_m > 0 and rng is not None:
             depth[valid] += rng.normal(0.0, p.depth_noise_std_m, int(valid.sum())).astype(
                 np.float32)
-        rgb = self._colour(zbuf, valid, sem, face, dx, dy, t)
-        return CameraFrame(depth, rgb, sem, inst, rot, t)
+        # Shaded on demand from arrays the frame owns (sem, inst are the frame's own; the
+        # copies keep the colours independent of what a consumer does with them).
+        sem_c, t_c = sem.copy(), t.copy()
+        return CameraFrame(depth, sem, inst, rot, t,
+                           lambda: self._colour(zbuf, valid, sem_c, face, dx, dy, t_c))
 
     def _colour(self, zbuf: npt.NDArray[np.float32], valid: npt.NDArray[np.bool_],
                 sem: npt.NDArray[np.uint8], face: npt.NDArray[np.uint8],

@@ -62,17 +62,16 @@ def scan_legs(scan_xy: npt.NDArray[np.floating], params: ObjectParams,
     candidates = np.flatnonzero((counts >= params.leg_min_points)
                                 & (widths >= params.leg_min_width_m)
                                 & (widths <= params.leg_max_width_m))
-    tree = cKDTree(pts)
-    centres = []
-    for lab in candidates:
-        sel = pts[labels == lab]
-        width = float(widths[lab])
-        centre = sel.mean(axis=0)
-        radius = params.leg_isolation_m + 0.5 * width
-        if len(tree.query_ball_point(centre, radius)) > len(sel):
-            continue
-        centres.append(centre)
-    return np.array(centres, dtype=np.float64).reshape(-1, 2)
+    if candidates.size == 0:
+        return np.zeros((0, 2))
+    # Each cluster's points in scan order: one stable sort instead of a mask per cluster.
+    order = np.argsort(labels, kind="stable")
+    first = np.cumsum(counts) - counts
+    centres = np.array([pts[order[first[lab]:first[lab] + counts[lab]]].mean(axis=0)
+                        for lab in candidates], dtype=np.float64).reshape(-1, 2)
+    radii = params.leg_isolation_m + 0.5 * widths[candidates]
+    near = cKDTree(pts).query_ball_point(centres, radii, return_length=True)
+    return centres[near <= counts[candidates]].reshape(-1, 2)
 
 
 def _scan_clusters(scan_xy: npt.ArrayLike, params: ObjectParams,

@@ -1,0 +1,71 @@
+"""The navigation stand-in's pruned planning gives exactly the whole-window result."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sim_bridge.navigation import NavParams, cost_grid, plan_path
+from sim_bridge.navigation import planner
+
+
+def _random_map(rng: np.random.Generator) -> np.ndarray:
+    """A cost grid with random clutter, wall pieces and an unknown part."""
+    h, w = (int(v) for v in rng.integers(40, 120, 2))
+    blocked = rng.random((h, w)) < rng.uniform(0.0, 0.03)
+    for _ in range(int(rng.integers(1, 6))):
+        if rng.random() < 0.5:
+            r = int(rng.integers(0, h))
+            blocked[r, int(rng.integers(0, w // 2)):int(rng.integers(w // 2, w))] = True
+        else:
+            c = int(rng.integers(0, w))
+            blocked[int(rng.integers(0, h // 2)):int(rng.integers(h // 2, h)), c] = True
+    unknown = np.zeros((h, w), bool)
+    unknown[:, int(rng.integers(0, w)):] = True
+    return cost_grid(blocked, unknown, 0.05, NavParams())
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_pruned_plan_is_bit_identical_to_the_whole_window_search(seed):
+    rng = np.random.default_rng(seed)
+    pruned = 0
+    orig = planner._pruned_search
+
+    def counting(*a):
+        nonlocal pruned
+        out = orig(*a)
+        pruned += out[0] is not None
+        return out
+
+    planner._pruned_search = counting
+    try:
+        for _ in range(6):
+            cost = _random_map(rng)
+            free = np.argwhere(np.isfinite(cost))
+            for _ in range(6):
+                s = tuple(int(v) for v in free[rng.integers(len(free))])
+                g = tuple(int(v) for v in free[rng.integers(len(free))])
+                ref = plan_path(cost, s, g, 0.05, 0.5, prune=False)
+                hint = None if ref is None else ref[1] * float(rng.uniform(0.3, 2.0))
+                for h in (None, hint):
+                    got = plan_path(cost, s, g, 0.05, 0.5, cost_hint=h)
+                    assert (ref is None) == (got is None)
+                    if ref is not None:
+                        assert got[1] == ref[1]                   # same float, not approx
+                        assert np.array_equal(got[0], ref[0])
+    finally:
+        planner._pruned_search = orig
+    assert pruned > 0                     # the pruned search was used (and certified)
+
+
+def test_pruned_search_declines_what_it_cannot_certify():
+    """A wall between start and goal: the bound of the straight line holds no path, and
+    the search returns no cells (the caller searches on)."""
+    cost = np.ones((40, 40))
+    cost[5:40, 20] = np.inf
+    cells, g, _ = planner._pruned_search(cost, (30, 5), (30, 35), 0.05, 1.8)
+    assert cells is None and g == np.inf
+    ref = plan_path(cost, (30, 5), (30, 35), 0.05, 0.5, prune=False)
+    got = plan_path(cost, (30, 5), (30, 35), 0.05, 0.5)
+    assert got[1] == ref[1] and np.array_equal(got[0], ref[0])
+    assert ref[0][:, 0].min() < 5                          # around the wall's end
