@@ -282,6 +282,7 @@ class _ObjectPipeline:
         self.tolerance_m = lp.object_update_tolerance_m
         self._last_stamp = -1.0
         self._published: list[tuple[float, ...]] = []
+        self._published_depth = 0
         self._walls: tuple[int, WallMask] | None = None   # (map version, its wall mask)
 
     def _wall_mask(self) -> WallMask:
@@ -311,18 +312,22 @@ class _ObjectPipeline:
         dets = self.detector.detect(fr.rgb, semantic=fr.semantic, instance=fr.instance)
         t1 = time.perf_counter()
         depth = DepthFrame(fr.depth_m, self.intrinsics, tf)
+        walls = self._wall_mask()
         res = process_frame(depth, dets, self.priors, self.params, scan_points_map(self.engine),
-                            self._wall_mask())
+                            walls)
         self.map.update(res.objects + res.unknown, depth, int(round(cam.stamp_s * 1e9)),
-                        robot_xy=self.engine.pose[:2])
+                        robot_xy=self.engine.pose[:2], walls=walls)
         timings["detection"].append((t1 - t0) * 1e3)
         timings["objects"].append((time.perf_counter() - t1) * 1e3)
         return True
 
     def changed(self) -> bool:
-        """True when the boxes differ from the last :meth:`mark_published` ones by more
+        """True when the depth obstacles changed or the boxes differ from the last
+        :meth:`mark_published` ones by more
         than the tolerance (or their number changed)."""
         cur = self._signature()
+        if self._depth_version() != self._published_depth:
+            return True
         if len(cur) != len(self._published):
             return True
         if not cur:
@@ -332,6 +337,10 @@ class _ObjectPipeline:
 
     def mark_published(self) -> None:
         self._published = self._signature()
+        self._published_depth = self._depth_version()
+
+    def _depth_version(self) -> int:
+        return self.map.depth.version if self.map.depth is not None else 0
 
     def _signature(self) -> list[tuple[float, ...]]:
         return [(o.center_xyz[0], o.center_xyz[1], o.size_xyz[0], o.size_xyz[1],
