@@ -107,3 +107,13 @@ def test_a_desk_top_seen_only_partly_still_becomes_a_full_box():
     # the whole desk top's footprint (not only what was seen) is in the layer
     full = _cells(layer.rasterize(_grid()), 0.95, 2.25, -1.25, -0.65)
     assert occ[full].mean() >= 0.9
+
+
+def test_the_virtual_cloud_carries_the_depth_obstacles():
+    pose = camera_pose(**PAPER_CAM)
+    frame = DepthFrame(render_depth([box_parts((1.5, 0.1), (0.3, 0.3, 0.6))], pose), K, pose)
+    om = ObjectMap(ObjectParams(), PRIORS)
+    om.update([], frame, 10**9)
+    cloud = om.virtual_cloud()
+    assert len(cloud) == len(om.depth) > 0
+    assert np.all((cloud[:, 0] > 1.3) & (cloud[:, 0] < 1.7) & (cloud[:, 2] < 0.7))

@@ -322,9 +322,10 @@ class ObjectMap:
         return grid.with_data(img)
 
     def virtual_cloud(self, spacing_m: float | None = None) -> npt.NDArray[np.float32]:
-        """Points filling every box (for a Nav2 voxel/obstacle layer), shape (N, 3).
+        """Points filling every box, and the centres of the depth obstacles' voxels (for
+        a Nav2 voxel/obstacle layer), shape (N, 3).
 
-        The spacing grows (doubling) until at most ``max_cloud_points`` points remain.
+        The boxes' spacing grows (doubling) until at most ``max_cloud_points`` points remain.
 
         Raises
         ------
@@ -334,16 +335,18 @@ class ObjectMap:
         spacing = self.params.cloud_spacing_m if spacing_m is None else float(spacing_m)
         if not spacing > 0:
             raise ValueError(f"spacing_m must be > 0, got {spacing_m}")
-        if not self._objects:
+        depth = (self.depth.centres() if self.depth is not None and len(self.depth)
+                 else np.zeros((0, 3)))
+        if not self._objects and not len(depth):
             return np.zeros((0, 3), dtype=np.float32)
-        while True:
+        while self._objects:
             total = sum(int(np.prod([max(math.ceil(s / spacing), 1) for s in t.obj.size_xyz]))
                         for t in self._objects)
             if total <= self.params.max_cloud_points:
                 break
             spacing *= 2.0
         clouds = [box_samples(t.obj, spacing, surface_only=False) for t in self._objects]
-        cloud = np.vstack(clouds)
+        cloud = np.vstack(clouds + [depth])
         r = self.params.swept_clear_radius_m
         if r > 0 and len(self._swept) and len(cloud):
             # Rasterise the swept corridor over the cloud's extent (cells of half the
