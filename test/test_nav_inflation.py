@@ -66,3 +66,22 @@ def test_lethal_zone_is_the_inscribed_radius(width_m, passes):
     cost = cost_grid(blocked, None, RES, NavParams())
     out = plan_path(cost, (20, 3), (20, 36), RES, 3.0)
     assert (out is not None) == passes
+
+
+def test_soft_margin_keeps_clear_where_it_can_and_still_passes_a_narrow_door():
+    soft = NavParams(inflation_soft_margin_m=0.05, inflation_cost_weight=0.0)
+    hard = NavParams(inflation_margin_m=0.05)
+    # a door the robot just fits through: closed by a 0.05 m hard margin, open with the soft one
+    blocked = np.zeros((40, 40), bool)
+    blocked[:, 18:22] = True
+    blocked[10:19, 18:22] = False                    # rows 10..18: 0.45 m
+    assert plan_path(cost_grid(blocked, None, RES, hard), (14, 3), (14, 36), RES, 3.0) is None
+    assert plan_path(cost_grid(blocked, None, RES, soft), (14, 3), (14, 36), RES, 3.0)
+    # a post in the open: with the soft band the robot's disk stays off the post's cells,
+    # with the bare lethal zone (cell centres only) the path grazes them
+    blocked = np.zeros((40, 60), bool)
+    blocked[19:21, 29:31] = True
+    cells = _plan(blocked, (20, 3), (20, 56), soft)
+    assert (_wall_distance_m(blocked, cells) - 0.22).min() >= 0.0
+    cells = _plan(blocked, (20, 3), (20, 56), NavParams(inflation_cost_weight=0.0))
+    assert (_wall_distance_m(blocked, cells) - 0.22).min() < 0.0
