@@ -196,6 +196,11 @@ def from_csv_row(row: dict[str, str]) -> dict[str, Any]:
         if item:
             x, y, what = item.split(",", 2)
             places.append([float(x), float(y), what])
+    contacts = []        # causes only (columns of newer CSVs): "cause:n;cause:n"
+    for item in (row.get("contact_causes") or "").split(";"):
+        if item:
+            cause, n = item.rsplit(":", 1)
+            contacts += [{"cause": cause} for _ in range(int(n))]
     return {
         "world": row["world"], "strategy": row["strategy"], "seed": int(row["seed"]),
         "completed": bool(int(row["completed"])), "stop_reason": row["stop_reason"],
@@ -212,6 +217,8 @@ def from_csv_row(row: dict[str, str]) -> dict[str, Any]:
         "timing_p": {k: [_float(row.get(f"{k}_ms_p50", "")), _float(row.get(f"{k}_ms_p95", ""))]
                      for k in TIMING_KEYS if f"{k}_ms_p50" in row},
         "coverage_samples": [],
+        "contacts": contacts,
+        "early_stop": {"cause": row["stop_cause"]} if row.get("stop_cause") else None,
         "record": "csv",
     }
 

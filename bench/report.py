@@ -28,6 +28,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from bench import records  # noqa: E402
+from bench.causes import contacts_table, early_stop_table  # noqa: E402
 from bench.figures import coverage_curves, plot_coverage, plot_time_to  # noqa: E402,F401
 from bench.records import TIMING_ROWS, as_float, by_world_strategy  # noqa: E402
 from bench.store import read_csv, slug  # noqa: E402
@@ -368,6 +369,26 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
           "Goals: goals sent to navigation; switches: goals replaced by a cheaper frontier "
           "while the old goal's frontier was still there and reachable.", ""]
     L += results_table(runs, tours) + [""]
+    contacts = contacts_table(runs)
+    if contacts:
+        L += ["## Contacts by cause", "",
+              "What each contact touched and whether navigation could have known it "
+              "(`sim_bridge/contacts.py`): wall mapped / unmapped (the map had an occupied "
+              "cell at the touched point or not); object in layer (the object costmap the "
+              "navigation plans around had it), in map only (the lidar map had it, the layer "
+              "did not), unseen (neither); unclassified: runs recorded before contacts were "
+              "classified. Backing off: contacts during the back-up after an earlier one.", ""]
+        L += contacts + [""]
+    stops = early_stop_table(runs)
+    if stops:
+        L += ["## Runs below 99 % by cause", "",
+              "Per run that ended below the target (`sim_bridge/early_stop.py`): the cause of "
+              "its largest unseen piece of the explorable area (a frontier's reason: "
+              "blacklisted, no passable cPoint, no path, not selectable, selectable; or no "
+              "frontier: frontier too small, closed by object layer, behind mapped obstacles) "
+              "and the frontiers left at the stop; unexplained: runs recorded before the "
+              "analysis existed.", ""]
+        L += stops + [""]
     summary = targets_summary(runs)
     if summary:
         L += ["## Against the targets", ""] + summary + [""]

@@ -446,7 +446,8 @@ class ObjectCostmapNode(Node):
         result = process_frame(frame, detections, self._priors, p, scan_xy, walls)
         for reason in result.dropped:
             self._drop("box", reason)
-        self._objects.update(result.objects + result.unknown, frame, t_ns, robot_xy=pose[:2])
+        self._objects.update(result.objects + result.unknown, frame, t_ns, robot_xy=pose[:2],
+                             walls=walls)
         t2 = time.perf_counter()
         self.frames_processed += 1
         self._publish(t_ns)

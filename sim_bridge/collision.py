@@ -70,6 +70,40 @@ class Collider:
                 best = (d, "map", "wall", "cell")
         return best
 
+    def nearest_point(self, x: float, y: float) -> tuple[float, float, str, str, str]:
+        """The point of the nearest solid closest to (x, y), with that solid's
+        object/class/part: ``(px, py, object, cls, part)`` (where a contact touched).
+
+        ``(nan, nan, "", "", "")`` in an empty world; inside a solid the point is (x, y).
+        """
+        best_d, out = math.inf, (math.nan, math.nan, "", "", "")
+        for p in self._boxes:
+            c, s = math.cos(p.yaw), math.sin(p.yaw)
+            dx, dy = x - p.x, y - p.y
+            u = max(-p.size[0] / 2.0, min(p.size[0] / 2.0, dx * c + dy * s))
+            v = max(-p.size[1] / 2.0, min(p.size[1] / 2.0, -dx * s + dy * c))
+            px, py = p.x + u * c - v * s, p.y + u * s + v * c
+            d = math.hypot(x - px, y - py)
+            if d < best_d:
+                best_d, out = d, (px, py, p.object, p.cls, p.part)
+        for p in self._cyls:
+            dc = math.hypot(x - p.x, y - p.y)
+            k = min(1.0, p.size[0] / dc) if dc > 0 else 0.0
+            px, py = p.x + (x - p.x) * k, p.y + (y - p.y) * k
+            d = max(dc - p.size[0], 0.0)
+            if d < best_d:
+                best_d, out = d, (px, py, p.object, p.cls, p.part)
+        if self._grid is not None:
+            g = self._grid
+            rr, cc = np.nonzero(g.data >= OCCUPIED_THRESHOLD)
+            if rr.size:
+                wx, wy = g.cells_to_world(rr, cc)
+                d = np.hypot(wx - x, wy - y)
+                i = int(np.argmin(d))
+                if d[i] < best_d:
+                    out = (float(wx[i]), float(wy[i]), "map", "wall", "cell")
+        return out
+
     def _grid_clearance(self, x: float, y: float) -> float:
         """Distance to the nearest occupied cell square within the radius (inf if none)."""
         g = self._grid

@@ -435,6 +435,7 @@ class SimEngine:
         """Stop: zero the command, abort the goal, back off (like Nav2's BackUp recovery)
         unless already backing; count a new contact event once."""
         self._cmd = (0.0, 0.0)
+        backing = self._backup_left_m > 0.0
         if self._backup_left_m <= 0.0 and self.params.collision_backup_m > 0.0:
             self._backup_left_m = self.params.collision_backup_m
             self._backup_dir = -1.0 if v >= 0.0 else 1.0
@@ -445,7 +446,8 @@ class SimEngine:
         if self._in_contact:
             return
         self._in_contact = True
-        ev = CollisionEvent(self._time_s, self._pose[0], self._pose[1], obj, cls, part)
+        ev = CollisionEvent(self._time_s, self._pose[0], self._pose[1], obj, cls, part,
+                            float(v), backing)
         self.metrics.add_collision(ev)
         for cb in self._on_collision:
             cb(ev)

@@ -58,13 +58,15 @@ from explore_seg.core.fields import param_meta
 from explore_seg.core.camera import CameraIntrinsics
 from explore_seg.core.detector import Detector, DetectorParams
 from explore_seg.core.explorer import Explorer
-from explore_seg.core.frontiers import Frontier
+from explore_seg.core.frontiers import Frontier, object_obstacles
 from explore_seg.core.grid import GridMap
 from explore_seg.core.objects import DepthFrame, ObjectMap, ObjectParams, WallMask, \
     load_priors, process_frame, wall_mask
 from explore_seg.core.segmentation import IncrementalSegmenter
 from explore_seg.core.selection import Action, NavOutcome
 from sim_bridge import worlds
+from sim_bridge.contacts import classify_contact
+from sim_bridge.early_stop import explain_stop
 from sim_bridge.engine import Collider, SimEngine, SimParams
 from sim_bridge.navigation import OutcomeFollower
 from sim_bridge.explorer_params import (ExplorerParams, default_explorer_params_file,  # noqa: F401
@@ -289,6 +291,7 @@ class _ObjectPipeline:
         self.tolerance_m = lp.object_update_tolerance_m
         self._last_stamp = -1.0
         self._published: list[tuple[float, ...]] = []
+        self._published_depth = 0
         self._walls: tuple[int, WallMask] | None = None   # (map version, its wall mask)
         self._walls_occ: npt.NDArray[np.bool_] | None = None   # its occupied cells
 
@@ -332,18 +335,22 @@ class _ObjectPipeline:
         dets = self.detector.detect(rgb, semantic=fr.semantic, instance=fr.instance)
         t1 = time.perf_counter()
         depth = DepthFrame(fr.depth_m, self.intrinsics, tf)
+        walls = self._wall_mask()
         res = process_frame(depth, dets, self.priors, self.params, scan_points_map(self.engine),
-                            self._wall_mask())
+                            walls)
         self.map.update(res.objects + res.unknown, depth, int(round(cam.stamp_s * 1e9)),
-                        robot_xy=self.engine.pose[:2])
+                        robot_xy=self.engine.pose[:2], walls=walls)
         timings["detection"].append((t1 - t0) * 1e3)
         timings["objects"].append((time.perf_counter() - t1) * 1e3)
         return True
 
     def changed(self) -> bool:
-        """True when the boxes differ from the last :meth:`mark_published` ones by more
+        """True when the depth obstacles changed or the boxes differ from the last
+        :meth:`mark_published` ones by more
         than the tolerance (or their number changed)."""
         cur = self._signature()
+        if self._depth_version() != self._published_depth:
+            return True
         if len(cur) != len(self._published):
             return True
         if not cur:
@@ -353,6 +360,10 @@ class _ObjectPipeline:
 
     def mark_published(self) -> None:
         self._published = self._signature()
+        self._published_depth = self._depth_version()
+
+    def _depth_version(self) -> int:
+        return self.map.depth.version if self.map.depth is not None else 0
 
     def _signature(self) -> list[tuple[float, ...]]:
         return [(o.center_xyz[0], o.center_xyz[1], o.size_xyz[0], o.size_xyz[1],
@@ -442,6 +453,10 @@ def run_exploration(world: World, strategy: str, seed: int, *,
     seg_version = -1
     layer: GridMap | None = None
     follower = OutcomeFollower() if p.nav_feedback else None
+    last_step = None
+    # every contact classified against the map and the layer navigation had then
+    engine.on_collision(lambda ev: res.contacts.append(
+        classify_contact(ev, engine.collider, engine.map, layer)))
     wall0 = time.perf_counter()
 
     def record_coverage() -> float:
@@ -491,7 +506,7 @@ def run_exploration(world: World, strategy: str, seed: int, *,
             ended = follower.poll(engine.nav_status) if follower is not None else None
             if ended is not None:
                 explorer.report_navigation(*ended)
-            step = explorer.step(now, grid, engine.pose, layer, use_labels)
+            step = last_step = explorer.step(now, grid, engine.pose, layer, use_labels)
             if step.detected:
                 res.timings_ms["frontier"].append(step.detect_s * 1e3)
             res.timings_ms["selection"].append(step.select_s * 1e3)
@@ -530,6 +545,14 @@ def run_exploration(world: World, strategy: str, seed: int, *,
     res.collision_places = [(e.x_m, e.y_m, e.object or e.cls) for e in engine.metrics.collisions]
     res.nav_aborts = engine.metrics.goals_aborted
     res.n_objects = len(objects.map) if objects is not None else 0
+    if last_step is not None and ref is not None and not res.completed:
+        extra = (object_obstacles(layer, engine.map, fr_p.object_occupied_threshold)
+                 if fr_p.use_object_costmap else None)
+        res.early_stop = explain_stop(
+            engine.map, ref, last_step.frontiers, last_step.dist_m,
+            explorer.manager.excluded(last_step.frontiers),
+            last_step.selection.costs if last_step.selection is not None else None,
+            fr_p, extra)
     if not res.coverage_samples or res.coverage_samples[-1][0] < engine.time_s:
         res.coverage_samples.append((engine.time_s, res.coverage_pct, res.path_length_m))
     return res

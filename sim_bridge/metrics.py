@@ -28,7 +28,9 @@ from explore_seg.core.grid import FREE_THRESHOLD, GridMap
 
 @dataclass(frozen=True)
 class CollisionEvent:
-    """One contact: sim time, robot position (base_footprint) and what was hit."""
+    """One contact: sim time, robot position (base_footprint) and what was hit; the
+    commanded forward speed at the blocked step (negative: reversing) and whether the
+    robot was backing off after an earlier contact."""
 
     t_s: float
     x_m: float
@@ -36,6 +38,8 @@ class CollisionEvent:
     object: str
     cls: str
     part: str
+    speed_mps: float = 0.0
+    backing: bool = False
 
 
 class CoverageReference:

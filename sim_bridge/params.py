@@ -142,6 +142,10 @@ class SimParams:
     nav_inflation_margin_m: float = field(
         default=NavParams.inflation_margin_m, metadata=param_meta(
         "clearance beyond the robot radius every plan keeps", "m", range=(0.0, math.inf)))
+    nav_inflation_soft_margin_m: float = field(
+        default=NavParams.inflation_soft_margin_m, metadata=param_meta(
+        "clearance beyond the lethal zone that plans keep where the room allows (a high "
+        "cost, not lethal: narrower doors still pass); 0 = off", "m", range=(0.0, math.inf)))
     nav_inflation_radius_m: float = field(
         default=NavParams.inflation_radius_m, metadata=param_meta(
         "obstacle cost decays to zero at this distance (Nav2 inflation_radius)", "m",
@@ -256,6 +260,7 @@ class SimParams:
             robot_radius_m=self.robot_radius_m,
             inflation_margin_m=self.nav_inflation_margin_m,
             inflation_radius_m=self.nav_inflation_radius_m,
+            inflation_soft_margin_m=self.nav_inflation_soft_margin_m,
             unknown_cost=self.nav_unknown_cost,
             allow_unknown=self.nav_allow_unknown,
             replan_period_s=self.nav_replan_period_s,

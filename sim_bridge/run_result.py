@@ -50,6 +50,13 @@ class RunResult:
         decision.
     coverage_samples : list of (t_s, coverage_pct, path_m)
     goals : list of (x, y)
+    contacts : list of dict
+        Every contact classified (:func:`sim_bridge.contacts.classify_contact`: what was
+        hit, whether the map / object layer had it, speed, cause); empty in records made
+        before it existed.
+    early_stop : dict or None
+        For a run that stopped below its coverage target: the frontiers left and the
+        unseen gaps with their causes (:func:`sim_bridge.early_stop.explain_stop`).
     """
 
     world: str
@@ -75,6 +82,8 @@ class RunResult:
     timings_ms: dict[str, list[float]] = field(default_factory=dict)
     coverage_samples: list[tuple[float, float, float]] = field(default_factory=list)
     goals: list[tuple[float, float]] = field(default_factory=list)
+    contacts: list[dict[str, Any]] = field(default_factory=list)
+    early_stop: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """All fields as plain JSON-able values (NaN -> None)."""
@@ -98,13 +107,23 @@ class RunResult:
                     "goals_blacklisted": self.goals_blacklisted, "nav_aborts": self.nav_aborts,
                     "n_objects": self.n_objects,
                     "collision_places": ";".join(f"{x:.2f},{y:.2f},{w}"
-                                                 for x, y, w in self.collision_places)})
+                                                 for x, y, w in self.collision_places),
+                    "contact_causes": ";".join(f"{k}:{v}" for k, v in
+                                               _counts(c.get("cause", "") for c in self.contacts)),
+                    "stop_cause": (self.early_stop or {}).get("cause", "")})
         for key in TIMING_KEYS:
             vals = self.timings_ms.get(key, [])
             row[f"{key}_ms_p50"] = _round(float(np.percentile(vals, 50)) if vals else math.nan, 3)
             row[f"{key}_ms_p95"] = _round(float(np.percentile(vals, 95)) if vals else math.nan, 3)
         return row
 
+
+
+def _counts(keys: Any) -> list[tuple[str, int]]:
+    out: dict[str, int] = {}
+    for k in keys:
+        out[k] = out.get(k, 0) + 1
+    return sorted(out.items())
 
 
 def _round(v: float, nd: int = 2) -> float:

@@ -18,6 +18,12 @@ class NavParams:
     inflation_margin_m: float = field(default=0.0, metadata=param_meta(
         "clearance beyond the radius every plan keeps (lethal zone = radius + this)",
         "m", range=(0.0, math.inf)))
+    inflation_soft_margin_m: float = field(default=0.0, metadata=param_meta(
+        "cells within the lethal zone + this cost inflation_soft_margin_cost more per metre "
+        "(Nav2's near-lethal band): paths keep this clearance where the room allows and "
+        "still pass doors too narrow for it; 0 = off", "m", range=(0.0, math.inf)))
+    inflation_soft_margin_cost: float = field(default=20.0, metadata=param_meta(
+        "extra cost per metre inside inflation_soft_margin_m", range=(0.0, math.inf)))
     inflation_radius_m: float = field(default=0.6, metadata=param_meta(
         "obstacle cost decays to zero at this distance (Nav2 inflation_radius)",
         "m", range=(0.0, math.inf)))
@@ -90,6 +96,7 @@ class NavParams:
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
         non_negative = ("inflation_margin_m", "inflation_cost_weight", "unknown_cost",
+                        "inflation_soft_margin_m", "inflation_soft_margin_cost",
                         "planner_goal_tolerance_m", "plan_window_margin_m",
                         "progress_timeout_s", "goal_timeout_s", "min_approach_speed_mps")
         for name in non_negative:

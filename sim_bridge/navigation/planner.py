@@ -47,6 +47,10 @@ def cost_grid(blocked: npt.NDArray[np.bool_], unknown: npt.NDArray[np.bool_] | N
         band = ~lethal & (d < params.inflation_radius_m)
         excess = np.maximum(d[band] - params.lethal_radius_m, 0.0)
         cost[band] += params.inflation_cost_weight * np.exp(-params.inflation_cost_scale * excess)
+    if params.inflation_soft_margin_m > 0 and blocked.any():   # near-lethal band
+        soft = inflate(blocked, params.lethal_radius_m + params.inflation_soft_margin_m,
+                       resolution_m) & ~lethal
+        cost[soft] += params.inflation_soft_margin_cost
     if unknown is not None and params.unknown_cost > 0:
         cost[unknown] += params.unknown_cost
     cost[lethal] = np.inf

@@ -26,6 +26,11 @@ lidar plane over such a group (inside the legs' rectangle grown by a radius, in 
 band) give the footprint of an ``"unknown"`` object, so a table whose legs the lidar sees
 and whose top it misses becomes an obstacle.
 
+Generic obstacles (:class:`DepthObstacles`, Nav2's voxel / obstacle layer idea): every depth
+point between a floor margin and the robot's height marks a voxel, cleared where the
+camera later sees through it; their columns join the boxes in the layer, so an object of
+any class (a bin, a box, a shelf overhang) is an obstacle once seen.
+
 :class:`ObjectMap` fuses the per-frame boxes in the map frame (merging re-detections by
 their measured footprints, :func:`fuse_boxes`: partial views add up, noise and the sides
 grown by the prior do not; counting misses where the camera sees through an object) and
@@ -38,7 +43,8 @@ Modules, each importing only those above it: :mod:`~.params` (:class:`ObjectPara
 :class:`ObjectCostmapNodeParams`), :mod:`~.priors` (size priors), :mod:`~.cloud`
 (point-cloud steps), :mod:`~.geometry` (footprints), :mod:`~.frame` (the depth frame,
 back-projection), :mod:`~.boxes` (:class:`Object3D`, box fitting, the prior's clamp),
-:mod:`~.walls` (the 2D map's walls), :mod:`~.detections` (one detection -> box),
+:mod:`~.walls` (the 2D map's walls), :mod:`~.depth_obstacles` (generic obstacles from
+depth, :class:`DepthObstacles`), :mod:`~.detections` (one detection -> box),
 :mod:`~.legs` (unclassified objects), :mod:`~.fusion` (:func:`fuse_boxes`),
 :mod:`~.object_map` (:class:`ObjectMap`) and :mod:`~.pipeline` (:func:`process_frame`).
 This package re-exports their public names.
@@ -49,6 +55,7 @@ from explore_seg.core.objects.boxes import (MAX_SURFACE_POINTS, Object3D, clamp_
 from explore_seg.core.objects.cloud import (box_mask, box_stride, euclidean_clusters,
                                             pixel_grid_edges, statistical_outlier_mask,
                                             voxel_downsample)
+from explore_seg.core.objects.depth_obstacles import DepthObstacles
 from explore_seg.core.objects.detections import (DetectionClusters, assign_clusters,
                                                  cluster_detection, fit_cluster,
                                                  object_from_detection, rank_clusters,
@@ -84,6 +91,6 @@ __all__ = [
     "object_from_detection", "assign_clusters", "scan_legs", "scan_posts", "group_legs",
     "unknown_objects",
     # fusion, object map, pipeline
-    "footprint_iou", "fuse_boxes", "TrackedObject", "box_samples", "ObjectMap",
+    "DepthObstacles", "footprint_iou", "fuse_boxes", "TrackedObject", "box_samples", "ObjectMap",
     "FrameResult", "process_frame",
 ]

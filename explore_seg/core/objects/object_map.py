@@ -15,10 +15,12 @@ import numpy.typing as npt
 from explore_seg.core.camera import apply_transform, invert_transform
 from explore_seg.core.grid import GridMap
 from explore_seg.core.objects.boxes import Object3D
+from explore_seg.core.objects.depth_obstacles import DepthObstacles
 from explore_seg.core.objects.frame import DepthFrame
 from explore_seg.core.objects.fusion import footprint_iou, fuse_boxes
 from explore_seg.core.objects.params import UNKNOWN_CLASS, ObjectParams
 from explore_seg.core.objects.priors import SizePrior
+from explore_seg.core.objects.walls import WallMask
 from explore_seg.core.swept import SweptPath
 
 
@@ -69,6 +71,9 @@ class ObjectMap:
         self._objects: list[TrackedObject] = []
         self._next_id = 0
         self._swept = SweptPath()
+        #: Generic obstacles from depth (None when ``params.depth_obstacles`` is off).
+        self.depth: DepthObstacles | None = (DepthObstacles(params) if params.depth_obstacles
+                                             else None)
 
     def __len__(self) -> int:
         return len(self._objects)
@@ -93,12 +98,15 @@ class ObjectMap:
         return [t.obj for t in self._objects]
 
     def clear(self) -> None:
-        """Forget every object."""
+        """Forget every object (and the depth obstacles)."""
         self._objects.clear()
+        if self.depth is not None:
+            self.depth.clear()
 
     # ------------------------------------------------------------------ update
     def update(self, observations: Sequence[Object3D], frame: DepthFrame | None = None,
-               stamp_ns: int = 0, robot_xy: Sequence[float] | None = None) -> None:
+               stamp_ns: int = 0, robot_xy: Sequence[float] | None = None,
+               walls: WallMask | None = None) -> None:
         """Fuse one frame's observations; count misses of unseen objects.
 
         Parameters
@@ -115,7 +123,11 @@ class ObjectMap:
             there: observations and tracked objects whose footprint reaches at least
             ``robot_clear_fraction`` of ``robot_radius_m`` into the robot's disk are
             dropped (else a misplaced box can enclose the robot and end exploration).
+        walls : WallMask, optional
+            The 2D map's walls: their depth points do not mark depth obstacles.
         """
+        if frame is not None and self.depth is not None:
+            self.depth.update(frame, stamp_ns * 1e-9, walls)
         if robot_xy is not None:
             self.note_robot_position(robot_xy[0], robot_xy[1])
         if robot_xy is not None and self.params.robot_clear_fraction > 0:
@@ -279,8 +291,9 @@ class ObjectMap:
         -------
         GridMap
             ``object_value`` inside every footprint (cells whose centre is inside, plus
-            the outline so thin objects keep at least one cell), ``background_value``
-            elsewhere.
+            the outline so thin objects keep at least one cell) and on every depth
+            obstacle column, ``background_value`` elsewhere; the robot's swept path is
+            cleared.
         """
         p = self.params
         img = np.full(grid.shape, p.background_value, dtype=np.int8)
@@ -300,14 +313,19 @@ class ObjectMap:
         if polys:
             cv2.polylines(img, polys, True, int(p.object_value), lineType=cv2.LINE_8,
                           shift=shift)
+        depth = self.depth is not None and self.depth.version > 0 and len(self.depth) > 0
+        if depth:
+            img[self.depth.mask(grid)] = p.object_value  # type: ignore[union-attr]
+        if polys or depth:
             if p.swept_clear_radius_m > 0 and len(self._swept):
                 img[self._swept.mask(grid, p.swept_clear_radius_m)] = p.background_value
         return grid.with_data(img)
 
     def virtual_cloud(self, spacing_m: float | None = None) -> npt.NDArray[np.float32]:
-        """Points filling every box (for a Nav2 voxel/obstacle layer), shape (N, 3).
+        """Points filling every box, and the centres of the depth obstacles' voxels (for
+        a Nav2 voxel/obstacle layer), shape (N, 3).
 
-        The spacing grows (doubling) until at most ``max_cloud_points`` points remain.
+        The boxes' spacing grows (doubling) until at most ``max_cloud_points`` points remain.
 
         Raises
         ------
@@ -317,16 +335,18 @@ class ObjectMap:
         spacing = self.params.cloud_spacing_m if spacing_m is None else float(spacing_m)
         if not spacing > 0:
             raise ValueError(f"spacing_m must be > 0, got {spacing_m}")
-        if not self._objects:
+        depth = (self.depth.centres() if self.depth is not None and len(self.depth)
+                 else np.zeros((0, 3)))
+        if not self._objects and not len(depth):
             return np.zeros((0, 3), dtype=np.float32)
-        while True:
+        while self._objects:
             total = sum(int(np.prod([max(math.ceil(s / spacing), 1) for s in t.obj.size_xyz]))
                         for t in self._objects)
             if total <= self.params.max_cloud_points:
                 break
             spacing *= 2.0
         clouds = [box_samples(t.obj, spacing, surface_only=False) for t in self._objects]
-        cloud = np.vstack(clouds)
+        cloud = np.vstack(clouds + [depth])
         r = self.params.swept_clear_radius_m
         if r > 0 and len(self._swept) and len(cloud):
             # Rasterise the swept corridor over the cloud's extent (cells of half the

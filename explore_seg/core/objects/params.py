@@ -214,6 +214,40 @@ class ObjectParams:
     unknown_pixel_stride: int = field(default=4, metadata=param_meta(
         "Use every n-th depth pixel (rows and columns) for unclassified objects", "px",
         range=(1, 2**31 - 1)))
+    # --- generic obstacles from depth (Nav2 voxel/obstacle layer idea; depth_obstacles.py)
+    depth_obstacles: bool = field(default=True, metadata=param_meta(
+        "Mark every depth point between depth_min_height_m and depth_max_height_m in the "
+        "object layer (voxels, cleared where the camera sees through them), whatever its "
+        "class: an undetected bin or box becomes an obstacle"))
+    depth_min_height_m: float = field(default=0.05, metadata=param_meta(
+        "Floor margin: depth points lower than this above the floor do not mark", "m",
+        range=(0.0, math.inf)))
+    depth_max_height_m: float = field(default=1.1, metadata=param_meta(
+        "Depth points at or above this height (the robot's) do not mark", "m",
+        range=(0.0, math.inf)))
+    depth_max_range_m: float = field(default=3.0, metadata=param_meta(
+        "Depth beyond this neither marks nor clears", "m", range=(0.0, math.inf)))
+    depth_pixel_stride: int = field(default=4, metadata=param_meta(
+        "Use every n-th depth pixel (rows and columns) for marking", "px",
+        range=(1, 2**31 - 1)))
+    depth_voxel_m: float = field(default=0.05, metadata=param_meta(
+        "Voxel size on the floor (x, y)", "m", range=(0.0, math.inf)))
+    depth_voxel_height_m: float = field(default=0.1, metadata=param_meta(
+        "Voxel height", "m", range=(0.0, math.inf)))
+    depth_min_points: int = field(default=2, metadata=param_meta(
+        "A voxel is marked by a frame with at least this many of its points in it",
+        range=(1, 2**31 - 1)))
+    depth_max_score: int = field(default=3, metadata=param_meta(
+        "Marks a voxel can collect (each frame that sees through it takes one away; at "
+        "zero it is cleared)", range=(1, 32767)))
+    depth_clear_margin_m: float = field(default=0.1, metadata=param_meta(
+        "A voxel is seen through when the depth at its pixel lies this much beyond it", "m",
+        range=(0.0, math.inf)))
+    depth_decay_s: float = field(default=300.0, metadata=param_meta(
+        "A voxel not marked again for this long is forgotten (0 = never)", "s",
+        range=(0.0, math.inf)))
+    depth_max_voxels: int = field(default=200000, metadata=param_meta(
+        "Most voxels kept (the oldest are dropped first)", range=(1, 2**31 - 1)))
 
     def __post_init__(self) -> None:
         positive = ("max_depth_m", "ceiling_height_m", "cluster_tolerance_m",
@@ -221,13 +255,15 @@ class ObjectParams:
                     "leg_cluster_gap_m", "leg_max_width_m", "leg_isolation_m",
                     "leg_group_distance_m", "leg_max_range_m", "unknown_max_height_m",
                     "unknown_cover_cell_m", "post_link_m",
-                    "sor_std")
+                    "sor_std", "depth_max_height_m", "depth_max_range_m", "depth_voxel_m",
+                    "depth_voxel_height_m")
         for name in positive:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
         non_negative = ("voxel_size_m", "miss_depth_margin_m", "leg_min_width_m",
-                        "unknown_radius_m", "post_max_width_m", "post_overhang_m", "post_band_m")
+                        "unknown_radius_m", "post_max_width_m", "post_overhang_m", "post_band_m",
+                        "depth_min_height_m", "depth_clear_margin_m", "depth_decay_s")
         for name in non_negative:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
@@ -246,7 +282,8 @@ class ObjectParams:
         at_least_one = ("pixel_stride", "max_box_samples", "sor_k", "min_cluster_points", "max_objects",
                         "clear_after_misses", "miss_min_samples", "max_cloud_points",
                         "leg_min_points", "min_legs", "unknown_min_points",
-                        "unknown_pixel_stride")
+                        "unknown_pixel_stride", "depth_pixel_stride", "depth_min_points",
+                        "depth_max_score", "depth_max_voxels")
         for name in at_least_one:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
@@ -277,6 +314,12 @@ class ObjectParams:
             raise ValueError(
                 f"floor_height_m ({self.floor_height_m}) must be below ceiling_height_m "
                 f"({self.ceiling_height_m})")
+        if self.depth_min_height_m >= self.depth_max_height_m:
+            raise ValueError(
+                f"depth_min_height_m ({self.depth_min_height_m}) must be below "
+                f"depth_max_height_m ({self.depth_max_height_m})")
+        if self.depth_max_score > 32767:
+            raise ValueError(f"depth_max_score must be <= 32767, got {self.depth_max_score}")
         if self.unknown_min_height_m >= self.unknown_max_height_m:
             raise ValueError(
                 f"unknown_min_height_m ({self.unknown_min_height_m}) must be below "

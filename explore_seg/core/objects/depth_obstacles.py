@@ -1,0 +1,203 @@
+"""Generic obstacles from depth: every depth point in a height band marks the object layer,
+whatever its class (the idea of Nav2's voxel / obstacle layer).
+
+The YOLO boxes give the full extent of furniture the detector knows, including the parts
+the camera does not see; an object of a class it does not know (a bin, a box, a shelf
+overhang above the lidar plane) would be missed. :class:`DepthObstacles` keeps voxels in
+the map frame:
+
+* **marking**: the depth image is sampled every ``depth_pixel_stride``-th pixel up to
+  ``depth_max_range_m``; points between ``depth_min_height_m`` (the floor margin) and
+  ``depth_max_height_m`` (the robot's height), not over a wall of the 2D map
+  (``drop_wall_points``), are binned into voxels of ``depth_voxel_m`` (x, y) by
+  ``depth_voxel_height_m`` (z); a voxel with at least ``depth_min_points`` points in a
+  frame gains one point of score (up to ``depth_max_score``);
+* **clearing**: a stored voxel that lies in the camera's view, in front of the measured
+  surface by more than ``depth_clear_margin_m`` at its pixel (the ray passed through it),
+  loses one point; at zero it is forgotten. Voxels out of view (behind the robot, below
+  the camera's field of view when the robot is close) are kept;
+* **decay**: a voxel not marked for ``depth_decay_s`` is forgotten (0: never).
+
+The layer cell of a voxel column is an obstacle when any voxel of the column is stored:
+:meth:`DepthObstacles.mask` on any grid geometry.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.camera import apply_transform, invert_transform
+from explore_seg.core.grid import GridMap
+from explore_seg.core.objects.frame import DepthFrame
+from explore_seg.core.objects.params import ObjectParams
+from explore_seg.core.objects.walls import WallMask
+
+_XY_BITS = 21
+_Z_BITS = 10
+_XY_OFF = 1 << (_XY_BITS - 1)
+
+
+def _pack(ix: npt.NDArray[np.int64], iy: npt.NDArray[np.int64], iz: npt.NDArray[np.int64]
+          ) -> npt.NDArray[np.int64]:
+    return (((ix + _XY_OFF) << (_XY_BITS + _Z_BITS)) | ((iy + _XY_OFF) << _Z_BITS)
+            | iz).astype(np.int64)
+
+
+def _unpack(keys: npt.NDArray[np.int64]) -> tuple[npt.NDArray[np.int64], ...]:
+    ix = (keys >> (_XY_BITS + _Z_BITS)) - _XY_OFF
+    iy = ((keys >> _Z_BITS) & ((1 << _XY_BITS) - 1)) - _XY_OFF
+    iz = keys & ((1 << _Z_BITS) - 1)
+    return ix, iy, iz
+
+
+class DepthObstacles:
+    """Voxels of depth points in the robot's height band (see the module docstring).
+
+    Parameters
+    ----------
+    params : ObjectParams
+        The ``depth_*`` fields (and ``drop_wall_points``).
+    """
+
+    def __init__(self, params: ObjectParams) -> None:
+        self.params = params
+        self._keys = np.zeros(0, np.int64)       # sorted
+        self._score = np.zeros(0, np.int16)
+        self._stamp = np.zeros(0, np.float64)
+        self._columns = np.zeros(0, np.int64)    # sorted (ix, iy) keys of stored voxels
+        #: Changes whenever the set of obstacle columns changes.
+        self.version = 0
+
+    def __len__(self) -> int:
+        return int(self._keys.size)
+
+    def clear(self) -> None:
+        """Forget every voxel."""
+        self.__init__(self.params)  # type: ignore[misc]
+
+    # ------------------------------------------------------------------ update
+    def band_points(self, frame: DepthFrame, walls: WallMask | None = None
+                    ) -> npt.NDArray[np.float64]:
+        """Map-frame depth points in the height band (the ones that mark), shape (N, 3)."""
+        p = self.params
+        s = p.depth_pixel_stride
+        d = frame.depth_m[::s, ::s]
+        rows, cols = np.mgrid[0:frame.depth_m.shape[0]:s, 0:frame.depth_m.shape[1]:s]
+        with np.errstate(invalid="ignore"):
+            ok = np.isfinite(d) & (d > 0) & (d <= p.depth_max_range_m)
+        z = d[ok].astype(np.float64)
+        k = frame.intrinsics
+        pts = np.stack([(cols[ok] - k.cx) * z / k.fx, (rows[ok] - k.cy) * z / k.fy, z], axis=1)
+        pts = apply_transform(frame.map_from_optical, pts)
+        pts = pts[(pts[:, 2] > p.depth_min_height_m) & (pts[:, 2] < p.depth_max_height_m)]
+        if walls is not None and p.drop_wall_points and len(pts):
+            pts = pts[~walls.on(pts[:, :2])]
+        return pts
+
+    def update(self, frame: DepthFrame, stamp_s: float, walls: WallMask | None = None
+               ) -> bool:
+        """Mark, clear and decay with one depth frame; True when the obstacle columns
+        changed.
+
+        Parameters
+        ----------
+        frame : DepthFrame
+        stamp_s : float
+            Frame time (seconds, monotonic; used by the decay).
+        walls : WallMask, optional
+            Depth points on the 2D map's walls do not mark (the map has them).
+        """
+        p = self.params
+        pts = self.band_points(frame, walls)
+        v, vz = p.depth_voxel_m, p.depth_voxel_height_m
+        ix = np.floor(pts[:, 0] / v).astype(np.int64)
+        iy = np.floor(pts[:, 1] / v).astype(np.int64)
+        iz = np.floor((pts[:, 2] - p.depth_min_height_m) / vz).astype(np.int64)
+        new, counts = np.unique(_pack(ix, iy, iz), return_counts=True)
+        new = new[counts >= p.depth_min_points]
+        keys, score, stamp = self._keys, self._score.astype(np.int32), self._stamp
+        # clearing: stored voxels the camera sees through (not marked in this frame)
+        if keys.size:
+            through = self._seen_through(frame, keys) & ~np.isin(keys, new)
+            score = score - through.astype(np.int32)
+        # marking
+        if new.size:
+            if keys.size:
+                idx_c = np.minimum(np.searchsorted(keys, new), keys.size - 1)
+                found = keys[idx_c] == new
+            else:
+                idx_c, found = np.zeros(new.size, np.int64), np.zeros(new.size, bool)
+            score[idx_c[found]] = np.minimum(score[idx_c[found]] + 1, p.depth_max_score)
+            stamp = stamp.copy()
+            stamp[idx_c[found]] = stamp_s
+            add = new[~found]
+            keys = np.concatenate([keys, add])
+            score = np.concatenate([score, np.ones(add.size, np.int32)])
+            stamp = np.concatenate([stamp, np.full(add.size, float(stamp_s))])
+            order = np.argsort(keys, kind="stable")
+            keys, score, stamp = keys[order], score[order], stamp[order]
+        keep = score > 0
+        if p.depth_decay_s > 0:
+            keep &= stamp >= stamp_s - p.depth_decay_s
+        if keep.sum() > p.depth_max_voxels:       # bounded: the oldest go first
+            old = np.argsort(stamp[keep], kind="stable")[:int(keep.sum()) - p.depth_max_voxels]
+            keep[np.flatnonzero(keep)[old]] = False
+        self._keys, self._score, self._stamp = keys[keep], score[keep].astype(np.int16), stamp[keep]
+        columns = np.unique(self._keys >> _Z_BITS)
+        changed = not np.array_equal(columns, self._columns)
+        if changed:
+            self._columns = columns
+            self.version += 1
+        return changed
+
+    def _seen_through(self, frame: DepthFrame, keys: npt.NDArray[np.int64]
+                      ) -> npt.NDArray[np.bool_]:
+        """Voxels whose centre the camera sees past by more than ``depth_clear_margin_m``."""
+        p = self.params
+        centres = self.centres(keys)
+        opt = apply_transform(invert_transform(frame.map_from_optical), centres)
+        z = opt[:, 2]
+        k = frame.intrinsics
+        out = np.zeros(keys.size, bool)
+        front = (z > 1e-6) & (z <= p.depth_max_range_m)
+        if not front.any():
+            return out
+        zf = z[front]
+        u = np.round(k.fx * opt[front, 0] / zf + k.cx).astype(np.int64)
+        vv = np.round(k.fy * opt[front, 1] / zf + k.cy).astype(np.int64)
+        inside = (u >= 0) & (u < k.width) & (vv >= 0) & (vv < k.height)
+        measured = np.full(zf.shape, np.nan, np.float64)
+        measured[inside] = frame.depth_m[vv[inside], u[inside]]
+        with np.errstate(invalid="ignore"):
+            through = np.isfinite(measured) & (measured > zf + p.depth_clear_margin_m)
+        out[np.flatnonzero(front)] = through
+        return out
+
+    # ----------------------------------------------------------------- outputs
+    def centres(self, keys: npt.NDArray[np.int64] | None = None) -> npt.NDArray[np.float64]:
+        """Map-frame centres of the stored voxels (or of ``keys``), shape (N, 3)."""
+        p = self.params
+        ix, iy, iz = _unpack(self._keys if keys is None else keys)
+        return np.stack([(ix + 0.5) * p.depth_voxel_m, (iy + 0.5) * p.depth_voxel_m,
+                         p.depth_min_height_m + (iz + 0.5) * p.depth_voxel_height_m], axis=1)
+
+    def mask(self, grid: GridMap) -> npt.NDArray[np.bool_]:
+        """Cells of ``grid`` covered by an obstacle column, shape (H, W) bool."""
+        out = np.zeros(grid.shape, bool)
+        if not self._columns.size:
+            return out
+        v = self.params.depth_voxel_m
+        ix = (self._columns >> _XY_BITS) - _XY_OFF
+        iy = (self._columns & ((1 << _XY_BITS) - 1)) - _XY_OFF
+        n = max(1, int(math.ceil(v / grid.resolution_m - 1e-9)))
+        offs = ((np.arange(n) + 0.5) / n) * v
+        ox, oy = np.meshgrid(offs, offs, indexing="ij")
+        x = (ix[:, None] * v + ox.ravel()[None, :]).ravel()
+        y = (iy[:, None] * v + oy.ravel()[None, :]).ravel()
+        r, c = grid.world_to_cells(x, y)
+        ok = (r >= 0) & (r < grid.height) & (c >= 0) & (c < grid.width)
+        out[r[ok], c[ok]] = True
+        return out

@@ -1,0 +1,119 @@
+"""Generic obstacles from depth (explore_seg.core.objects.depth_obstacles) in the object layer,
+and a partly seen desk top that still becomes a full box."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from explore_seg.core.grid import GridMap
+from explore_seg.core.objects import (DepthFrame, DepthObstacles, ObjectMap, ObjectParams,
+                                      object_from_detection, process_frame, wall_mask)
+from objects_scene import (K, PRIORS, Det, box_parts, camera_pose, desk_at_wall_map,
+                           project_box, render_depth, table_parts)
+
+# the paper's robot: camera 0.894 m up, pitched 0.1 rad down
+PAPER_CAM = dict(z=0.894, pitch=0.1)
+
+
+def _grid():
+    return GridMap(np.zeros((80, 80), np.int8), 0.05, (0.0, -2.0))
+
+
+def _cells(layer, x0, x1, y0, y1):
+    x, y = layer.cells_to_world(*np.indices(layer.shape))
+    return (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)
+
+
+def test_a_bin_of_an_undetected_class_is_in_the_layer_after_one_frame():
+    pose = camera_pose(**PAPER_CAM)
+    bin_ = [box_parts((1.5, 0.1), (0.3, 0.3, 0.6))]
+    frame = DepthFrame(render_depth(bin_, pose), K, pose)
+    params = ObjectParams()
+    res = process_frame(frame, [], PRIORS, params)      # no detection at all
+    om = ObjectMap(params, PRIORS)
+    om.update(res.objects + res.unknown, frame, 10**9)
+    assert len(om) == 0                                  # no box ...
+    layer = om.rasterize(_grid())
+    occ = layer.data >= 65
+    # ... but the bin's near face is an obstacle, and nothing else (the floor is not)
+    assert occ[_cells(layer, 1.34, 1.41, -0.02, 0.22)].all()
+    assert not occ[~_cells(layer, 1.30, 1.70, -0.1, 0.3)].any()
+    # off: the layer stays empty (the boxes' behaviour alone)
+    om0 = ObjectMap(dataclasses.replace(params, depth_obstacles=False), PRIORS)
+    om0.update([], frame, 10**9)
+    assert not (om0.rasterize(_grid()).data >= 65).any()
+
+
+def test_seen_through_clears_out_of_view_keeps_and_decay_forgets():
+    params = ObjectParams(depth_decay_s=100.0)
+    d = DepthObstacles(params)
+    pose = camera_pose(**PAPER_CAM)
+    bin_ = [box_parts((1.5, 0.1), (0.3, 0.3, 0.6))]
+    assert d.update(DepthFrame(render_depth(bin_, pose), K, pose), 0.0)
+    assert d.version == 1 and len(d) > 0
+    # turned away: the bin is out of view and stays
+    away = camera_pose(yaw=np.pi, **PAPER_CAM)
+    assert not d.update(DepthFrame(render_depth(bin_, away), K, away), 1.0) and len(d) > 0
+    # the bin is gone and the camera, 0.5 m further back, sees the floor behind where
+    # it stood (from the first pose its lowest voxels lie below the view): cleared
+    back = camera_pose(x=-0.5, **PAPER_CAM)
+    assert d.update(DepthFrame(render_depth([], back), K, back), 2.0)
+    assert len(d) == 0 and not d.mask(_grid()).any()
+    # decay: marked at t = 0, not seen again for longer than depth_decay_s
+    d.update(DepthFrame(render_depth(bin_, pose), K, pose), 0.0)
+    assert len(d) > 0
+    d.update(DepthFrame(render_depth(bin_, away), K, away), 101.0)
+    assert len(d) == 0
+
+
+def test_height_band_and_walls_do_not_mark():
+    pose = camera_pose(**PAPER_CAM)
+    # a shelf above the robot and a 3 cm floor mat: neither marks
+    parts = [box_parts((1.5, 0.0), (0.4, 0.4, 0.2), z0=1.3),
+             box_parts((1.2, -0.6), (0.5, 0.5, 0.03))]
+    d = DepthObstacles(ObjectParams())
+    d.update(DepthFrame(render_depth(parts, pose), K, pose), 0.0)
+    assert len(d) == 0
+    # a wall the 2D map has: its points do not mark (drop_wall_points)
+    wall = [box_parts((2.55, 0.0), (0.1, 4.0, 2.0))]
+    frame = DepthFrame(render_depth(wall, pose), K, pose)
+    grid = desk_at_wall_map([None], 2.55)
+    d.update(frame, 0.0, wall_mask(grid, ObjectParams()))
+    assert len(d) == 0
+    d.update(frame, 0.0)
+    assert len(d) > 0
+
+
+def test_a_desk_top_seen_only_partly_still_becomes_a_full_box():
+    """The camera sees the near 40 % of a desk (the rest beyond the image's lower-right
+    corner); the box keeps the measured near edge and grows to the prior's extent."""
+    desk = table_parts((1.6, -0.95), 1.4, 0.7, 0.75, 0.0)
+    pose = camera_pose(z=1.0, pitch=0.5)
+    frame = DepthFrame(render_depth(desk, pose), K, pose)
+    box = project_box(desk, pose)
+    assert box[3] == K.height - 1 or box[0] == 0 or box[2] == K.width - 1   # cut by the view
+    obj = object_from_detection(frame, box, "dining table", 0.9, PRIORS["dining table"],
+                                ObjectParams())
+    assert obj is not None
+    prior = PRIORS["dining table"]
+    lo, hi = sorted(obj.size_xyz[:2])
+    assert lo >= prior.min_xy_m - 1e-6
+    layer = ObjectMap(ObjectParams(depth_obstacles=False), PRIORS)
+    layer.update([obj])
+    occ = layer.rasterize(_grid()).data >= 65
+    # the whole desk top's footprint (not only what was seen) is in the layer
+    full = _cells(layer.rasterize(_grid()), 0.95, 2.25, -1.25, -0.65)
+    assert occ[full].mean() >= 0.9
+
+
+def test_the_virtual_cloud_carries_the_depth_obstacles():
+    pose = camera_pose(**PAPER_CAM)
+    frame = DepthFrame(render_depth([box_parts((1.5, 0.1), (0.3, 0.3, 0.6))], pose), K, pose)
+    om = ObjectMap(ObjectParams(), PRIORS)
+    om.update([], frame, 10**9)
+    cloud = om.virtual_cloud()
+    assert len(cloud) == len(om.depth) > 0
+    assert np.all((cloud[:, 0] > 1.3) & (cloud[:, 0] < 1.7) & (cloud[:, 2] < 0.7))
