@@ -33,6 +33,9 @@ class CostInputs:
         Region of each cPoint; None when regionGain is off (no labels or no robot region).
     robot_region : int
         Region of the robot (0 = unknown).
+    tour_cost_m : ndarray of float64, shape (N,), or None
+        ``routed``: length of the tour over all viewpoints when this group is visited
+        next (:class:`~explore_seg.core.selection.router.Router`); None for the others.
     """
 
     dist_m: npt.NDArray[np.float64]
@@ -41,6 +44,7 @@ class CostInputs:
     length_m: npt.NDArray[np.float64]
     regions: npt.NDArray[np.int64] | None
     robot_region: int
+    tour_cost_m: npt.NDArray[np.float64] | None = None
 
 
 #: ``cost(inputs, params) -> costs of the finite groups`` (shape ``(finite.sum(),)``).
@@ -72,13 +76,22 @@ def explore_lite_cost(inp: CostInputs, params: Any) -> npt.NDArray[np.float64]:
     return params.potential_scale * inp.dist_m[f] - params.gain_scale * inp.length_m[f]
 
 
+def routed_cost(inp: CostInputs, params: Any) -> npt.NDArray[np.float64]:
+    """The tour length (m) when the group is visited next (region changes included)."""
+    if inp.tour_cost_m is None:
+        raise ValueError("the routed strategy needs tour costs (explore_seg.core.selection."
+                         "router.Router, run by explore_seg.core.explorer.Explorer)")
+    return np.asarray(inp.tour_cost_m, dtype=np.float64)[inp.finite]
+
+
 #: Strategy name -> cost function. The first entry is listed first in the docs.
 COST_FUNCTIONS: dict[str, CostFunction] = {
     "paper": paper_cost,
     "nearest": nearest_cost,
     "explore_lite": explore_lite_cost,
+    "routed": routed_cost,
 }
 #: Strategies ``SelectionParams.strategy`` accepts.
 STRATEGIES: tuple[str, ...] = tuple(COST_FUNCTIONS)
 #: Strategies whose cost has a region term (the node logs once when it is inactive).
-REGION_STRATEGIES: frozenset[str] = frozenset({"paper"})
+REGION_STRATEGIES: frozenset[str] = frozenset({"paper", "routed"})
