@@ -13,7 +13,9 @@ stood still (moved < ``--still-m`` in a decision period while exploring), NEW_GO
 decisions and how many the region / size term decided, changes of the robot's region id
 (and how many were back to the id it had two changes before: flicker), goal switches,
 blacklistings, the time from 95 % coverage to the end, and the share of the path driven
-while coverage did not grow.
+while coverage did not grow, and for runs that ended DONE how long after coverage reached
+its final value (within 0.05 %) DONE came (``done_lag_s``; ``--coverage-target 100`` lets
+runs go on until DONE).
 
 Usage::
 
@@ -28,6 +30,7 @@ import csv
 import json
 import math
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -40,7 +43,7 @@ if str(ROOT) not in sys.path:
 from bench.tasks import explorer_params  # noqa: E402
 from bench.worlds import PAPER_CAMERA_MOUNT, load, sim_params_for, sim_time_limit  # noqa: E402
 from explore_seg.core.selection import Action  # noqa: E402
-from sim_bridge.lockstep import LockstepState, run_exploration  # noqa: E402
+from sim_bridge.lockstep import LockstepParams, LockstepState, run_exploration  # noqa: E402
 
 FIELDS = ("t_s", "coverage_pct", "x_m", "y_m", "action", "reason", "goal_x_m", "goal_y_m",
           "robot_region", "n_frontiers", "chosen_dist_m", "chosen_size_cells",
@@ -73,7 +76,7 @@ def paper_terms(st: LockstepState, alpha: float, beta: float, gamma: float
 
 
 def trace_run(world_spec: str, strategy: str, seed: int, out_dir: Path,
-              still_m: float) -> dict[str, Any]:
+              still_m: float, coverage_target_pct: float | None = None) -> dict[str, Any]:
     """One traced run: writes its CSV, returns its summary."""
     world, gt = load(world_spec)
     ep = explorer_params()
@@ -112,7 +115,11 @@ def trace_run(world_spec: str, strategy: str, seed: int, out_dir: Path,
         rows.append(row)
         last_xy.append((x, y))
 
+    lp = LockstepParams()
+    if coverage_target_pct is not None:
+        lp = replace(lp, coverage_target_pct=coverage_target_pct)
     res = run_exploration(world, strategy, seed, ground_truth=gt, explorer_params=ep,
+                          params=lp,
                           max_sim_time_s=sim_time_limit(float(gt.explorable_area_m2), None),
                           sim_params=sim_params_for(PAPER_CAMERA_MOUNT, None),
                           observer=observe)
@@ -145,6 +152,8 @@ def summarise(rows: list[dict[str, Any]], res: Any, world: str, strategy: str, s
     flicker = sum(1 for j in range(1, len(changes))
                   if regions[changes[j]] == regions[changes[j - 1] - 1])
     total_path = res.path_length_m
+    final = res.coverage_pct
+    t_final = next((r["t_s"] for r in rows if r["coverage_pct"] >= final - 0.05), res.sim_time_s)
     return dict(world=world, strategy=strategy, seed=seed, t95_s=t95, end_s=res.sim_time_s,
                 stop=res.stop_reason, coverage_pct=round(res.coverage_pct, 2),
                 still_s=round(still_s, 1), new_goals=len(new),
@@ -157,6 +166,8 @@ def summarise(rows: list[dict[str, Any]], res: Any, world: str, strategy: str, s
                 switches=res.goal_switches, blacklisted=res.goals_blacklisted,
                 after_95_s=round(res.sim_time_s - t95, 1) if math.isfinite(t95) else None,
                 path_m=round(total_path, 1),
+                done_lag_s=(round(res.sim_time_s - t_final, 1) if res.stop_reason == "done"
+                            else None),
                 path_no_gain_pct=round(100.0 * flat_path / total_path, 1) if total_path else 0)
 
 
@@ -168,13 +179,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default="out/trace")
     ap.add_argument("--still-m", type=float, default=0.05,
                     help="moved less than this in a decision period = standing still")
+    ap.add_argument("--coverage-target", type=float, default=None,
+                    help="stop at this coverage (default: the lock step's 99 %%; 100 lets a "
+                         "run go on until DONE, to measure how late DONE comes)")
     a = ap.parse_args(argv)
     out = Path(a.out)
     summaries = []
     for w in a.worlds.split(","):
         for s in a.strategies.split(","):
             for seed in (int(x) for x in a.seeds.split(",")):
-                summ = trace_run(w, s, seed, out, a.still_m)
+                summ = trace_run(w, s, seed, out, a.still_m, a.coverage_target)
                 print(json.dumps(summ), flush=True)
                 summaries.append(summ)
     with open(out / "summary.json", "a") as fh:

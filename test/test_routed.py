@@ -209,3 +209,23 @@ def test_no_goal_flip_on_a_tiny_map_change():
         out = ex.step(1.0 + k, g, pose)
         assert out.action is Action.KEEP, out.reason
         assert out.goal == first.goal
+
+
+def test_a_frontier_that_reveals_nothing_is_not_chased():
+    # A room fully known but for a speck of unknown cells walled off except one free
+    # neighbour: nearest sends a goal there, routed finishes (its view gains < min_gain).
+    data = np.zeros((80, 80), dtype=np.int8)
+    data[0:2, :] = data[-2:, :] = data[:, 0:2] = data[:, -2:] = 100
+    data[30:36, 60:72] = 100
+    data[32:34, 62:70] = -1                      # 16 unknown cells inside a box ...
+    data[33, 60:62] = 0                          # ... with a slit towards the room
+    data[33, 62] = -1
+    g = _grid(data)
+    x, y = g.cell_to_world(40, 20)
+    fp = FrontierParams(robot_radius_m=0.05, min_group_size_cells=1)
+    near = Explorer(fp, SelectionParams(strategy="nearest")).step(0.0, g, (x, y, 0.0))
+    assert near.action is Action.NEW_GOAL
+    ex = Explorer(fp, SelectionParams(strategy="routed", done_confirmations=2))
+    outs = [ex.step(float(k), g, (x, y, 0.0)) for k in range(3)]
+    assert outs[0].tour is not None and outs[0].tour.gain_m2.max() < 0.25
+    assert [o.action for o in outs[:2]] == [Action.WAIT, Action.DONE]

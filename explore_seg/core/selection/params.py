@@ -110,6 +110,10 @@ class SelectionParams:
     region_switch_m: float = _non_negative(
         "routed: extra tour cost of an edge between viewpoints of two different regions "
         "(finish a region unless its rest is a longer detour)", "m", default=2.0)
+    min_gain_m2: float = _non_negative(
+        "routed: a group whose viewpoint sees less unknown area than this is not a goal "
+        "(it would reveal nothing: exploration ends instead of chasing it)", "m^2",
+        default=0.25)
     gain_weight_m_per_m2: float = _non_negative(
         "routed: a group's cost is its tour length minus this times the unknown area its "
         "viewpoint sees (big views first when the detour is small)", "m/m^2", default=0.0)
@@ -122,7 +126,7 @@ class SelectionParams:
                      "progress_min_m", "goal_reached_tolerance_m", "frontier_match_radius_m",
                      "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
                      "flicker_radius_m", "viewpoint_radius_m", "region_switch_m",
-                     "gain_weight_m_per_m2"):
+                     "gain_weight_m_per_m2", "min_gain_m2"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {v}")

@@ -18,7 +18,9 @@ Per decision (:class:`Router`, driven by :class:`~explore_seg.core.explorer.Expl
    starts with it; any other: the tour with it moved to the front), in metres. The goal
    manager's rule then becomes the tour hysteresis: the goal changes only when a tour
    shorter by ``hysteresis_margin`` of the current goal's tour exists (or the goal's
-   frontier is gone), so goals do not flip on small map changes.
+   frontier is gone), so goals do not flip on small map changes. A group whose viewpoint
+   sees less than ``min_gain_m2`` of unknown area is left out (exploration ends rather
+   than chasing frontier specks that reveal nothing).
 """
 
 from __future__ import annotations
@@ -47,8 +49,9 @@ class TourPlan:
     Attributes
     ----------
     tour_cost_m : ndarray of float64, shape (N,)
-        Per group: length of the tour when its viewpoint is visited next (inf: not in the
-        tour: unreachable, excluded or no passable viewpoint).
+        Per group: length of the tour when its viewpoint is visited next, minus
+        ``gain_weight_m_per_m2`` times its gain (inf: not in the tour: unreachable,
+        excluded, no passable viewpoint or a gain below ``min_gain_m2``).
     order : ndarray of int64
         Group indices in tour order.
     length_m : float
@@ -145,6 +148,9 @@ class Router:
                 d[0] = np.inf
             k = pick_viewpoint(gain[a:b], d, p.viewpoint_gain_tolerance)
             if k is None:
+                # No reachable candidate (reachable through unknown space at most): keep
+                # the cPoint, rated by the best view near the group.
+                self.gain_m2[i] = float(gain[a:b].max())
                 out.append(f)
                 continue
             self.gain_m2[i] = gain[a + k]
@@ -194,6 +200,9 @@ class Router:
         robot_region = region_at(use, robot_rc, rad) if use is not None else 0
         sel = np.isfinite(np.asarray(dist_m, dtype=np.float64))
         sel &= np.asarray([f.point_passable for f in frontiers], dtype=bool)
+        gains = self._gains(n)
+        if len(self.gain_m2) == n:
+            sel &= gains >= p.min_gain_m2
         if excluded is not None:
             sel &= ~np.asarray(excluded, dtype=bool)
         idx = np.flatnonzero(sel)
@@ -230,7 +239,7 @@ class Router:
                 front[node] = min(front[node], own.length_m)
                 if own.length_m < best_len:
                     best_len, order = own.length_m, own.order
-        cost_out[idx] = front[1:] - p.gain_weight_m_per_m2 * self._gains(n)[idx]
+        cost_out[idx] = front[1:] - p.gain_weight_m_per_m2 * gains[idx]
         self.tour_s = time.perf_counter() - t0
         return TourPlan(cost_out, idx[order - 1].astype(np.int64), float(best_len), regions,
                         robot_region, self._gains(n))
