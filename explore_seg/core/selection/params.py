@@ -116,7 +116,7 @@ class SelectionParams:
         default=0.25)
     gain_weight_m_per_m2: float = _non_negative(
         "routed: a group's cost is its tour length minus this times the unknown area its "
-        "viewpoint sees (big views first when the detour is small)", "m/m^2", default=0.0)
+        "viewpoint sees (big views first when the detour is small)", "m/m^2", default=0.1)
 
     def __post_init__(self) -> None:
         if self.strategy not in STRATEGIES:
