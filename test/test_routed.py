@@ -189,7 +189,13 @@ def test_routed_step_sends_a_viewpoint_goal_with_a_tour():
     assert f.point_passable and g.data[f.point_rc] == 0
     assert out.goal.xy_m == f.point_xy_m
     assert 0 < out.route_s <= out.select_s
-    # costs are tour lengths: the chosen one is the tour's length, no other is cheaper
+    # costs are tour lengths minus the weighted gain
+    w = SelectionParams().gain_weight_m_per_m2
+    i = out.selection.index
+    assert out.selection.costs[i] == pytest.approx(out.tour.length_m - w * out.tour.gain_m2[i])
+    # without the gain term: the chosen one is the tour's length, no other is cheaper
+    plain = Explorer(fp, SelectionParams(strategy="routed", gain_weight_m_per_m2=0.0))
+    out = plain.step(0.0, g, pose)
     fin = out.selection.costs[np.isfinite(out.selection.costs)]
     assert out.selection.costs[out.selection.index] == pytest.approx(out.tour.length_m)
     assert fin.min() == pytest.approx(out.tour.length_m)
