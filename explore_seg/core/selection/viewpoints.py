@@ -104,15 +104,19 @@ def view_gain(grid: GridMap, cells_rc: npt.ArrayLike, range_m: float = 5.0,
     theta = np.arange(rays) * (2.0 * math.pi / rays)
     dr = np.rint(np.sin(theta)[:, None] * r[None, :] / cell_m).astype(np.int64)  # (K, S)
     dc = np.rint(np.cos(theta)[:, None] * r[None, :] / cell_m).astype(np.int64)
-    origin = (rc + 0.5) / COARSEN                                   # coarse coordinates
-    orow = np.floor(origin[:, 0]).astype(np.int64)[:, None, None]
-    ocol = np.floor(origin[:, 1]).astype(np.int64)[:, None, None]
-    rr, cc = orow + dr[None], ocol + dc[None]                       # (C, K, S)
+    # Pad the coarse map with blocking cells so no ray leaves it; flat indices.
+    pad = steps + 1
     hc, wc = codes.shape
-    inside = (rr >= 0) & (rr < hc) & (cc >= 0) & (cc < wc)
-    code = np.full(rr.shape, _BLOCKED, dtype=np.uint8)
-    code[inside] = codes[rr[inside], cc[inside]]
-    visible = np.cumsum(code == _BLOCKED, axis=2) == 0
+    padded = np.full((hc + 2 * pad, wc + 2 * pad), _BLOCKED, dtype=np.uint8)
+    padded[pad:pad + hc, pad:pad + wc] = codes
+    wp = wc + 2 * pad
+    orow = np.clip(np.floor((rc[:, 0] + 0.5) / COARSEN).astype(np.int64), -1, hc) + pad
+    ocol = np.clip(np.floor((rc[:, 1] + 0.5) / COARSEN).astype(np.int64), -1, wc) + pad
+    flat = (orow * wp + ocol)[:, None] + (dr * wp + dc).ravel()[None, :]   # (C, K*S)
+    code = padded.ravel()[flat].reshape(rc.shape[0], rays, steps)
+    blocked = code == _BLOCKED
+    first = np.where(blocked.any(axis=2), blocked.argmax(axis=2), steps)   # (C, K)
+    visible = np.arange(steps)[None, None, :] < first[:, :, None]
     weight = r * (2.0 * math.pi / rays) * cell_m                    # area per sample
     return ((visible & (code == _UNKNOWN)) * weight[None, None, :]).sum(axis=(1, 2))
 
