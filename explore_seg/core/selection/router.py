@@ -33,7 +33,7 @@ viewpoints up to ``viewpoint_radius_m`` = 1.5 m from their frontier end in "goal
 but its frontier remains" blacklistings (3-6 per eb/room_2 run). Decision time
 (frontier detection + viewpoints + tour + goal) on house snapshots: 51-72 ms of CPU per
 decision (``paper``: 10-13 ms); most of it is the ray casting of ``view_gain``.
-
+"""
 
 from __future__ import annotations
 
