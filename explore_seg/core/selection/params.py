@@ -101,7 +101,7 @@ class SelectionParams:
         "routed: rays cast over 360 degrees per viewpoint candidate", range=(4, 720)))
     viewpoint_radius_m: float = _non_negative(
         "routed: viewpoint candidates lie within this distance of their frontier's cells",
-        "m", default=1.5)
+        "m", default=0.75)
     viewpoint_step_m: float = field(default=0.3, metadata=param_meta(
         "routed: spacing of the viewpoint candidates' lattice", "m", range=(0.0, _INF)))
     viewpoint_gain_tolerance: float = field(default=0.1, metadata=param_meta(

@@ -22,17 +22,20 @@ Per decision (:class:`Router`, driven by :class:`~explore_seg.core.explorer.Expl
    sees less than ``min_gain_m2`` of unknown area is left out (exploration ends rather
    than chasing frontier specks that reveal nothing).
 
-Measured (lock step, seeds 0-2, ``bench/run_bench.py --runs 3 --jobs 1 --strategies routed
---worlds shared/house,shared/house_cluttered_plus,eb/corridor,eb/loop,eb/room_2``, paired
-with the baselines' rows of bench/results/runs.csv; median of per-seed T95 ratios where
-both reached 95 %): ``routed`` / ``explore_lite`` 0.68 on shared/house, 0.78 on
-house_cluttered_plus (1 pair), 1.02 on eb/loop, 1.09 on eb/corridor, 1.24 on eb/room_2;
-/ ``nearest`` 0.48 (1 pair), 0.86 (1 pair), 1.02, 0.89, 1.20; 15 of 15 runs completed.
-It is faster in the furnished houses and slower in the Explore-Bench rooms, where
-viewpoints up to ``viewpoint_radius_m`` = 1.5 m from their frontier end in "goal reached
-but its frontier remains" blacklistings (3-6 per eb/room_2 run). Decision time
-(frontier detection + viewpoints + tour + goal) on house snapshots: 51-72 ms of CPU per
-decision (``paper``: 10-13 ms); most of it is the ray casting of ``view_gain``.
+Measured (lock step, seeds 0-2 of shared/house, shared/house_cluttered_plus, eb/corridor,
+eb/loop, eb/room_2; paired with the baselines' rows of bench/results/runs.csv, median of
+per-seed T95 ratios where both reached 95 %; ``bench/run_bench.py --runs 3 --jobs 1
+--strategies routed --worlds ...`` runs the same, deterministic, runs). With
+``viewpoint_radius_m`` = 0.75 m: ``routed`` / ``explore_lite`` 0.67 on shared/house,
+0.77 on house_cluttered_plus (1 pair), 0.99 on eb/corridor, 1.02 on eb/loop, 1.12 on
+eb/room_2 (all 13 pairs: 1.00); / ``nearest`` 0.47 (1 pair), 0.91 (1 pair), 0.89, 1.02,
+1.09 (11 pairs: 0.92); 15 of 15 runs reached 99 %; path / coverage tour 1.02-1.24
+(median per world). With 1.5 m the ratios to ``explore_lite`` were 0.68, 0.78, 1.09,
+1.02, 1.24: viewpoints far from their frontier ended in more "goal reached but its
+frontier remains" blacklistings and longer paths. It is faster in the furnished houses
+and still slower than ``explore_lite`` on eb/room_2. Decision time (frontier detection +
+viewpoints + tour + goal) on house snapshots: 51-72 ms of CPU per decision (``paper``:
+10-13 ms), most of it the ray casting of ``view_gain``: over the 50 ms target.
 """
 
 from __future__ import annotations
