@@ -34,8 +34,10 @@ eb/room_2 (all 13 pairs: 1.00); / ``nearest`` 0.47 (1 pair), 0.91 (1 pair), 0.89
 1.02, 1.24: viewpoints far from their frontier ended in more "goal reached but its
 frontier remains" blacklistings and longer paths. It is faster in the furnished houses
 and still slower than ``explore_lite`` on eb/room_2. Decision time (frontier detection +
-viewpoints + tour + goal) on house snapshots: 51-72 ms of CPU per decision (``paper``:
-10-13 ms), most of it the ray casting of ``view_gain``: over the 50 ms target.
+viewpoints + tour + goal, median of 5 decisions on snapshots of a ``paper`` run on the
+generated house at 60, 200 and 400 s, load average 3.8): 27-34 ms of CPU (``paper``:
+6-7 ms), about three quarters of it viewpoints and tour; no p95 over whole runs on a
+quiet machine yet.
 """
 
 from __future__ import annotations
