@@ -57,7 +57,7 @@ import numpy.typing as npt
 from explore_seg.core.fields import param_meta
 from explore_seg.core.camera import CameraIntrinsics
 from explore_seg.core.detector import Detector, DetectorParams
-from explore_seg.core.explorer import Explorer
+from explore_seg.core.explorer import Explorer, ExplorerStep
 from explore_seg.core.frontiers import Frontier, object_obstacles
 from explore_seg.core.grid import GridMap
 from explore_seg.core.objects import DepthFrame, ObjectMap, ObjectParams, WallMask, \
@@ -97,12 +97,16 @@ class StrategySpec:
     use_objects : bool
         Run the object costmap; its layer blocks frontiers, selection paths and plans.
     description : str
+    nav_feedback : bool
+        Feed the navigation stand-in's outcome to the decision core in this strategy's
+        runs (as :attr:`LockstepParams.nav_feedback` does for every strategy).
     """
 
     selection: str
     use_regions: bool
     use_objects: bool
     description: str
+    nav_feedback: bool = False
 
 
 #: The strategies of the benchmark.
@@ -121,6 +125,9 @@ STRATEGY_SPECS: dict[str, StrategySpec] = {
                                     "Umari & Mukhopadhyay 2017: local + global RRT frontier "
                                     "points, mean shift, revenue 3 * gain - dist (no object "
                                     "costmap)"),
+    "routed": StrategySpec("routed", True, True,
+                           "viewpoints + region-routed tour (DuDe regions, object costmap), "
+                           "navigation outcome fed back", nav_feedback=True),
 }
 STRATEGIES: tuple[str, ...] = tuple(STRATEGY_SPECS)
 
@@ -205,6 +212,8 @@ class LockstepState:
     goals: list[tuple[float, float]]
     action: str = ""
     reason: str = ""
+    #: The decision core's output of this decision (costs, distances, tour).
+    step: ExplorerStep | None = None
 
 
 # --------------------------------------------------------------------------- set-up
@@ -452,7 +461,7 @@ def run_exploration(world: World, strategy: str, seed: int, *,
     labels: npt.NDArray[np.int32] | None = None
     seg_version = -1
     layer: GridMap | None = None
-    follower = OutcomeFollower() if p.nav_feedback else None
+    follower = OutcomeFollower() if (p.nav_feedback or spec.nav_feedback) else None
     last_step = None
     # every contact classified against the map and the layer navigation had then
     engine.on_collision(lambda ev: res.contacts.append(
@@ -531,7 +540,7 @@ def run_exploration(world: World, strategy: str, seed: int, *,
                 observer(LockstepState(engine, grid, step.frontiers, use_labels, layer,
                                        objects.map if objects else None,
                                        goal.xy_m if goal else None,
-                                       res.goals, step.action.value, step.reason))
+                                       res.goals, step.action.value, step.reason, step))
             if step.action is Action.DONE:
                 res.stop_reason = "done"
                 break

@@ -31,7 +31,7 @@ def runs(small_house):
             for s in STRATEGIES}
 
 
-@pytest.mark.parametrize("strategy", ["paper", "nearest"])
+@pytest.mark.parametrize("strategy", ["paper", "nearest", "routed"])
 def test_explores_small_house_to_completion(runs, strategy):
     r = runs[strategy]
     assert r.stop_reason == "coverage", (r.stop_reason, r.coverage_pct)

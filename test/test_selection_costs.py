@@ -89,7 +89,7 @@ def test_region_at_uses_nearest_labelled_cell():
 
 def test_strategies_are_the_cost_table():
     assert STRATEGIES == tuple(COST_FUNCTIONS) == ("paper", "nearest", "explore_lite",
-                                                   "rrt_exploration")
+                                                   "rrt_exploration", "routed")
     for name in STRATEGIES:
         SelectionParams(strategy=name)
 

@@ -309,6 +309,43 @@ class BlockGraph:
         out[has] = res
         return out
 
+    def distance_matrix(self, cells_rc: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Path lengths (m) between all pairs of cells, one multi-source sweep: entry
+        ``[i, j]`` is :meth:`distances` from cell ``i`` to cell ``j`` (inf when either is
+        not passable or they are not connected; 0 on the diagonal).
+
+        Parameters
+        ----------
+        cells_rc : array_like of int, shape (N, 2)
+
+        Returns
+        -------
+        ndarray of float64, shape (N, N)
+        """
+        rc = np.asarray(cells_rc, dtype=np.int64).reshape(-1, 2)
+        n = rc.shape[0]
+        out = np.full((n, n), np.inf)
+        if n == 0:
+            return out
+        node = self._nodes(rc)
+        has = np.flatnonzero(node >= 0)
+        if has.size:
+            nd = node[has]
+            uniq, inv = np.unique(nd, return_inverse=True)
+            d = dijkstra(self._graph, directed=True, indices=uniq)[:, uniq]   # (U, U)
+            sub = d[inv][:, inv]
+            if self.block_cells > 1:
+                off = np.hypot(rc[has, 0] - self._r0 - self._pos_r[nd],
+                               rc[has, 1] - self._c0 - self._pos_c[nd]) * self.resolution_m
+                sub = sub + off[:, None] + off[None, :]
+                same = nd[:, None] == nd[None, :]
+                straight = np.hypot(rc[has, 0][:, None] - rc[has, 0][None, :],
+                                    rc[has, 1][:, None] - rc[has, 1][None, :]) * self.resolution_m
+                sub = np.where(same, straight, sub)
+            out[np.ix_(has, has)] = sub
+        np.fill_diagonal(out, 0.0)
+        return out
+
 
 def block_distances(passable: npt.NDArray[np.bool_], start_rc: tuple[int, int],
                     targets_rc: npt.ArrayLike, resolution_m: float = 1.0,

@@ -51,6 +51,7 @@ from explore_seg.core.grid import GridMap, metres_to_cells
 from explore_seg.core.rrt import RrtFrontierDetector, RrtParams
 from explore_seg.core.selection import (RRT_STRATEGIES, Action, Goal, GoalManager, NavOutcome,
                                         PathGraphs, Selection, SelectionParams)
+from explore_seg.core.selection.router import Router, TourPlan
 
 #: Keys of :attr:`ExplorerStep.warnings` (the caller throttles its log per key).
 WARN_LAYER_FRAME = "layer_frame"
@@ -122,7 +123,13 @@ class ExplorerStep:
     warnings : tuple of (key, message)
         Problems with the input (layer frame, robot outside the map or walled in).
     detect_s, select_s : float
-        Wall seconds of detection (0 when cached) and of distances + selection.
+        Wall seconds of detection (0 when cached) and of distances + selection
+        (viewpoints and tour included).
+    tour : TourPlan or None
+        The ``routed`` strategy's tour (None for the other strategies); ``frontiers``
+        then hold the viewpoints as their cPoints.
+    route_s : float
+        Wall seconds of viewpoints + tour (part of ``select_s``; 0 without a tour).
     """
 
     action: Action
@@ -138,6 +145,8 @@ class ExplorerStep:
     warnings: tuple[tuple[str, str], ...]
     detect_s: float
     select_s: float
+    tour: TourPlan | None = None
+    route_s: float = 0.0
 
 
 class Explorer:
@@ -165,6 +174,8 @@ class Explorer:
         self._key: tuple[GridMap, GridMap | None] | None = None
         self._frontiers: list[Frontier] = []
         self._graph: PathGraphs | None = None
+        self._passable: npt.NDArray[np.bool_] | None = None
+        self._router = Router(frontier, selection) if selection.strategy == "routed" else None
         self._layer_warning = ""
         self._reported_blacklisted = 0
 
@@ -218,6 +229,8 @@ class Explorer:
         if rrt is not None:
             self._rp = rrt
             self._rrt = None
+        self._router = (Router(self._fp, self._sp) if self._sp.strategy == "routed"
+                        else None)
         self._key = None
 
     def reset(self, clear_blacklist: bool = False) -> None:
@@ -261,6 +274,7 @@ class Explorer:
         self._det = det
         self._layer_warning = det.layer_warning
         self._frontiers = det.frontiers
+        self._passable = det.passable
         self._graph = PathGraphs(grid, det.extra_obstacles, self._fp, self._sp, det.passable)
         self._key = (grid, layer)
 
@@ -318,10 +332,18 @@ class Explorer:
             labels = None
         frontiers = self._frontiers
         robot_rc = grid.world_to_cell(x, y)
-        dist, excluded = self._distances(grid, robot_rc, (x, y), warnings)
+        start = self._start_cell(grid, robot_rc, (x, y), warnings)
+        router, tour = self._router, None
+        if router is not None:
+            frontiers = router.viewpoints(grid, frontiers, self._graph, start, self._passable)
+        dist, excluded = self._distances(start, robot_rc, frontiers)
+        if router is not None and dist is not None:
+            tour = router.tour_costs(grid, frontiers, dist, excluded, self._graph, robot_rc,
+                                     labels, manager.goal_frontier(grid, frontiers))
         old_goal = manager.goal
         added = manager.blacklist_added
-        res = manager.step(now_s, (x, y), grid, frontiers, dist, labels, robot_rc, excluded)
+        res = manager.step(now_s, (x, y), grid, frontiers, dist, labels, robot_rc, excluded,
+                           tour.tour_cost_m if tour is not None else None)
         blacklisted = manager.blacklist_added - added + self._reported_blacklisted
         self._reported_blacklisted = 0
         switched = (res.action is Action.NEW_GOAL and res.goal is not None
@@ -331,26 +353,37 @@ class Explorer:
                                         self._sp.frontier_match_radius_m))
         return ExplorerStep(res.action, res.goal, res.reason, res.selection, frontiers, dist,
                             robot_rc, detected, blacklisted, switched, tuple(warnings),
-                            t1 - t0, time.perf_counter() - t1)
+                            t1 - t0, time.perf_counter() - t1, tour,
+                            router.viewpoint_s + router.tour_s if router is not None else 0.0)
 
-    def _distances(self, grid: GridMap, robot_rc: tuple[int, int], xy: tuple[float, float],
-                   warnings: list[tuple[str, str]]
-                   ) -> tuple[npt.NDArray[np.float64] | None, npt.NDArray[np.bool_] | None]:
-        """Path lengths robot -> cPoints and the blacklist mask; (None, None) when the robot
-        is outside the map or has no passable cell within ``start_search_radius_m``."""
+    def _start_cell(self, grid: GridMap, robot_rc: tuple[int, int], xy: tuple[float, float],
+                    warnings: list[tuple[str, str]]) -> tuple[int, int] | None:
+        """The robot's passable start cell; None (with a warning) when the robot is outside
+        the map or has no passable cell within ``start_search_radius_m``."""
         graph = self._graph
         assert graph is not None
         if not grid.in_bounds(*robot_rc):
             warnings.append((WARN_ROBOT_OUTSIDE,
                              f"robot at ({xy[0]:.2f}, {xy[1]:.2f}) lies outside the map"))
-            return None, None
+            return None
         radius = metres_to_cells(self._sp.start_search_radius_m, grid.resolution_m)
-        if graph.graph.nearest_passable(robot_rc, radius) is None:
+        start = graph.graph.nearest_passable(robot_rc, radius)
+        if start is None:
             warnings.append((WARN_ROBOT_BLOCKED, f"robot cell {robot_rc} is not passable and "
                                                  "has no passable cell nearby: no new goals"))
+        return start
+
+    def _distances(self, start: tuple[int, int] | None, robot_rc: tuple[int, int],
+                   frontiers: list[Frontier]
+                   ) -> tuple[npt.NDArray[np.float64] | None, npt.NDArray[np.bool_] | None]:
+        """Path lengths robot -> cPoints and the blacklist mask; (None, None) without a
+        start cell (:meth:`_start_cell`)."""
+        graph = self._graph
+        assert graph is not None
+        if start is None:
             return None, None
-        excluded = self.manager.excluded(self._frontiers)
-        return graph.distances(robot_rc, self._frontiers, excluded), excluded
+        excluded = self.manager.excluded(frontiers)
+        return graph.distances(robot_rc, frontiers, excluded), excluded
 
 
 def _frontier_alive(grid: GridMap, frontiers: Sequence[Frontier],

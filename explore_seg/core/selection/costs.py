@@ -77,7 +77,9 @@ def _check_dist(frontiers: Sequence[Frontier], dist_m: npt.ArrayLike) -> np.ndar
 def compute_costs(frontiers: Sequence[Frontier], dist_m: npt.ArrayLike,
                   labels: npt.NDArray[np.integer] | None, robot_region: int,
                   params: SelectionParams = SelectionParams(),
-                  regions: npt.NDArray[np.int64] | None = None) -> npt.NDArray[np.float64]:
+                  regions: npt.NDArray[np.int64] | None = None,
+                  tour_cost_m: npt.NDArray[np.float64] | None = None
+                  ) -> npt.NDArray[np.float64]:
     """Cost of every frontier under ``params.strategy`` (formulas in the module docstring).
 
     Parameters
@@ -92,6 +94,8 @@ def compute_costs(frontiers: Sequence[Frontier], dist_m: npt.ArrayLike,
     params : SelectionParams
     regions : ndarray of int, shape (N,), optional
         Precomputed :func:`frontier_regions` (else computed from ``labels``).
+    tour_cost_m : ndarray of float64, shape (N,), optional
+        The ``routed`` strategy's tour costs (required by it, ignored by the others).
 
     Returns
     -------
@@ -121,7 +125,8 @@ def compute_costs(frontiers: Sequence[Frontier], dist_m: npt.ArrayLike,
         size_cells=np.asarray([f.size_cells for f in frontiers], dtype=np.float64),
         length_m=np.asarray([f.length_m for f in frontiers], dtype=np.float64),
         regions=reg, robot_region=int(robot_region),
-        info_gain_m2=np.asarray([f.info_gain_m2 for f in frontiers], dtype=np.float64))
+        info_gain_m2=np.asarray([f.info_gain_m2 for f in frontiers], dtype=np.float64),
+        tour_cost_m=None if tour_cost_m is None else np.asarray(tour_cost_m, np.float64))
     costs[finite] = COST_FUNCTIONS[params.strategy](inputs, params)
     return costs
 
@@ -155,7 +160,8 @@ def select_goal(frontiers: Sequence[Frontier], dist_m: npt.ArrayLike,
                 labels: npt.NDArray[np.integer] | None, robot_rc: tuple[int, int],
                 params: SelectionParams = SelectionParams(),
                 resolution_m: float | None = None,
-                excluded: npt.NDArray[np.bool_] | None = None) -> Selection:
+                excluded: npt.NDArray[np.bool_] | None = None,
+                tour_cost_m: npt.NDArray[np.float64] | None = None) -> Selection:
     """The min-cost frontier (paper Alg. 2), with the costs and regions used.
 
     Parameters
@@ -171,6 +177,8 @@ def select_goal(frontiers: Sequence[Frontier], dist_m: npt.ArrayLike,
         Map resolution for the region search radius (taken from the frontiers if None).
     excluded : ndarray of bool, shape (N,), optional
         Frontiers not to choose (blacklisted); they still count in the normalisations.
+    tour_cost_m : ndarray of float64, shape (N,), optional
+        The ``routed`` strategy's tour costs (:class:`~.router.Router`).
 
     Returns
     -------
@@ -188,7 +196,8 @@ def select_goal(frontiers: Sequence[Frontier], dist_m: npt.ArrayLike,
     rad = metres_to_cells(params.region_search_radius_m, resolution_m)
     robot_region = region_at(use_labels, robot_rc, rad) if use_labels is not None else 0
     regions = frontier_regions(frontiers, use_labels, rad)
-    costs = compute_costs(frontiers, dist_m, use_labels, robot_region, params, regions)
+    costs = compute_costs(frontiers, dist_m, use_labels, robot_region, params, regions,
+                          tour_cost_m)
     active = params.strategy in REGION_STRATEGIES and use_labels is not None and robot_region > 0
     pick = costs.copy()
     if excluded is not None:

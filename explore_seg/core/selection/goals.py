@@ -254,6 +254,13 @@ class GoalManager:
         d2 = ((pts[:, None, :] - bl[None, :, :]) ** 2).sum(axis=2)
         return (d2 <= self.params.blacklist_radius_m ** 2).any(axis=1)
 
+    def goal_frontier(self, grid: GridMap, frontiers: Sequence[Frontier]) -> int | None:
+        """Index of the frontier owning the current goal (a cell within
+        ``frontier_match_radius_m`` + the goal's gap to its frontier), None if none."""
+        if self.goal is None or self.goal.is_return:
+            return None
+        return self._matching(grid, frontiers)
+
     def _matching(self, grid: GridMap, frontiers: Sequence[Frontier]) -> int | None:
         """Index of the frontier owning the current goal (closest cell within radius)."""
         if self.goal is None or not frontiers:
@@ -308,7 +315,8 @@ class GoalManager:
              frontiers: Sequence[Frontier], dist_m: npt.ArrayLike | None,
              labels: npt.NDArray[np.integer] | None = None,
              robot_rc: tuple[int, int] | None = None,
-             excluded: npt.NDArray[np.bool_] | None = None) -> StepResult:
+             excluded: npt.NDArray[np.bool_] | None = None,
+             tour_cost_m: npt.NDArray[np.float64] | None = None) -> StepResult:
         """One decision: progress on the current goal, then candidates, then keep or switch.
 
         Parameters
@@ -330,6 +338,8 @@ class GoalManager:
         excluded : ndarray of bool, shape (N,), optional
             :meth:`excluded` of ``frontiers`` computed by the caller before this call (for
             the path distances); recomputed here when the blacklist changed since.
+        tour_cost_m : ndarray of float64, shape (N,), optional
+            The ``routed`` strategy's tour costs (:class:`~.router.Router`).
 
         Returns
         -------
@@ -355,7 +365,7 @@ class GoalManager:
         if excluded is None or self._blacklist_version != version:
             excluded = self.excluded(frontiers)
         sel = select_goal(frontiers, dist_m, labels, robot_rc, self.params, grid.resolution_m,
-                          excluded)
+                          excluded, tour_cost_m)
         if sel.index is None:
             return self._no_candidate(now_s, robot_xy_m, grid, reason, sel)
         self._empty_ticks = 0

@@ -101,7 +101,31 @@ class SelectionParams:
     return_to_start: bool = field(default=False, metadata=param_meta(
         "drive back to the start pose when exploration is done"))
     use_regions: bool = field(default=True, metadata=param_meta(
-        "use the regions labels for regionGain (paper strategy)"))
+        "use the regions labels for regionGain (paper strategy) and region_switch_m "
+        "(routed)"))
+    sensor_range_m: float = field(default=5.0, metadata=param_meta(
+        "routed: range of the 360-degree sensor whose view of unknown space rates the "
+        "viewpoints", "m", range=(0.0, _INF)))
+    gain_rays: int = field(default=24, metadata=param_meta(
+        "routed: rays cast over 360 degrees per viewpoint candidate", range=(4, 720)))
+    viewpoint_radius_m: float = _non_negative(
+        "routed: viewpoint candidates lie within this distance of their frontier's cells",
+        "m", default=0.75)
+    viewpoint_step_m: float = field(default=0.3, metadata=param_meta(
+        "routed: spacing of the viewpoint candidates' lattice", "m", range=(0.0, _INF)))
+    viewpoint_gain_tolerance: float = field(default=0.1, metadata=param_meta(
+        "routed: among candidates seeing at least (1 - this) of the best view, the one "
+        "closest to the robot is the viewpoint", range=(0.0, 1.0)))
+    region_switch_m: float = _non_negative(
+        "routed: extra tour cost of an edge between viewpoints of two different regions "
+        "(finish a region unless its rest is a longer detour)", "m", default=2.0)
+    min_gain_m2: float = _non_negative(
+        "routed: a group whose viewpoint sees less unknown area than this is not a goal "
+        "(it would reveal nothing: exploration ends instead of chasing it)", "m^2",
+        default=0.25)
+    gain_weight_m_per_m2: float = _non_negative(
+        "routed: a group's cost is its tour length minus this times the unknown area its "
+        "viewpoint sees (big views first when the detour is small)", "m/m^2", default=0.1)
 
     def __post_init__(self) -> None:
         if self.strategy not in STRATEGIES:
@@ -111,7 +135,8 @@ class SelectionParams:
                      "region_search_radius_m", "start_search_radius_m", "hysteresis_margin",
                      "progress_min_m", "goal_reached_tolerance_m", "frontier_match_radius_m",
                      "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
-                     "flicker_radius_m"):
+                     "flicker_radius_m", "viewpoint_radius_m", "region_switch_m",
+                     "gain_weight_m_per_m2", "min_gain_m2"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {v}")
@@ -130,6 +155,16 @@ class SelectionParams:
         if self.flicker_vanish_count < 0:
             raise ValueError(f"flicker_vanish_count must be >= 0, got "
                              f"{self.flicker_vanish_count}")
+        if not (math.isfinite(self.sensor_range_m) and self.sensor_range_m > 0):
+            raise ValueError(f"sensor_range_m must be finite and > 0, got {self.sensor_range_m}")
+        if not (math.isfinite(self.viewpoint_step_m) and self.viewpoint_step_m > 0):
+            raise ValueError(f"viewpoint_step_m must be finite and > 0, "
+                             f"got {self.viewpoint_step_m}")
+        if not 4 <= self.gain_rays <= 720:
+            raise ValueError(f"gain_rays must be in 4..720, got {self.gain_rays}")
+        if not 0.0 <= self.viewpoint_gain_tolerance <= 1.0:
+            raise ValueError(f"viewpoint_gain_tolerance must be in [0, 1], "
+                             f"got {self.viewpoint_gain_tolerance}")
         if self.done_confirmations < 1:
             raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
 

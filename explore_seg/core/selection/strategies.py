@@ -36,6 +36,9 @@ class CostInputs:
     info_gain_m2 : ndarray of float64, shape (N,), or None
         Unknown area each frontier promises (``Frontier.info_gain_m2``; NaN where its
         detector did not measure it); None when not given.
+    tour_cost_m : ndarray of float64, shape (N,), or None
+        ``routed``: length of the tour over all viewpoints when this group is visited
+        next (:class:`~explore_seg.core.selection.router.Router`); None for the others.
     """
 
     dist_m: npt.NDArray[np.float64]
@@ -45,6 +48,7 @@ class CostInputs:
     regions: npt.NDArray[np.int64] | None
     robot_region: int
     info_gain_m2: npt.NDArray[np.float64] | None = None
+    tour_cost_m: npt.NDArray[np.float64] | None = None
 
 
 #: ``cost(inputs, params) -> costs of the finite groups`` (shape ``(finite.sum(),)``).
@@ -96,12 +100,21 @@ def rrt_exploration_cost(inp: CostInputs, params: Any) -> npt.NDArray[np.float64
     return d - params.info_multiplier * gain
 
 
+def routed_cost(inp: CostInputs, params: Any) -> npt.NDArray[np.float64]:
+    """The tour length (m) when the group is visited next (region changes included)."""
+    if inp.tour_cost_m is None:
+        raise ValueError("the routed strategy needs tour costs (explore_seg.core.selection."
+                         "router.Router, run by explore_seg.core.explorer.Explorer)")
+    return np.asarray(inp.tour_cost_m, dtype=np.float64)[inp.finite]
+
+
 #: Strategy name -> cost function. The first entry is listed first in the docs.
 COST_FUNCTIONS: dict[str, CostFunction] = {
     "paper": paper_cost,
     "nearest": nearest_cost,
     "explore_lite": explore_lite_cost,
     "rrt_exploration": rrt_exploration_cost,
+    "routed": routed_cost,
 }
 #: Strategies ``SelectionParams.strategy`` accepts.
 STRATEGIES: tuple[str, ...] = tuple(COST_FUNCTIONS)
@@ -109,4 +122,4 @@ STRATEGIES: tuple[str, ...] = tuple(COST_FUNCTIONS)
 #: (:mod:`explore_seg.core.rrt`) instead of frontier cell groups.
 RRT_STRATEGIES: frozenset[str] = frozenset({"rrt_exploration"})
 #: Strategies whose cost has a region term (the node logs once when it is inactive).
-REGION_STRATEGIES: frozenset[str] = frozenset({"paper"})
+REGION_STRATEGIES: frozenset[str] = frozenset({"paper", "routed"})

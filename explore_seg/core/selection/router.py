@@ -1,0 +1,269 @@
+"""The ``routed`` strategy's planning: viewpoints, then a global tour over them.
+
+Per decision (:class:`Router`, driven by :class:`~explore_seg.core.explorer.Explorer`):
+
+1. :meth:`Router.viewpoints`: every frontier group gets a viewpoint
+   (:mod:`.viewpoints`: the reachable pose from which a 360-degree sensor of
+   ``sensor_range_m`` sees the most unknown area on the current map). The groups are
+   returned with their cPoint replaced by the viewpoint, so the goal manager sends, keeps,
+   judges and blacklists viewpoints exactly as it does cPoints.
+2. :meth:`Router.tour_costs`: an open tour from the robot over the viewpoints of the
+   selectable groups (:mod:`.tour`: greedy, 2-opt, Or-opt) on path lengths from the
+   block graph the core already builds (one multi-source sweep for all pairs). DuDe
+   regions are the routing structure: an edge between viewpoints of two different regions
+   (or from the robot's region into another) costs ``region_switch_m`` more, so a tour
+   finishes a region before it leaves, unless what is left there is a detour of more than
+   that. The cost of each group is the length of the tour when its viewpoint is visited
+   next (the tour's first: the tour's length; the current goal's group: the best tour that
+   starts with it; any other: the tour with it moved to the front), in metres. The goal
+   manager's rule then becomes the tour hysteresis: the goal changes only when a tour
+   shorter by ``hysteresis_margin`` of the current goal's tour exists (or the goal's
+   frontier is gone), so goals do not flip on small map changes. A group whose viewpoint
+   sees less than ``min_gain_m2`` of unknown area is left out (exploration ends rather
+   than chasing frontier specks that reveal nothing).
+
+Measured (lock step, seeds 0-2 of shared/house, shared/house_cluttered_plus, eb/corridor,
+eb/loop, eb/room_2; paired with the baselines' rows of bench/results/runs.csv, median of
+per-seed T95 ratios where both reached 95 %; ``bench/run_bench.py --runs 3 --jobs 1
+--strategies routed --worlds ...`` runs the same, deterministic, runs). With
+``viewpoint_radius_m`` = 0.75 m: ``routed`` / ``explore_lite`` 0.67 on shared/house,
+0.77 on house_cluttered_plus (1 pair), 0.99 on eb/corridor, 1.02 on eb/loop, 1.12 on
+eb/room_2 (all 13 pairs: 1.00); / ``nearest`` 0.47 (1 pair), 0.91 (1 pair), 0.89, 1.02,
+1.09 (11 pairs: 0.92); 15 of 15 runs reached 99 %; path / coverage tour 1.02-1.24
+(median per world). With 1.5 m the ratios to ``explore_lite`` were 0.68, 0.78, 1.09,
+1.02, 1.24: viewpoints far from their frontier ended in more "goal reached but its
+frontier remains" blacklistings and longer paths. It is faster in the furnished houses
+and still slower than ``explore_lite`` on eb/room_2. Decision time (frontier detection +
+viewpoints + tour + goal, median of 5 decisions on snapshots of a ``paper`` run on the
+generated house at 60, 200 and 400 s, load average 3.8): 27-34 ms of CPU (``paper``:
+6-7 ms), about three quarters of it viewpoints and tour; no p95 over whole runs on a
+quiet machine yet.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+from typing import Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.frontiers import Frontier, FrontierParams
+from explore_seg.core.grid import GridMap, metres_to_cells
+from explore_seg.core.selection.distances import PathGraphs
+from explore_seg.core.selection.params import SelectionParams
+from explore_seg.core.selection.regions import frontier_regions, region_at
+from explore_seg.core.selection.tour import front_costs, solve_tour
+from explore_seg.core.selection.viewpoints import (candidate_cells, coarse_codes,
+                                                   pick_viewpoint, view_gain)
+
+
+@dataclass(frozen=True)
+class TourPlan:
+    """The tour of one decision (for markers, traces and tests).
+
+    Attributes
+    ----------
+    tour_cost_m : ndarray of float64, shape (N,)
+        Per group: length of the tour when its viewpoint is visited next, minus
+        ``gain_weight_m_per_m2`` times its gain (inf: not in the tour: unreachable,
+        excluded, no passable viewpoint or a gain below ``min_gain_m2``).
+    order : ndarray of int64
+        Group indices in tour order.
+    length_m : float
+        Length of the best tour.
+    regions : ndarray of int64, shape (N,)
+        Region of each viewpoint (zeros without labels).
+    robot_region : int
+    gain_m2 : ndarray of float64, shape (N,)
+        Unknown area seen from each viewpoint (zeros where none was computed).
+    """
+
+    tour_cost_m: npt.NDArray[np.float64] = field(repr=False)
+    order: npt.NDArray[np.int64]
+    length_m: float
+    regions: npt.NDArray[np.int64] = field(repr=False)
+    robot_region: int
+    gain_m2: npt.NDArray[np.float64] = field(repr=False, default_factory=lambda: np.zeros(0))
+
+
+class Router:
+    """Viewpoints and tours of the ``routed`` strategy (see the module docstring).
+
+    Parameters
+    ----------
+    frontier_params : FrontierParams
+        ``occupied_threshold`` for the ray casting.
+    params : SelectionParams
+        The ``routed`` fields (sensor range, rays, viewpoint radius and step, region
+        penalty) and ``region_search_radius_m``, ``unknown_path_factor``.
+    """
+
+    def __init__(self, frontier_params: FrontierParams, params: SelectionParams) -> None:
+        self._fp = frontier_params
+        self._p = params
+        self._codes: tuple[GridMap, npt.NDArray[np.uint8]] | None = None
+        #: Gain (m^2) of each group's viewpoint in the last :meth:`viewpoints` call.
+        self.gain_m2: npt.NDArray[np.float64] = np.zeros(0)
+        #: Wall seconds of the last :meth:`viewpoints` and :meth:`tour_costs` calls.
+        self.viewpoint_s = 0.0
+        self.tour_s = 0.0
+
+    def _coarse(self, grid: GridMap) -> npt.NDArray[np.uint8]:
+        if self._codes is None or self._codes[0] is not grid:
+            self._codes = (grid, coarse_codes(grid, self._fp.occupied_threshold))
+        return self._codes[1]
+
+    def viewpoints(self, grid: GridMap, frontiers: Sequence[Frontier],
+                   graphs: PathGraphs, start_rc: tuple[int, int] | None,
+                   passable: npt.NDArray[np.bool_]) -> list[Frontier]:
+        """The groups with their cPoint moved to their viewpoint.
+
+        Parameters
+        ----------
+        grid : GridMap
+        frontiers : sequence of Frontier
+        graphs : PathGraphs
+            Path graphs of this map version (reachability and distances from the robot).
+        start_rc : (int, int) or None
+            The robot's passable start cell (None: distances unknown, cPoints kept).
+        passable : ndarray of bool, shape (H, W)
+            Passable cells (viewpoint candidates).
+
+        Returns
+        -------
+        list of Frontier
+            Same order and cells; ``point_rc``/``point_xy_m`` at the viewpoint,
+            ``point_passable`` True where a reachable viewpoint was found (else the group
+            is unchanged).
+        """
+        t0 = time.perf_counter()
+        p = self._p
+        res = grid.resolution_m
+        n = len(frontiers)
+        self.gain_m2 = np.zeros(n)
+        if n == 0 or start_rc is None:
+            self.viewpoint_s = time.perf_counter() - t0
+            return list(frontiers)
+        radius = metres_to_cells(p.viewpoint_radius_m, res)
+        step = max(1, metres_to_cells(p.viewpoint_step_m, res))
+        cands = [candidate_cells(f.cells, f.point_rc, passable, radius, step)
+                 for f in frontiers]
+        counts = np.asarray([len(c) for c in cands])
+        allc = np.concatenate(cands)
+        dist = graphs.graph.distances(start_rc, allc)
+        gain = view_gain(grid, allc, p.sensor_range_m, p.gain_rays,
+                         self._fp.occupied_threshold, self._coarse(grid))
+        out: list[Frontier] = []
+        bounds = np.concatenate([[0], np.cumsum(counts)])
+        for i, f in enumerate(frontiers):
+            a, b = int(bounds[i]), int(bounds[i + 1])
+            # The cPoint (first candidate) competes only when it is passable.
+            d = dist[a:b].copy()
+            if not f.point_passable:
+                d[0] = np.inf
+            k = pick_viewpoint(gain[a:b], d, p.viewpoint_gain_tolerance)
+            if k is None:
+                # No reachable candidate (reachable through unknown space at most): keep
+                # the cPoint, rated by the best view near the group.
+                self.gain_m2[i] = float(gain[a:b].max())
+                out.append(f)
+                continue
+            self.gain_m2[i] = gain[a + k]
+            r, c = int(allc[a + k, 0]), int(allc[a + k, 1])
+            if (r, c) == tuple(f.point_rc) and f.point_passable:
+                out.append(f)
+                continue
+            out.append(replace(f, point_rc=(r, c), point_xy_m=grid.cell_to_world(r, c),
+                               point_passable=True))
+        self.viewpoint_s = time.perf_counter() - t0
+        return out
+
+    def tour_costs(self, grid: GridMap, frontiers: Sequence[Frontier],
+                   dist_m: npt.NDArray[np.float64], excluded: npt.NDArray[np.bool_] | None,
+                   graphs: PathGraphs, robot_rc: tuple[int, int],
+                   labels: npt.NDArray[np.integer] | None, goal_index: int | None
+                   ) -> TourPlan:
+        """Tour over the selectable viewpoints and each group's cost (module docstring).
+
+        Parameters
+        ----------
+        grid : GridMap
+        frontiers : sequence of Frontier
+            Groups at their viewpoints (:meth:`viewpoints`).
+        dist_m : ndarray of float64, shape (N,)
+            Path length robot -> viewpoint (inf: unreachable).
+        excluded : ndarray of bool, shape (N,) or None
+            Blacklisted groups (left out of the tour).
+        graphs : PathGraphs
+        robot_rc : (int, int)
+        labels : ndarray of int, shape (H, W), or None
+            Region labels (None or ``use_regions`` False: no region penalty).
+        goal_index : int or None
+            The current goal's group (its tour is solved with it first).
+
+        Returns
+        -------
+        TourPlan
+        """
+        t0 = time.perf_counter()
+        p = self._p
+        n = len(frontiers)
+        cost_out = np.full(n, np.inf)
+        use = labels if (p.use_regions and labels is not None) else None
+        rad = metres_to_cells(p.region_search_radius_m, grid.resolution_m)
+        regions = frontier_regions(frontiers, use, rad)
+        robot_region = region_at(use, robot_rc, rad) if use is not None else 0
+        sel = np.isfinite(np.asarray(dist_m, dtype=np.float64))
+        sel &= np.asarray([f.point_passable for f in frontiers], dtype=bool)
+        gains = self._gains(n)
+        if len(self.gain_m2) == n:
+            sel &= gains >= p.min_gain_m2
+        if excluded is not None:
+            sel &= ~np.asarray(excluded, dtype=bool)
+        idx = np.flatnonzero(sel)
+        if idx.size == 0:
+            self.tour_s = time.perf_counter() - t0
+            return TourPlan(cost_out, idx.astype(np.int64), 0.0, regions, robot_region,
+                            self._gains(n))
+        pts = np.asarray([frontiers[i].point_rc for i in idx], dtype=np.int64)
+        m = idx.size + 1
+        cost = np.zeros((m, m))
+        cost[0, 1:] = np.asarray(dist_m, dtype=np.float64)[idx]
+        pair = graphs.graph.distance_matrix(pts)
+        bad = ~np.isfinite(pair)
+        if bad.any():
+            # Reachable from the robot only through unknown space (fallback distances):
+            # straight line times the unknown-space factor.
+            xy = pts.astype(np.float64) * grid.resolution_m
+            straight = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1])
+            pair = np.where(bad, straight * p.unknown_path_factor, pair)
+        cost[1:, 1:] = pair
+        if p.region_switch_m > 0 and use is not None:
+            reg = np.concatenate([[robot_region], regions[idx]])
+            differ = (reg[:, None] > 0) & (reg[None, :] > 0) & (reg[:, None] != reg[None, :])
+            cost += np.where(differ, p.region_switch_m, 0.0)
+        cost[:, 0] = 0.0
+        np.fill_diagonal(cost, 0.0)
+        tour = solve_tour(cost)
+        front = front_costs(cost, tour)
+        best_len, order = tour.length_m, tour.order
+        if goal_index is not None and sel[goal_index]:
+            node = int(np.flatnonzero(idx == goal_index)[0]) + 1
+            if node != int(tour.order[0]):
+                own = solve_tour(cost, first=node)
+                front[node] = min(front[node], own.length_m)
+                if own.length_m < best_len:
+                    best_len, order = own.length_m, own.order
+        cost_out[idx] = front[1:] - p.gain_weight_m_per_m2 * gains[idx]
+        self.tour_s = time.perf_counter() - t0
+        return TourPlan(cost_out, idx[order - 1].astype(np.int64), float(best_len), regions,
+                        robot_region, self._gains(n))
+
+    def _gains(self, n: int) -> npt.NDArray[np.float64]:
+        """The last viewpoints' gains when they belong to these ``n`` groups."""
+        return self.gain_m2.copy() if len(self.gain_m2) == n else np.zeros(n)
+
+
+__all__ = ["Router", "TourPlan"]

@@ -1,0 +1,237 @@
+"""The ``routed`` strategy: viewpoint gain, tours (greedy, 2-opt, Or-opt), tour costs,
+hysteresis through the decision core, and the pairwise path lengths it uses."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from explore_seg.core.block_graph import BlockGraph
+from explore_seg.core.explorer import Explorer
+from explore_seg.core.frontiers import FrontierParams
+from explore_seg.core.grid import GridMap
+from explore_seg.core.selection import STRATEGIES, Action, SelectionParams, compute_costs
+from explore_seg.core.selection.tour import (front_costs, greedy_order, improve, solve_tour,
+                                             tour_length)
+from explore_seg.core.selection.viewpoints import (candidate_cells, pick_viewpoint,
+                                                   view_gain)
+from selection_cases import two_frontiers
+
+RES = 0.05
+
+
+def _grid(data: np.ndarray) -> GridMap:
+    return GridMap(np.asarray(data, dtype=np.int8), RES, (0.0, 0.0))
+
+
+def _dist_matrix(xy: np.ndarray) -> np.ndarray:
+    return np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1])
+
+
+# ------------------------------------------------------------------------- viewpoint gain
+
+def test_gain_is_the_visible_unknown_area():
+    # 6 x 6 m free square, a 4 m unknown strip east of it: a sensor at the border sees a
+    # half disc of unknown space (pi * r^2 / 2), one 3 m inside sees less.
+    data = np.zeros((120, 200), dtype=np.int8)
+    data[:, 120:] = -1
+    g = _grid(data)
+    gain = view_gain(g, np.array([[60, 119], [60, 59]]), range_m=2.0, rays=72)
+    assert gain[0] == pytest.approx(np.pi * 2.0 ** 2 / 2, rel=0.15)
+    assert 0 <= gain[1] < 0.05 * gain[0]
+
+
+def test_walls_block_the_view():
+    data = np.zeros((100, 200), dtype=np.int8)
+    data[:, 120:] = -1
+    data[:, 100:102] = 100                       # a wall between the sensor and the unknown
+    g = _grid(data)
+    gain = view_gain(g, np.array([[50, 95], [50, 110]]), range_m=3.0, rays=48)
+    assert gain[0] == 0.0
+    assert gain[1] > 1.0
+
+
+def test_view_gain_rejects_bad_arguments():
+    g = _grid(np.zeros((10, 10)))
+    with pytest.raises(ValueError, match="range_m"):
+        view_gain(g, [[1, 1]], range_m=0.0)
+    with pytest.raises(ValueError, match="rays"):
+        view_gain(g, [[1, 1]], rays=2)
+
+
+def test_viewpoint_is_the_best_view_and_then_the_closest():
+    assert pick_viewpoint(np.array([5.0, 10.0, 9.5]), np.array([1.0, 8.0, 3.0]), 0.1) == 2
+    assert pick_viewpoint(np.array([5.0, 10.0, 9.5]), np.array([1.0, 8.0, 3.0]), 0.0) == 1
+    assert pick_viewpoint(np.array([5.0, 10.0]), np.array([1.0, np.inf]), 0.1) == 0
+    assert pick_viewpoint(np.array([5.0]), np.array([np.inf]), 0.1) is None
+
+
+def test_candidates_are_passable_near_the_frontier_and_start_with_the_cpoint():
+    pas = np.zeros((60, 60), dtype=bool)
+    pas[:, :30] = True
+    cells = np.array([[30, 30], [31, 30], [32, 30]])
+    c = candidate_cells(cells, (31, 29), pas, radius_cells=10, step_cells=5)
+    assert tuple(c[0]) == (31, 29)
+    assert pas[c[1:, 0], c[1:, 1]].all()
+    d = np.hypot(c[1:, None, 0] - cells[None, :, 0], c[1:, None, 1] - cells[None, :, 1]).min(1)
+    assert (d <= 10).all() and len(c) > 5
+    assert (c[1:] % 5 == 0).all()                # on the global lattice
+
+
+# ---------------------------------------------------------------------------------- tours
+
+def test_known_instance_is_solved_to_its_optimum():
+    # Robot at 0 on a line, points at 1, -1.5, 3: greedy goes 1, 3, -1.5 (7.5 m), the
+    # optimum goes -1.5, 1, 3 (6 m).
+    x = np.array([0.0, 1.0, -1.5, 3.0])
+    cost = np.abs(x[:, None] - x[None, :])
+    cost[:, 0] = 0.0
+    assert greedy_order(cost).tolist() == [1, 3, 2]
+    assert tour_length(cost, greedy_order(cost)) == pytest.approx(7.5)
+    t = solve_tour(cost)
+    assert t.order.tolist() == [2, 1, 3]
+    assert t.length_m == pytest.approx(6.0)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_improvement_is_never_worse_than_greedy_and_small_tours_are_near_optimal(seed):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 8))
+    cost = _dist_matrix(rng.uniform(0, 10, (n, 2))) * rng.uniform(1.0, 1.3, (n, n))
+    cost[:, 0] = 0.0
+    np.fill_diagonal(cost, 0.0)
+    greedy = greedy_order(cost)
+    t = solve_tour(cost)
+    assert sorted(t.order.tolist()) == list(range(1, n))
+    assert t.length_m == pytest.approx(tour_length(cost, t.order))
+    assert t.length_m <= tour_length(cost, greedy) + 1e-9
+    best = min(tour_length(cost, p) for p in itertools.permutations(range(1, n)))
+    assert t.length_m <= 1.1 * best + 1e-9
+
+
+def test_fixed_first_and_front_costs():
+    rng = np.random.default_rng(7)
+    cost = _dist_matrix(rng.uniform(0, 10, (7, 2)))
+    cost[:, 0] = 0.0
+    t = solve_tour(cost)
+    front = front_costs(cost, t)
+    assert front[t.order[0]] == pytest.approx(t.length_m)
+    for j in range(1, 7):
+        moved = [j] + [k for k in t.order if k != j]
+        assert front[j] == pytest.approx(tour_length(cost, moved))
+        own = solve_tour(cost, first=j)
+        assert own.order[0] == j and own.length_m <= front[j] + 1e-9
+    assert improve(cost, t.order).tolist() == t.order.tolist()     # a local optimum
+
+
+def test_solve_tour_rejects_bad_matrices():
+    with pytest.raises(ValueError, match="square"):
+        solve_tour(np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="finite"):
+        solve_tour(np.array([[0.0, np.inf], [0.0, 0.0]]))
+    with pytest.raises(ValueError, match="first"):
+        solve_tour(np.zeros((3, 3)), first=0)
+    assert solve_tour(np.zeros((1, 1))).order.size == 0
+
+
+# ------------------------------------------------------------------ pairwise path lengths
+
+@pytest.mark.parametrize("k", [1, 4])
+def test_distance_matrix_matches_single_sweeps(k):
+    rng = np.random.default_rng(3)
+    pas = rng.random((50, 70)) > 0.25
+    g = BlockGraph(pas, RES, k)
+    cells = np.vstack([np.argwhere(pas)[rng.choice(int(pas.sum()), 8, replace=False)],
+                       np.argwhere(~pas)[:1]])
+    m = g.distance_matrix(cells)
+    for i, c in enumerate(cells):
+        d = g.distances(tuple(c), cells)
+        d[i] = 0.0
+        np.testing.assert_allclose(m[i], d)
+
+
+# ------------------------------------------------------- the strategy in the decision core
+
+def test_routed_is_a_strategy_and_needs_tour_costs():
+    assert "routed" in STRATEGIES
+    _, fr, labels = two_frontiers()
+    with pytest.raises(ValueError, match="tour costs"):
+        compute_costs(fr, [1.0, 3.0], labels, 1, SelectionParams(strategy="routed"))
+    costs = compute_costs(fr, [1.0, 3.0], labels, 1, SelectionParams(strategy="routed"),
+                          tour_cost_m=np.array([7.0, 5.0]))
+    assert costs.tolist() == [7.0, 5.0]
+
+
+def _two_rooms() -> tuple[GridMap, tuple[float, float, float]]:
+    """A 12 x 4 m known corridor with unknown space at both ends and one side room."""
+    data = np.full((120, 300), -1, dtype=np.int8)
+    data[40:80, 30:270] = 0
+    data[38:40, 30:270] = 100
+    data[80:82, 30:270] = 100
+    data[38:40, 140:160] = 0                     # a doorway north
+    g = _grid(data)
+    x, y = g.cell_to_world(60, 100)
+    return g, (x, y, 0.0)
+
+
+def test_routed_step_sends_a_viewpoint_goal_with_a_tour():
+    g, pose = _two_rooms()
+    fp = FrontierParams(robot_radius_m=0.1)
+    ex = Explorer(fp, SelectionParams(strategy="routed"))
+    out = ex.step(0.0, g, pose)
+    assert out.action is Action.NEW_GOAL
+    assert out.tour is not None and len(out.tour.order) == 3
+    assert out.selection.index == out.tour.order[0]
+    assert out.tour.gain_m2[out.selection.index] > 0
+    f = out.frontiers[out.selection.index]
+    assert f.point_passable and g.data[f.point_rc] == 0
+    assert out.goal.xy_m == f.point_xy_m
+    assert 0 < out.route_s <= out.select_s
+    # costs are tour lengths minus the weighted gain
+    w = SelectionParams().gain_weight_m_per_m2
+    i = out.selection.index
+    assert out.selection.costs[i] == pytest.approx(out.tour.length_m - w * out.tour.gain_m2[i])
+    # without the gain term: the chosen one is the tour's length, no other is cheaper
+    plain = Explorer(fp, SelectionParams(strategy="routed", gain_weight_m_per_m2=0.0))
+    out = plain.step(0.0, g, pose)
+    fin = out.selection.costs[np.isfinite(out.selection.costs)]
+    assert out.selection.costs[out.selection.index] == pytest.approx(out.tour.length_m)
+    assert fin.min() == pytest.approx(out.tour.length_m)
+
+
+def test_no_goal_flip_on_a_tiny_map_change():
+    g, pose = _two_rooms()
+    fp = FrontierParams(robot_radius_m=0.1)
+    ex = Explorer(fp, SelectionParams(strategy="routed"))
+    first = ex.step(0.0, g, pose)
+    assert first.action is Action.NEW_GOAL
+    for k in range(5):
+        data = g.data.copy()
+        data[60 + k, 30 + k] = 100               # a speck of noise at the west end
+        data[40, 200 + k] = 0
+        g = g.with_data(data)
+        out = ex.step(1.0 + k, g, pose)
+        assert out.action is Action.KEEP, out.reason
+        assert out.goal == first.goal
+
+
+def test_a_frontier_that_reveals_nothing_is_not_chased():
+    # A room fully known but for a speck of unknown cells walled off except one free
+    # neighbour: nearest sends a goal there, routed finishes (its view gains < min_gain).
+    data = np.zeros((80, 80), dtype=np.int8)
+    data[0:2, :] = data[-2:, :] = data[:, 0:2] = data[:, -2:] = 100
+    data[30:36, 60:72] = 100
+    data[32:34, 62:70] = -1                      # 16 unknown cells inside a box ...
+    data[33, 60:62] = 0                          # ... with a slit towards the room
+    data[33, 62] = -1
+    g = _grid(data)
+    x, y = g.cell_to_world(40, 20)
+    fp = FrontierParams(robot_radius_m=0.05, min_group_size_cells=1)
+    near = Explorer(fp, SelectionParams(strategy="nearest")).step(0.0, g, (x, y, 0.0))
+    assert near.action is Action.NEW_GOAL
+    ex = Explorer(fp, SelectionParams(strategy="routed", done_confirmations=2))
+    outs = [ex.step(float(k), g, (x, y, 0.0)) for k in range(3)]
+    assert outs[0].tour is not None and outs[0].tour.gain_m2.max() < 0.25
+    assert [o.action for o in outs[:2]] == [Action.WAIT, Action.DONE]
