@@ -2,7 +2,7 @@
 
 Callbacks only store the newest inputs. A timer on the ROS clock (``_POLLS_PER_PERIOD``
 times per ``1 / rate_hz``), and a guard condition woken when a depth image arrives or a
-pose reaches a waiting image's stamp, take the newest colour/depth pair whose stamps match
+pose reaches a waiting image's stamp, take the oldest waiting colour/depth pair whose stamps match
 (``sync_tolerance_s``) and lie at least ``_MIN_GAP_PERIODS / rate_hz`` after the last one
 processed (so a camera at ``rate_hz`` has every frame processed, a faster one about
 ``rate_hz`` of them), the robot pose nearest to it, runs the detector and
@@ -286,8 +286,14 @@ class ObjectCostmapNode(Node):
 
     @failsafe("object costmap update")
     def _on_wake(self) -> None:
-        if not self.paused:
+        # Every frame that became processable (at most the buffer's worth).
+        for _ in range(_PAIR_BUFFER):
+            if self.paused:
+                return
+            done = self.frames_processed
             self._tick_inner()
+            if self.frames_processed == done:
+                return
 
     # ------------------------------------------------------------------- tick
     @failsafe("object costmap update")
@@ -352,7 +358,13 @@ class ObjectCostmapNode(Node):
                 "object_costmap in a process of its own"))
 
     def _newest_pair(self) -> tuple[Image, Image, Image | None] | None:
-        """Newest unprocessed depth with a colour (and semantic) image close in time."""
+        """Oldest unprocessed depth at least the least gap after the last processed one,
+        with a robot pose and a colour (and semantic) image close in time.
+
+        Oldest first: when the pose stream caught up with several waiting frames at once,
+        each is processed in turn (newest first skipped the older ones); the buffer's
+        length (``_PAIR_BUFFER`` frames) bounds how stale a frame can be.
+        """
         tol_ns = int(self.params.sync_tolerance_s * 1e9)
         oracle = self._dp.params.backend == "oracle"
         # Frames newer than the newest pose wait for a pose at or after their stamp while
@@ -364,13 +376,13 @@ class ObjectCostmapNode(Node):
         poses_flow = (arrival is not None
                       and self.get_clock().now().nanoseconds - arrival < pose_tol_ns)
         min_gap_ns = int(_MIN_GAP_PERIODS / self.params.rate_hz * 1e9)
-        for depth in sorted(self._depths, key=_stamp_ns, reverse=True):
+        for depth in sorted(self._depths, key=_stamp_ns):
             t = _stamp_ns(depth)
             if self._last_depth_ns is not None and t < self._last_depth_ns + min_gap_ns:
-                return None     # processed, or too soon after the last one: wait for a newer
+                continue        # processed, or too soon after the last one
             if newest_pose is not None and t > newest_pose and (
                     t > newest_pose + pose_tol_ns or poses_flow):
-                continue
+                return None     # this one and every newer one wait for a pose
             color = _closest(self._colors, t, tol_ns)
             semantic = _closest(self._semantics, t, tol_ns) if oracle else None
             if color is not None and (semantic is not None or not oracle):
