@@ -278,7 +278,8 @@ class IncrementalSegmenter:
         n, lab = cv2.connectedComponents(rest[box].astype(np.uint8), connectivity=8)
         if n <= 1:
             return
-        area = np.bincount(lab[free_raw[box]].ravel(), minlength=n)
+        rr, cc = np.nonzero(rest[box])             # the few cells of the components
+        area = np.bincount(lab[rr, cc][free_raw[box][rr, cc]], minlength=n)
         min_px = self.params.min_region_area_m2 / (res * res)
         sub = labels[box]
         for k in np.flatnonzero(area >= min_px).tolist():

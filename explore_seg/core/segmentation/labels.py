@@ -40,20 +40,28 @@ def fill_gaps(labels: npt.NDArray[np.int32], domain: npt.NDArray[np.bool_],
     c0, c1 = max(0, cols[0] - 1), min(labels.shape[1], cols[-1] + 2)
     lab = labels[r0:r1, c0:c1]
     tgt = todo[r0:r1, c0:c1].copy()
-    # grey dilation on ranks (float32 is exact below 2**24; ids may be larger)
-    uniq, rank = _ranks(lab)
+    # grey dilation (the largest id around wins) on the ids themselves when they fit in
+    # 16 bits, else on their ranks (float32 is exact below 2**24; ids may be larger)
+    top = int(lab.max())
+    uniq = None
+    if top < 256:
+        rank = lab.astype(np.uint8)
+    elif top < 65536:
+        rank = lab.astype(np.uint16)
+    else:
+        uniq, rank = _ranks(lab)
     k = np.ones((3, 3), np.uint8)
     for _ in range(max_iter):
         grown = cv2.dilate(rank, k)
         put = tgt & (grown > 0)
         if not put.any():
             break
-        rank[put] = grown[put]
+        np.copyto(rank, grown, where=put)
         tgt &= ~put
         if not tgt.any():
             break
     filled = todo[r0:r1, c0:c1] & (rank > 0)
-    lab[filled] = uniq[rank[filled].astype(np.int64)]
+    lab[filled] = rank[filled] if uniq is None else uniq[rank[filled].astype(np.int64)]
 
 
 def _ranks(lab: npt.NDArray[np.int32]
