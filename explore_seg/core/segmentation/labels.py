@@ -91,6 +91,28 @@ def label_counts(values: npt.NDArray[np.integer]) -> dict[int, int]:
     return dict(zip(nz.tolist(), c[nz].tolist()))
 
 
+def _key_counts(x: npt.NDArray[np.int64], y: npt.NDArray[np.int64]
+                ) -> tuple[list[int], list[int], list[int]]:
+    """Distinct pairs (x, y) in ascending order of (x, y), with their counts.
+
+    ``np.unique`` on ``x * 2**32 + y`` does it; a bincount over ``x * K + (y - y0)`` does
+    the same without the sort when that table is small.
+    """
+    y0 = int(y.min())
+    k = int(y.max()) - y0 + 1
+    top = (int(x.max()) + 1) * k
+    if top <= _MAX_TABLE:
+        cnt = np.bincount(x * k + (y - y0), minlength=top)
+        keys = np.flatnonzero(cnt)
+        return (keys // k).tolist(), (keys % k + y0).tolist(), cnt[keys].tolist()
+    keys, cnt = np.unique(x * (1 << 32) + y, return_counts=True)
+    return (keys >> 32).tolist(), (keys & 0xFFFFFFFF).tolist(), cnt.tolist()
+
+
+#: Largest count table :func:`_key_counts` allocates instead of sorting.
+_MAX_TABLE = 1 << 21
+
+
 def pair_counts(lab: npt.NDArray[np.int32]) -> dict[tuple[int, int], int]:
     """Number of 4-neighbour cell pairs between every two different non-zero labels."""
     out: dict[tuple[int, int], int] = {}
@@ -98,12 +120,11 @@ def pair_counts(lab: npt.NDArray[np.int32]) -> dict[tuple[int, int], int]:
         m = (a != b) & (a > 0) & (b > 0)
         if not m.any():
             continue
-        x = np.minimum(a[m], b[m]).astype(np.int64)
-        y = np.maximum(a[m], b[m]).astype(np.int64)
-        keys, cnt = np.unique(x * (1 << 32) + y, return_counts=True)
-        for key, c in zip(keys.tolist(), cnt.tolist()):
-            pair = (key >> 32, key & 0xFFFFFFFF)
-            out[pair] = out.get(pair, 0) + c
+        am, bm = a[m], b[m]
+        x = np.minimum(am, bm).astype(np.int64)
+        y = np.maximum(am, bm).astype(np.int64)
+        for i, j, c in zip(*_key_counts(x, y)):
+            out[(i, j)] = out.get((i, j), 0) + c
     return out
 
 
@@ -115,7 +136,10 @@ def apply_mapping(labels: npt.NDArray[np.int32], mapping: dict[int, int]) -> Non
     top = max(int(labels.max()), max(mapping)) + 1
     lut = np.arange(top, dtype=np.int64)
     lut[np.fromiter(mapping.keys(), np.int64)] = np.fromiter(mapping.values(), np.int64)
-    labels[...] = lut[labels].astype(np.int32)
+    if int(lut.max()) <= np.iinfo(np.int32).max:
+        labels[...] = lut.astype(np.int32)[labels]
+    else:
+        labels[...] = lut[labels].astype(np.int32)
 
 
 def match_ids(new: npt.NDArray[np.int32], old: npt.NDArray[np.int32],
@@ -132,10 +156,8 @@ def match_ids(new: npt.NDArray[np.int32], old: npt.NDArray[np.int32],
         return {}
     a = old[m].astype(np.int64)
     b = new[m].astype(np.int64)
-    keys, cnt = np.unique(a * (1 << 32) + b, return_counts=True)
     best: dict[int, tuple[int, int]] = {}
-    for key, c in zip(keys.tolist(), cnt.tolist()):
-        i, j = key >> 32, key & 0xFFFFFFFF
+    for i, j, c in zip(*_key_counts(a, b)):
         if i not in best or c > best[i][1] or (c == best[i][1] and j < best[i][0]):
             best[i] = (j, c)
     out: dict[int, int] = {}
