@@ -148,7 +148,7 @@ class IncrementalSegmenter:
         self._geom = grid
         self._data = grid.data.copy()
         self._free_raw, self._free_clean = free_raw, free_clean
-        out = np.where(free_raw, labels, 0).astype(np.int32, copy=False)
+        out = np.multiply(labels, free_raw, dtype=np.int32)   # 0 off the free cells
         self.last_update_info = UpdateInfo(mode, time.perf_counter() - t0, n_areas,
                                            n_cells, len(label_counts(out)), reason)
         return out
@@ -348,9 +348,14 @@ class IncrementalSegmenter:
         if not dirty and blobs is None:
             self._leftovers(labels, free_raw, domain, res)
             return labels, "unchanged", 0, 0, ""
-        lut = np.zeros(max(max(old_area, default=0), max(dirty, default=0)) + 2, dtype=bool)
-        lut[list(dirty)] = True
-        work = lut[labels]
+        if len(dirty) <= 4:     # a few comparisons are faster than a table look-up
+            work = np.zeros(labels.shape, dtype=bool)
+            for i in dirty:
+                work |= labels == i
+        else:
+            lut = np.zeros(max(max(old_area, default=0), max(dirty)) + 2, dtype=bool)
+            lut[list(dirty)] = True
+            work = lut[labels]
         if blobs is not None:
             work |= blobs
         n_work = int(work.sum())
@@ -365,7 +370,7 @@ class IncrementalSegmenter:
             return labels, "unchanged", 0, 0, ""
         lab_c = labels[box]
         work_c = work[box]
-        old_c = np.where(work_c, lab_c, 0)
+        old_c = np.multiply(lab_c, work_c, dtype=np.int32)
         lab_c[work_c] = 0
         n_areas, alab = cv2.connectedComponents(work_c.astype(np.uint8), connectivity=8)
         temp_ids: list[int] = []

@@ -80,12 +80,23 @@ def _ranks(lab: npt.NDArray[np.int32]
     return uniq, lut[lab]
 
 
+#: From this many values on, :func:`label_counts` counts with OpenCV's histogram.
+_HIST_MIN_SIZE = 1 << 15
+
+
 def label_counts(values: npt.NDArray[np.integer]) -> dict[int, int]:
     """{id: count} of the ids > 0 in ``values`` (ids are bounded by the id counter)."""
     v = values.ravel()
     if v.size == 0:
         return {}
-    c = np.bincount(v)          # labels are never negative
+    top = int(v.max())
+    if v.size >= _HIST_MIN_SIZE and top < 65536 and int(v.min()) >= 0:
+        # OpenCV's histogram of the 16-bit ids: exact counts (float32, < 2**24 cells),
+        # several times faster than bincount's cast to intp on large images
+        c = cv2.calcHist([v.astype(np.uint16).reshape(1, -1)], [0], None, [top + 1],
+                         [0, top + 1]).ravel().astype(np.int64)
+    else:
+        c = np.bincount(v)          # labels are never negative
     c[0] = 0
     nz = np.flatnonzero(c)
     return dict(zip(nz.tolist(), c[nz].tolist()))
