@@ -157,33 +157,67 @@ class _Boundary:
 
 
 class _NotchTable:
-    """Points, rings and arc positions of all notches (built once per round)."""
+    """Every notch against every boundary point, in (notches, points) arrays (built once
+    per round): notch-to-notch distances, and the plain cut ends of :func:`far_ends`
+    (ring vertices, then feet of perpendiculars) with their validity, ring, arc position
+    and distance."""
 
-    def __init__(self, notches: list[Notch], rings: list[Ring]) -> None:
+    def __init__(self, notches: list[Notch], rings: list[Ring],
+                 bd: _Boundary | None = None, st: DudeSettings | None = None) -> None:
         self.pts = np.array([u.pt for u in notches], dtype=np.float64).reshape(-1, 2)
         self.arc = [float(rings[u.ring].arc[u.idx]) for u in notches]
+        vx, vy = self.pts[:, 0:1], self.pts[:, 1:2]
+        self.dist = np.hypot(self.pts[None, :, 0] - vx, self.pts[None, :, 1] - vy).tolist()
+        if bd is None or st is None:
+            self.tips = None
+            return
+        vr = np.array([u.ring for u in notches], dtype=bd.ring.dtype)[:, None]
+        vi = np.array([u.idx for u in notches], dtype=bd.idx.dtype)[:, None]
+        same = bd.ring == vr
+        near_v = same & (((bd.idx - vi) % bd.size <= 1) | ((vi - bd.idx) % bd.size <= 1))
+        # perpendicular feet on edges facing v (v on the interior = left side)
+        rx = vx - bd.pts[:, 0]
+        ry = vy - bd.pts[:, 1]
+        ok = bd.den > 1e-12
+        t = np.where(ok, (rx * bd.ab[:, 0] + ry * bd.ab[:, 1]) / np.where(ok, bd.den, 1.0),
+                     -1.0)
+        cross = bd.ab[:, 0] * ry - bd.ab[:, 1] * rx
+        own_edge = same & ((bd.idx == vi) | ((bd.idx + 1) % bd.size == vi))
+        sel = ok & (t > 0.0) & (t < 1.0) & (cross > 0) & ~own_edge
+        k, nb = t.shape
+        px = np.concatenate([np.broadcast_to(bd.pts[:, 0], (k, nb)),
+                             bd.pts[:, 0] + t * bd.ab[:, 0]], axis=1)
+        py = np.concatenate([np.broadcast_to(bd.pts[:, 1], (k, nb)),
+                             bd.pts[:, 1] + t * bd.ab[:, 1]], axis=1)
+        ring = np.concatenate([bd.ring, bd.ring])
+        arc = np.concatenate([np.broadcast_to(bd.arc, (k, nb)), bd.arc + t * bd.len], axis=1)
+        dist = np.hypot(px - vx, py - vy)
+        # sliver cuts (ends close along the notch's own ring, §9.2) are no candidates
+        per = np.array([float(rings[u.ring].perimeter) for u in notches])[:, None]
+        va = np.array(self.arc)[:, None]
+        dd = np.where(per > 0, np.abs(arc - va) % np.where(per > 0, per, 1.0), 0.0)
+        not_sliver = (ring != vr) | (np.minimum(dd, per - dd) > st.sliver_factor * st.tau_px)
+        valid = np.concatenate([~near_v, sel], axis=1) & (dist >= 1.0) & not_sliver
+        self.tips = (valid, px, py, ring, arc, dist)
 
 
 def far_ends(v: Notch, vi: int, notches: list[Notch], rings: list[Ring],
               bd: _Boundary, st: DudeSettings, nt: _NotchTable | None = None
               ) -> tuple[list[End], list[End]]:
-    """Candidate far ends of cuts from notch ``v``: other notches and plain points.
+    """Candidate far ends of cuts from notch ``v`` (``notches[vi]``): other notches and
+    plain points.
 
     Plain points are the ring vertices and the feet of the perpendiculars from ``v`` on
     the ring edges that face it; the ``max_tip_candidates`` nearest are returned. Ends
     whose cut would be a sliver cut (§9.2) are skipped.
     """
     tau = st.tau_px
-    if nt is None:
-        nt = _NotchTable(notches, rings)
+    if nt is None or nt.tips is None:
+        nt = _NotchTable(notches, rings, bd, st)
+    assert nt.tips is not None
     per = float(rings[v.ring].perimeter)
     va = float(rings[v.ring].arc[v.idx])
     limit = st.sliver_factor * tau
-
-    def not_sliver(ring: npt.NDArray[np.intp], arc: npt.NDArray[np.float64]
-                   ) -> npt.NDArray[np.bool_]:
-        dd = np.abs(arc - va) % per if per > 0 else np.zeros_like(arc)
-        return (ring != v.ring) | (np.minimum(dd, per - dd) > limit)
 
     def not_sliver1(ring: int, arc: float) -> bool:
         if ring != v.ring:
@@ -191,7 +225,7 @@ def far_ends(v: Notch, vi: int, notches: list[Notch], rings: list[Ring],
         dd = abs(arc - va) % per if per > 0 else 0.0
         return min(dd, per - dd) > limit
 
-    dist = np.hypot(nt.pts[:, 0] - v.pt[0], nt.pts[:, 1] - v.pt[1]).tolist()
+    dist = nt.dist[vi]
     cand = [(dist[j], j) for j, u in enumerate(notches)
             if not (j == vi or (u.ring == v.ring and u.idx == v.idx))]
     cand.sort(key=lambda t: t[0])
@@ -200,29 +234,19 @@ def far_ends(v: Notch, vi: int, notches: list[Notch], rings: list[Ring],
         u = notches[j]
         if not_sliver1(u.ring, nt.arc[j]):
             notch_ends.append(End(u.pt, u.ring, nt.arc[j], j, length))
-    # ring vertices, not v itself nor its ring neighbours
-    same = bd.ring == v.ring
-    near_v = same & (((bd.idx - v.idx) % bd.size <= 1) | ((v.idx - bd.idx) % bd.size <= 1))
-    # perpendicular feet on edges facing v (v on the interior = left side)
-    rel = v.pt - bd.pts
-    ok = bd.den > 1e-12
-    t = np.where(ok, np.einsum("ij,ij->i", rel, bd.ab) / np.where(ok, bd.den, 1.0), -1.0)
-    cross = bd.ab[:, 0] * rel[:, 1] - bd.ab[:, 1] * rel[:, 0]
-    own_edge = same & ((bd.idx == v.idx) | ((bd.idx + 1) % bd.size == v.idx))
-    sel = ok & (t > 0.0) & (t < 1.0) & (cross > 0) & ~own_edge
-    P = np.concatenate([bd.pts[~near_v], bd.pts[sel] + t[sel, None] * bd.ab[sel]])
-    R = np.concatenate([bd.ring[~near_v], bd.ring[sel]])
-    A = np.concatenate([bd.arc[~near_v], bd.arc[sel] + t[sel] * bd.len[sel]])
-    L = np.hypot(P[:, 0] - v.pt[0], P[:, 1] - v.pt[1])
-    keep = (L >= 1.0) & not_sliver(R, A)
-    P, R, A, L = P[keep], R[keep], A[keep], L[keep]
+    valid, px, py, ring, arc, dist_all = nt.tips
+    at = np.flatnonzero(valid[vi])
+    L = dist_all[vi, at]
     k = st.max_tip_candidates
     if len(L) > k:
         part = np.argpartition(L, k)[:k]
-        P, R, A, L = P[part], R[part], A[part], L[part]
+        at, L = at[part], L[part]
     order = np.argsort(L, kind="stable")
-    Rl, Al, Ll = R.tolist(), A.tolist(), L.tolist()
-    tips = [End(P[i], Rl[i], Al[i], -1, Ll[i]) for i in order.tolist()]
+    at = at[order]
+    X, Y = px[vi, at], py[vi, at]
+    tips = [End(np.array([x, y]), r, a, -1, d) for x, y, r, a, d in
+            zip(X.tolist(), Y.tolist(), ring[at].tolist(), arc[vi, at].tolist(),
+                L[order].tolist())]
     return notch_ends, tips
 
 
@@ -232,7 +256,7 @@ def cut_sets(notches: list[Notch], rings: list[Ring], vis: npt.NDArray[np.bool_]
     tau = st.tau_px
     sets: list[CutSet] = []
     bd = _Boundary(rings)
-    nt = _NotchTable(notches, rings)
+    nt = _NotchTable(notches, rings, bd, st)
     # far ends of every notch, then one raster test of all their cuts
     all_ends = []
     for vi, v in enumerate(notches):
