@@ -61,7 +61,9 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
         small = stats[:, cv2.CC_STAT_AREA] <= speck_px
         small[0] = False
         if small.any():
-            occ_u8 = np.where(small[lab], 0, occ_u8).astype(np.uint8)
+            keep = (~small).astype(np.uint8)
+            keep[0] = 0
+            occ_u8 = keep[lab]        # the occupied cells less the specks
         # the components left in occ_u8 are these minus the specks
         occ_cc = (lab, stats, small)
     r_inf = length_to_cells(params.obstacle_inflation_m, res)
