@@ -33,6 +33,24 @@ def point_segment_dist(p: npt.NDArray[np.float64], a: npt.NDArray[np.float64],
     return np.hypot(p[:, 0] - q[:, 0], p[:, 1] - q[:, 1])
 
 
+def point_segment_dists(p: npt.NDArray[np.float64], a: npt.NDArray[np.float64],
+                        b: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    """Distances of points ``p`` (N, 2) to their own segments a-b (N, 2 each).
+
+    Row by row the operations of :func:`point_segment_dist` (for integer coordinates
+    the same values; its dot product is then exact).
+    """
+    abx, aby = b[:, 0] - a[:, 0], b[:, 1] - a[:, 1]
+    den = abx * abx + aby * aby
+    px, py = p[:, 0] - a[:, 0], p[:, 1] - a[:, 1]
+    ok = den > 1e-12
+    t = np.clip((px * abx + py * aby) / np.where(ok, den, 1.0), 0.0, 1.0)
+    qx = a[:, 0] + t * abx
+    qy = a[:, 1] + t * aby
+    d = np.hypot(p[:, 0] - qx, p[:, 1] - qy)
+    return np.where(ok, d, np.hypot(px, py))
+
+
 def seg_dist(p: npt.NDArray[np.float64], a: npt.NDArray[np.float64],
               b: npt.NDArray[np.float64]) -> float:
     return float(point_segment_dist(p, a, b)[0])
@@ -117,9 +135,15 @@ def _dp_keep_small(p: list[list[float]], eps: float) -> list[int]:
             sq.append(dx * dx + dy * dy)
         top = max(sq)
         near = [k for k, s in enumerate(sq) if s >= top * (1.0 - 1e-9)]
-        d = np.hypot(np.array([dxs[k] for k in near]), np.array([dys[k] for k in near]))
-        b = int(np.argmax(d))
-        if float(d[b]) > eps:
+        e2 = eps * eps
+        if len(near) == 1 and (top > e2 * (1.0 + 1e-9) or top < e2 * (1.0 - 1e-9)):
+            # one farthest point, clearly on one side of eps: no rounding question
+            b, far = 0, top > e2
+        else:
+            d = np.hypot(np.array([dxs[k] for k in near]), np.array([dys[k] for k in near]))
+            b = int(np.argmax(d))
+            far = float(d[b]) > eps
+        if far:
             m = i + 1 + near[b]
             keep[m] = True
             stack.append((i, m))

@@ -16,7 +16,8 @@ import numpy.typing as npt
 
 from explore_seg.core.segmentation.params import DudeSettings
 from explore_seg.core.segmentation.polygon import (dp_keep, dp_keep_list, hull_indices,
-                                                   hull_indices_list, seg_dist, seg_dist_xy,
+                                                   hull_indices_list, point_segment_dists,
+                                                   seg_dist_xy,
                                                    signed_area)
 
 
@@ -176,9 +177,9 @@ def outer_features(ring: Ring, tau: float, max_depth: int
     if len(hull) < 3:
         return [], list(range(n))
     plist = pts.tolist()
-    notches: list[tuple[int, float]] = []
     feats: set[int] = set(hull)
     nh = len(hull)
+    cands: list[tuple[int, int, int]] = []      # (vertex, bridge end a, bridge end b)
     for k in range(nh):
         a = hull[k]
         b = hull[(k + 1) % nh]
@@ -188,12 +189,16 @@ def outer_features(ring: Ring, tau: float, max_depth: int
         chain = plist[a:a + gap + 1] if a + gap < n else plist[a:] + plist[:a + gap + 1 - n]
         cand, ends = _pocket_candidates(chain, tau, 0, max_depth)
         feats.update((a + i) % n for i in ends)
-        for c in cand:
-            i = (a + c) % n
-            conc = seg_dist(pts[i], pts[a], pts[b])
-            if conc >= tau:
-                notches.append((i, conc))
-                feats.add(i)
+        cands += [((a + c) % n, a, b) for c in cand]
+    if not cands:
+        return [], sorted(feats)
+    idx = np.array(cands, dtype=np.intp)
+    conc = point_segment_dists(pts[idx[:, 0]], pts[idx[:, 1]], pts[idx[:, 2]]).tolist()
+    notches: list[tuple[int, float]] = []
+    for (i, _a, _b), c in zip(cands, conc):
+        if c >= tau:
+            notches.append((i, c))
+            feats.add(i)
     return notches, sorted(feats)
 
 
