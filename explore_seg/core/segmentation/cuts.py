@@ -119,7 +119,9 @@ def _samples(code: npt.NDArray[np.uint8], p0: npt.NDArray[np.float64],
     y = p0[seg, 1] + t * dy[seg]
     c = np.clip(np.rint(x).astype(np.int64), 0, code.shape[1] - 1)
     r = np.clip(np.rint(y).astype(np.int64), 0, code.shape[0] - 1)
-    return code[r, c], start
+    r *= code.shape[1]
+    r += c
+    return code.ravel()[r], start
 
 
 @dataclass
@@ -144,12 +146,16 @@ class _Boundary:
     """All ring vertices and edges of a piece in flat arrays (built once per round)."""
 
     def __init__(self, rings: list[Ring]) -> None:
+        sizes = np.array([len(r.pts) for r in rings])
         self.pts = np.concatenate([r.pts for r in rings])
-        self.ring = np.concatenate([np.full(len(r.pts), k) for k, r in enumerate(rings)])
-        self.idx = np.concatenate([np.arange(len(r.pts)) for r in rings])
+        self.ring = np.repeat(np.arange(len(rings)), sizes)
+        first = np.cumsum(sizes) - sizes
+        self.idx = np.arange(len(self.pts)) - np.repeat(first, sizes)
         self.arc = np.concatenate([r.arc for r in rings])
-        self.size = np.concatenate([np.full(len(r.pts), len(r.pts)) for r in rings])
-        nxt = np.concatenate([np.roll(r.pts, -1, axis=0) for r in rings])
+        self.size = np.repeat(sizes, sizes)
+        nxt_i = np.arange(1, len(self.pts) + 1)
+        nxt_i[np.cumsum(sizes) - 1] = first          # each ring's last vertex -> its first
+        nxt = self.pts[nxt_i]
         self.ab = nxt - self.pts
         self.den = np.einsum("ij,ij->i", self.ab, self.ab)
         self.len = np.sqrt(self.den)
