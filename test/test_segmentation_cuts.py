@@ -20,7 +20,7 @@ def test_cut_sets_no_duplicate_when_nothing_resolves_a_notch(monkeypatch):
            cuts.End(np.array([10.0, 10.0]), 0, 20.0, 2, 5.0)]    # weight 1/5: the best
     monkeypatch.setattr(cuts, "far_ends",
                         lambda v, vi, *a: (list(far), []) if vi == 0 else ([], []))
-    monkeypatch.setattr(cuts, "segments_clear", lambda vis, border, P0, P1, w:
+    monkeypatch.setattr(cuts, "segments_clear", lambda vis, border, P0, P1, *a:
                         np.ones(len(P1), bool))
     monkeypatch.setattr(cuts, "resolves", lambda v, ends, tau: False)
     st = DudeSettings(tau_px=2.0, simplify_eps_px=1.0, min_hole_area_px=1.0,

@@ -54,24 +54,32 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
         return free_raw, free_raw.copy()
     occ = data > params.occupied_min_occupancy
     occ_u8 = occ.astype(np.uint8)
+    occ_cc = None
     speck_px = math.floor(params.obstacle_speck_area_m2 / (res * res) + 1e-6)
     if speck_px >= 1 and occ.any():
         n, lab, stats, _ = cv2.connectedComponentsWithStats(occ_u8, connectivity=8)
         small = stats[:, cv2.CC_STAT_AREA] <= speck_px
         small[0] = False
         if small.any():
-            occ_u8 = np.where(small[lab], 0, occ_u8).astype(np.uint8)
+            keep = (~small).astype(np.uint8)
+            keep[0] = 0
+            occ_u8 = keep[lab]        # the occupied cells less the specks
+        # the components left in occ_u8 are these minus the specks
+        occ_cc = (lab, stats, small)
     r_inf = length_to_cells(params.obstacle_inflation_m, res)
     obst = cv2.dilate(occ_u8, _square(r_inf)) if r_inf > 0 else occ_u8
     r_close = length_to_cells(params.free_close_m, res)
     grown = cv2.dilate(free_raw.astype(np.uint8), _square(r_close)) if r_close > 0 \
         else free_raw.astype(np.uint8)
     free_clean = (grown > 0) & (obst == 0)
-    return free_raw, fill_clutter_holes(free_clean, occ_u8, params, res)
+    return free_raw, fill_clutter_holes(free_clean, occ_u8, params, res, occ_cc)
 
 
 def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8],
-                       params: SegmentationParams, res: float) -> npt.NDArray[np.bool_]:
+                       params: SegmentationParams, res: float,
+                       occ_cc: tuple[npt.NDArray[np.int32], npt.NDArray[np.int32],
+                                     npt.NDArray[np.bool_]] | None = None
+                       ) -> npt.NDArray[np.bool_]:
     """``free_clean`` with its clutter holes filled.
 
     A hole of the cleaned free space (a component of its complement that does not reach
@@ -82,6 +90,9 @@ def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.ui
     unknown cells around it. A wall piece between two doors is a hole too, but a long
     one. Clutter holes count as free space for the decomposition, so furniture does not
     cut rooms.
+
+    ``occ_cc`` (optional): the 8-connected components of an occupied mask that ``occ``
+    is with some whole components removed, as (labels, stats, removed).
     """
     ext = params.clutter_max_extent_m / res
     area = params.clutter_max_area_m2 / (res * res)
@@ -97,13 +108,16 @@ def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.ui
     small[0] = False
     if not small.any():
         return free_clean
-    no, olab, ost, _ = cv2.connectedComponentsWithStats(occ, connectivity=8)
+    if occ_cc is None:
+        _no, olab, ost, _ = cv2.connectedComponentsWithStats(occ, connectivity=8)
+        gone = np.zeros(len(ost), dtype=bool)
+    else:
+        olab, ost, gone = occ_cc
     diag = np.hypot(ost[:, cv2.CC_STAT_WIDTH], ost[:, cv2.CC_STAT_HEIGHT])
-    big = diag > params.clutter_max_object_m / res
+    big = (diag > params.clutter_max_object_m / res) & ~gone
     big[0] = False
     if big.any():
-        struct = big[olab]
-        small[np.unique(lab[struct])] = False
+        small[lab[big[olab]]] = False
     return free_clean | small[lab]
 
 

@@ -10,7 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.segmentation.params import DudeSettings
-from explore_seg.core.segmentation.polygon import crosses_any, seg_dist
+from explore_seg.core.segmentation.polygon import crosses_any, seg_dist_xy
 from explore_seg.core.segmentation.rings import Notch, Ring
 
 _TWO_PI = 2.0 * math.pi
@@ -45,41 +45,83 @@ def wedge(notch: Notch, ring: Ring, feats: list[int]) -> bool:
 
 def resolves(v: Notch, ends: list[npt.NDArray[np.float64]], tau: float) -> bool:
     """True when cuts from ``v`` to ``ends`` (one or two points) resolve ``v`` (§8.2)."""
+    vx, vy = float(v.pt[0]), float(v.pt[1])
     rel = []
     for u in ends:
-        d = u - v.pt
-        w = (math.atan2(d[1], d[0]) - v.a_n) % _TWO_PI
+        ux, uy = float(u[0]), float(u[1])
+        w = (math.atan2(uy - vy, ux - vx) - v.a_n) % _TWO_PI
         if w <= _ANGLE_EPS or w >= v.interior - _ANGLE_EPS:
             return False
-        rel.append((w, u))
+        rel.append((w, ux, uy))
     rel.sort(key=lambda t: t[0])
-    bounds = [(0.0, v.n)] + rel + [(v.interior, v.p)]
-    for (w0, q0), (w1, q1) in zip(bounds[:-1], bounds[1:]):
-        if w1 - w0 >= math.pi and seg_dist(v.pt, q0, q1) > tau:
+    bounds = ([(0.0, float(v.n[0]), float(v.n[1]))] + rel
+              + [(v.interior, float(v.p[0]), float(v.p[1]))])
+    for (w0, x0, y0), (w1, x1, y1) in zip(bounds[:-1], bounds[1:]):
+        if w1 - w0 >= math.pi and seg_dist_xy(vx, vy, x0, y0, x1, y1) > tau:
             return False
     return True
 
 
 def segments_clear(vis: npt.NDArray[np.bool_], border: npt.NDArray[np.bool_],
                     p0: npt.NDArray[np.float64], p1: npt.NDArray[np.float64],
-                    min_len: float) -> npt.NDArray[np.bool_]:
-    """Raster test of segments p0-p1 (N, 2): inside ``vis`` and not along its border."""
+                    min_len: float, code: npt.NDArray[np.uint8] | None = None
+                    ) -> npt.NDArray[np.bool_]:
+    """Raster test of segments p0-p1 (N, 2): inside ``vis`` and not along its border.
+
+    Every segment is sampled every half pixel. Segments shorter than ``min_len`` and
+    segments one of whose every ``_COARSE``-th samples is outside ``vis`` fail without
+    the full sampling. ``code`` (optional) is ``vis + 2 * border`` as uint8, when the
+    caller has it.
+    """
     n = len(p0)
+    out = np.zeros(n, dtype=bool)
     if n == 0:
-        return np.zeros(0, dtype=bool)
-    d = p1 - p0
-    length = np.hypot(d[:, 0], d[:, 1])
+        return out
+    if code is None:
+        code = vis.astype(np.uint8) | (border.astype(np.uint8) << 1)
+    dx = p1[:, 0] - p0[:, 0]
+    dy = p1[:, 1] - p0[:, 1]
+    length = np.hypot(dx, dy)
     ns = np.maximum(2, np.ceil(length / _SAMPLE_STEP_PX).astype(np.int64))
-    seg = np.repeat(np.arange(n), ns)
-    start = np.cumsum(ns) - ns
-    k = np.arange(int(ns.sum())) - np.repeat(start, ns)
+    todo = np.flatnonzero(length >= min_len)
+    if todo.size == 0:
+        return out
+    # coarse pass: a sample outside the piece fails the segment
+    nc = (ns[todo] + _COARSE - 1) // _COARSE
+    got, start = _samples(code, p0[todo], dx[todo], dy[todo], ns[todo], nc, _COARSE)
+    bad = np.add.reduceat((got & 1) == 0, start, dtype=np.int64) > 0
+    todo = todo[~bad]
+    if todo.size == 0:
+        return out
+    nsel = ns[todo]
+    got, start = _samples(code, p0[todo], dx[todo], dy[todo], nsel, nsel, 1)
+    outside = np.add.reduceat((got & 1) == 0, start, dtype=np.int64)
+    onb = np.add.reduceat(got >> 1, start, dtype=np.int64) / nsel
+    out[todo] = (outside == 0) & (onb <= _MAX_BORDER_FRACTION)
+    return out
+
+
+#: Sample stride of the coarse pass of :func:`segments_clear`.
+_COARSE = 8
+
+
+def _samples(code: npt.NDArray[np.uint8], p0: npt.NDArray[np.float64],
+             dx: npt.NDArray[np.float64], dy: npt.NDArray[np.float64],
+             ns: npt.NDArray[np.int64], count: npt.NDArray[np.int64], stride: int
+             ) -> tuple[npt.NDArray[np.uint8], npt.NDArray[np.int64]]:
+    """``code`` at samples k = 0, stride, ... (``count`` per segment) of the segments'
+    ``ns`` samples at t = (k + 0.5) / ns; the flat values and each segment's start."""
+    seg = np.repeat(np.arange(len(ns)), count)
+    start = np.cumsum(count) - count
+    k = (np.arange(int(count.sum())) - np.repeat(start, count)) * stride
     t = (k + 0.5) / ns[seg]
-    xy = p0[seg] + t[:, None] * d[seg]
-    c = np.clip(np.rint(xy[:, 0]).astype(np.int64), 0, vis.shape[1] - 1)
-    r = np.clip(np.rint(xy[:, 1]).astype(np.int64), 0, vis.shape[0] - 1)
-    outside = np.bincount(seg, weights=~vis[r, c], minlength=n)
-    onb = np.bincount(seg, weights=border[r, c], minlength=n) / ns
-    return (outside == 0) & (onb <= _MAX_BORDER_FRACTION) & (length >= min_len)
+    x = p0[seg, 0] + t * dx[seg]
+    y = p0[seg, 1] + t * dy[seg]
+    c = np.clip(np.rint(x).astype(np.int64), 0, code.shape[1] - 1)
+    r = np.clip(np.rint(y).astype(np.int64), 0, code.shape[0] - 1)
+    r *= code.shape[1]
+    r += c
+    return code.ravel()[r], start
 
 
 @dataclass
@@ -104,67 +146,113 @@ class _Boundary:
     """All ring vertices and edges of a piece in flat arrays (built once per round)."""
 
     def __init__(self, rings: list[Ring]) -> None:
+        sizes = np.array([len(r.pts) for r in rings])
         self.pts = np.concatenate([r.pts for r in rings])
-        self.ring = np.concatenate([np.full(len(r.pts), k) for k, r in enumerate(rings)])
-        self.idx = np.concatenate([np.arange(len(r.pts)) for r in rings])
+        self.ring = np.repeat(np.arange(len(rings)), sizes)
+        first = np.cumsum(sizes) - sizes
+        self.idx = np.arange(len(self.pts)) - np.repeat(first, sizes)
         self.arc = np.concatenate([r.arc for r in rings])
-        self.size = np.concatenate([np.full(len(r.pts), len(r.pts)) for r in rings])
-        nxt = np.concatenate([np.roll(r.pts, -1, axis=0) for r in rings])
+        self.size = np.repeat(sizes, sizes)
+        nxt_i = np.arange(1, len(self.pts) + 1)
+        nxt_i[np.cumsum(sizes) - 1] = first          # each ring's last vertex -> its first
+        nxt = self.pts[nxt_i]
         self.ab = nxt - self.pts
         self.den = np.einsum("ij,ij->i", self.ab, self.ab)
         self.len = np.sqrt(self.den)
         self.perimeter = np.array([r.perimeter for r in rings])
 
 
+class _NotchTable:
+    """Every notch against every boundary point, in (notches, points) arrays (built once
+    per round): notch-to-notch distances, and the plain cut ends of :func:`far_ends`
+    (ring vertices, then feet of perpendiculars) with their validity, ring, arc position
+    and distance."""
+
+    def __init__(self, notches: list[Notch], rings: list[Ring],
+                 bd: _Boundary | None = None, st: DudeSettings | None = None) -> None:
+        self.pts = np.array([u.pt for u in notches], dtype=np.float64).reshape(-1, 2)
+        self.arc = [float(rings[u.ring].arc[u.idx]) for u in notches]
+        vx, vy = self.pts[:, 0:1], self.pts[:, 1:2]
+        self.dist = np.hypot(self.pts[None, :, 0] - vx, self.pts[None, :, 1] - vy).tolist()
+        if bd is None or st is None:
+            self.tips = None
+            return
+        vr = np.array([u.ring for u in notches], dtype=bd.ring.dtype)[:, None]
+        vi = np.array([u.idx for u in notches], dtype=bd.idx.dtype)[:, None]
+        same = bd.ring == vr
+        near_v = same & (((bd.idx - vi) % bd.size <= 1) | ((vi - bd.idx) % bd.size <= 1))
+        # perpendicular feet on edges facing v (v on the interior = left side)
+        rx = vx - bd.pts[:, 0]
+        ry = vy - bd.pts[:, 1]
+        ok = bd.den > 1e-12
+        t = np.where(ok, (rx * bd.ab[:, 0] + ry * bd.ab[:, 1]) / np.where(ok, bd.den, 1.0),
+                     -1.0)
+        cross = bd.ab[:, 0] * ry - bd.ab[:, 1] * rx
+        own_edge = same & ((bd.idx == vi) | ((bd.idx + 1) % bd.size == vi))
+        sel = ok & (t > 0.0) & (t < 1.0) & (cross > 0) & ~own_edge
+        k, nb = t.shape
+        px = np.concatenate([np.broadcast_to(bd.pts[:, 0], (k, nb)),
+                             bd.pts[:, 0] + t * bd.ab[:, 0]], axis=1)
+        py = np.concatenate([np.broadcast_to(bd.pts[:, 1], (k, nb)),
+                             bd.pts[:, 1] + t * bd.ab[:, 1]], axis=1)
+        ring = np.concatenate([bd.ring, bd.ring])
+        arc = np.concatenate([np.broadcast_to(bd.arc, (k, nb)), bd.arc + t * bd.len], axis=1)
+        dist = np.hypot(px - vx, py - vy)
+        # sliver cuts (ends close along the notch's own ring, §9.2) are no candidates
+        per = np.array([float(rings[u.ring].perimeter) for u in notches])[:, None]
+        va = np.array(self.arc)[:, None]
+        dd = np.where(per > 0, np.abs(arc - va) % np.where(per > 0, per, 1.0), 0.0)
+        not_sliver = (ring != vr) | (np.minimum(dd, per - dd) > st.sliver_factor * st.tau_px)
+        valid = np.concatenate([~near_v, sel], axis=1) & (dist >= 1.0) & not_sliver
+        self.tips = (valid, px, py, ring, arc, dist)
+
+
 def far_ends(v: Notch, vi: int, notches: list[Notch], rings: list[Ring],
-              bd: _Boundary, st: DudeSettings) -> tuple[list[End], list[End]]:
-    """Candidate far ends of cuts from notch ``v``: other notches and plain points.
+              bd: _Boundary, st: DudeSettings, nt: _NotchTable | None = None
+              ) -> tuple[list[End], list[End]]:
+    """Candidate far ends of cuts from notch ``v`` (``notches[vi]``): other notches and
+    plain points.
 
     Plain points are the ring vertices and the feet of the perpendiculars from ``v`` on
     the ring edges that face it; the ``max_tip_candidates`` nearest are returned. Ends
     whose cut would be a sliver cut (§9.2) are skipped.
     """
     tau = st.tau_px
+    if nt is None or nt.tips is None:
+        nt = _NotchTable(notches, rings, bd, st)
+    assert nt.tips is not None
     per = float(rings[v.ring].perimeter)
     va = float(rings[v.ring].arc[v.idx])
     limit = st.sliver_factor * tau
 
-    def not_sliver(ring: npt.NDArray[np.intp], arc: npt.NDArray[np.float64]
-                   ) -> npt.NDArray[np.bool_]:
-        dd = np.abs(arc - va) % per if per > 0 else np.zeros_like(arc)
-        return (ring != v.ring) | (np.minimum(dd, per - dd) > limit)
+    def not_sliver1(ring: int, arc: float) -> bool:
+        if ring != v.ring:
+            return True
+        dd = abs(arc - va) % per if per > 0 else 0.0
+        return min(dd, per - dd) > limit
 
+    dist = nt.dist[vi]
+    cand = [(dist[j], j) for j, u in enumerate(notches)
+            if not (j == vi or (u.ring == v.ring and u.idx == v.idx))]
+    cand.sort(key=lambda t: t[0])
     notch_ends = []
-    for j, u in enumerate(notches):
-        if j == vi or (u.ring == v.ring and u.idx == v.idx):
-            continue
-        notch_ends.append(End(u.pt, u.ring, float(rings[u.ring].arc[u.idx]), j,
-                               float(np.hypot(*(u.pt - v.pt)))))
-    notch_ends.sort(key=lambda e: e.length)
-    notch_ends = [e for e in notch_ends[:st.max_notch_candidates]
-                  if not_sliver(np.array([e.ring]), np.array([e.arc]))[0]]
-    # ring vertices, not v itself nor its ring neighbours
-    same = bd.ring == v.ring
-    near_v = same & (((bd.idx - v.idx) % bd.size <= 1) | ((v.idx - bd.idx) % bd.size <= 1))
-    # perpendicular feet on edges facing v (v on the interior = left side)
-    rel = v.pt - bd.pts
-    ok = bd.den > 1e-12
-    t = np.where(ok, np.einsum("ij,ij->i", rel, bd.ab) / np.where(ok, bd.den, 1.0), -1.0)
-    cross = bd.ab[:, 0] * rel[:, 1] - bd.ab[:, 1] * rel[:, 0]
-    own_edge = same & ((bd.idx == v.idx) | ((bd.idx + 1) % bd.size == v.idx))
-    sel = ok & (t > 0.0) & (t < 1.0) & (cross > 0) & ~own_edge
-    P = np.concatenate([bd.pts[~near_v], bd.pts[sel] + t[sel, None] * bd.ab[sel]])
-    R = np.concatenate([bd.ring[~near_v], bd.ring[sel]])
-    A = np.concatenate([bd.arc[~near_v], bd.arc[sel] + t[sel] * bd.len[sel]])
-    L = np.hypot(P[:, 0] - v.pt[0], P[:, 1] - v.pt[1])
-    keep = (L >= 1.0) & not_sliver(R, A)
-    P, R, A, L = P[keep], R[keep], A[keep], L[keep]
+    for length, j in cand[:st.max_notch_candidates]:
+        u = notches[j]
+        if not_sliver1(u.ring, nt.arc[j]):
+            notch_ends.append(End(u.pt, u.ring, nt.arc[j], j, length))
+    valid, px, py, ring, arc, dist_all = nt.tips
+    at = np.flatnonzero(valid[vi])
+    L = dist_all[vi, at]
     k = st.max_tip_candidates
     if len(L) > k:
         part = np.argpartition(L, k)[:k]
-        P, R, A, L = P[part], R[part], A[part], L[part]
+        at, L = at[part], L[part]
     order = np.argsort(L, kind="stable")
-    tips = [End(P[i], int(R[i]), float(A[i]), -1, float(L[i])) for i in order]
+    at = at[order]
+    X, Y = px[vi, at], py[vi, at]
+    tips = [End(np.array([x, y]), r, a, -1, d) for x, y, r, a, d in
+            zip(X.tolist(), Y.tolist(), ring[at].tolist(), arc[vi, at].tolist(),
+                L[order].tolist())]
     return notch_ends, tips
 
 
@@ -174,14 +262,26 @@ def cut_sets(notches: list[Notch], rings: list[Ring], vis: npt.NDArray[np.bool_]
     tau = st.tau_px
     sets: list[CutSet] = []
     bd = _Boundary(rings)
+    nt = _NotchTable(notches, rings, bd, st)
+    # far ends of every notch, then one raster test of all their cuts
+    all_ends = []
     for vi, v in enumerate(notches):
-        notch_ends, tips = far_ends(v, vi, notches, rings, bd, st)
-        ends = notch_ends + tips
+        notch_ends, tips = far_ends(v, vi, notches, rings, bd, st, nt)
+        all_ends.append(notch_ends + tips)
+    counts = [len(e) for e in all_ends]
+    if sum(counts) == 0:
+        return sets
+    P1 = np.array([e.pt for ends in all_ends for e in ends])
+    P0 = np.repeat(nt.pts, counts, axis=0)
+    code = vis.astype(np.uint8) | (border.astype(np.uint8) << 1)
+    clear_all = segments_clear(vis, border, P0, P1, 1.5, code).tolist()
+    first = 0
+    for vi, v in enumerate(notches):
+        ends = all_ends[vi]
+        clear = clear_all[first:first + len(ends)]
+        first += len(ends)
         if not ends:
             continue
-        P1 = np.array([e.pt for e in ends])
-        P0 = np.repeat(v.pt[None, :], len(ends), axis=0)
-        clear = segments_clear(vis, border, P0, P1, 1.5)
         vis_ends = [e for e, c in zip(ends, clear) if c]
         if not vis_ends:
             continue

@@ -128,7 +128,7 @@ class IncrementalSegmenter:
         domain = free_raw | free_clean
         prev = None
         if shift is not None and self._labels is not None:
-            prev = shift_into(self._labels, grid.shape, *shift)
+            prev = shift_into(self._labels, grid.shape, *shift, reuse=True)  # read only
         reason = ""
         if prev is None:
             reason = "no compatible previous state"
@@ -148,7 +148,7 @@ class IncrementalSegmenter:
         self._geom = grid
         self._data = grid.data.copy()
         self._free_raw, self._free_clean = free_raw, free_clean
-        out = np.where(free_raw, labels, 0).astype(np.int32)
+        out = np.multiply(labels, free_raw, dtype=np.int32)   # 0 off the free cells
         self.last_update_info = UpdateInfo(mode, time.perf_counter() - t0, n_areas,
                                            n_cells, len(label_counts(out)), reason)
         return out
@@ -278,7 +278,8 @@ class IncrementalSegmenter:
         n, lab = cv2.connectedComponents(rest[box].astype(np.uint8), connectivity=8)
         if n <= 1:
             return
-        area = np.bincount(lab[free_raw[box]].ravel(), minlength=n)
+        rr, cc = np.nonzero(rest[box])             # the few cells of the components
+        area = np.bincount(lab[rr, cc][free_raw[box][rr, cc]], minlength=n)
         min_px = self.params.min_region_area_m2 / (res * res)
         sub = labels[box]
         for k in np.flatnonzero(area >= min_px).tolist():
@@ -347,9 +348,14 @@ class IncrementalSegmenter:
         if not dirty and blobs is None:
             self._leftovers(labels, free_raw, domain, res)
             return labels, "unchanged", 0, 0, ""
-        lut = np.zeros(max(max(old_area, default=0), max(dirty, default=0)) + 2, dtype=bool)
-        lut[list(dirty)] = True
-        work = lut[labels]
+        if len(dirty) <= 4:     # a few comparisons are faster than a table look-up
+            work = np.zeros(labels.shape, dtype=bool)
+            for i in dirty:
+                work |= labels == i
+        else:
+            lut = np.zeros(max(max(old_area, default=0), max(dirty)) + 2, dtype=bool)
+            lut[list(dirty)] = True
+            work = lut[labels]
         if blobs is not None:
             work |= blobs
         n_work = int(work.sum())
@@ -364,7 +370,7 @@ class IncrementalSegmenter:
             return labels, "unchanged", 0, 0, ""
         lab_c = labels[box]
         work_c = work[box]
-        old_c = np.where(work_c, lab_c, 0)
+        old_c = np.multiply(lab_c, work_c, dtype=np.int32)
         lab_c[work_c] = 0
         n_areas, alab = cv2.connectedComponents(work_c.astype(np.uint8), connectivity=8)
         temp_ids: list[int] = []
@@ -406,17 +412,29 @@ class IncrementalSegmenter:
         lab_w = labels[win]
         fc_w = free_clean[win]
         used: set[int] = set()
-        for _c, a, b in cand[:_MAX_SEAM_TESTS]:
+        tests = cand[:_MAX_SEAM_TESTS]
+        from scipy import ndimage
+        objs = ndimage.find_objects(lab_w, max_label=max(max(a, b) for _c, a, b in tests))
+        hw, ww = lab_w.shape
+        for _c, a, b in tests:
             new, old = (a, b) if a in redone else (b, a)
             if new in used or old in used:
                 continue
-            both = (lab_w == new) | (lab_w == old)
-            bb = bbox(both, 1)
-            union = np.pad((both[bb] & fc_w[bb]).astype(np.uint8), 1)
+            sa, sb = objs[new - 1], objs[old - 1]
+            if sa is None or sb is None:
+                continue
+            # bounding box of both pieces' cells in the window, grown by one cell
+            bb = (slice(max(0, min(sa[0].start, sb[0].start) - 1),
+                        min(hw, max(sa[0].stop, sb[0].stop) + 1)),
+                  slice(max(0, min(sa[1].start, sb[1].start) - 1),
+                        min(ww, max(sa[1].stop, sb[1].stop) + 1)))
+            sub = lab_w[bb]
+            both = (sub == new) | (sub == old)
+            union = np.pad((both & fc_w[bb]).astype(np.uint8), 1)
             if cv2.connectedComponents(union, connectivity=4)[0] != 2:
                 continue
             if max_concavity(union) < tau_px:
-                lab_w[both & (lab_w == new)] = old
+                sub[sub == new] = old
                 used |= {new, old}
 
 

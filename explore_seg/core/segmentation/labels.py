@@ -40,20 +40,28 @@ def fill_gaps(labels: npt.NDArray[np.int32], domain: npt.NDArray[np.bool_],
     c0, c1 = max(0, cols[0] - 1), min(labels.shape[1], cols[-1] + 2)
     lab = labels[r0:r1, c0:c1]
     tgt = todo[r0:r1, c0:c1].copy()
-    # grey dilation on ranks (float32 is exact below 2**24; ids may be larger)
-    uniq, rank = _ranks(lab)
+    # grey dilation (the largest id around wins) on the ids themselves when they fit in
+    # 16 bits, else on their ranks (float32 is exact below 2**24; ids may be larger)
+    top = int(lab.max())
+    uniq = None
+    if top < 256:
+        rank = lab.astype(np.uint8)
+    elif top < 65536:
+        rank = lab.astype(np.uint16)
+    else:
+        uniq, rank = _ranks(lab)
     k = np.ones((3, 3), np.uint8)
     for _ in range(max_iter):
         grown = cv2.dilate(rank, k)
         put = tgt & (grown > 0)
         if not put.any():
             break
-        rank[put] = grown[put]
+        np.copyto(rank, grown, where=put)
         tgt &= ~put
         if not tgt.any():
             break
     filled = todo[r0:r1, c0:c1] & (rank > 0)
-    lab[filled] = uniq[rank[filled].astype(np.int64)]
+    lab[filled] = rank[filled] if uniq is None else uniq[rank[filled].astype(np.int64)]
 
 
 def _ranks(lab: npt.NDArray[np.int32]
@@ -72,15 +80,48 @@ def _ranks(lab: npt.NDArray[np.int32]
     return uniq, lut[lab]
 
 
+#: From this many values on, :func:`label_counts` counts with OpenCV's histogram.
+_HIST_MIN_SIZE = 1 << 15
+
+
 def label_counts(values: npt.NDArray[np.integer]) -> dict[int, int]:
     """{id: count} of the ids > 0 in ``values`` (ids are bounded by the id counter)."""
     v = values.ravel()
     if v.size == 0:
         return {}
-    c = np.bincount(v)          # labels are never negative
+    top = int(v.max())
+    if v.size >= _HIST_MIN_SIZE and top < 65536 and int(v.min()) >= 0:
+        # OpenCV's histogram of the 16-bit ids: exact counts (float32, < 2**24 cells),
+        # several times faster than bincount's cast to intp on large images
+        c = cv2.calcHist([v.astype(np.uint16).reshape(1, -1)], [0], None, [top + 1],
+                         [0, top + 1]).ravel().astype(np.int64)
+    else:
+        c = np.bincount(v)          # labels are never negative
     c[0] = 0
     nz = np.flatnonzero(c)
     return dict(zip(nz.tolist(), c[nz].tolist()))
+
+
+def _key_counts(x: npt.NDArray[np.int64], y: npt.NDArray[np.int64]
+                ) -> tuple[list[int], list[int], list[int]]:
+    """Distinct pairs (x, y) in ascending order of (x, y), with their counts.
+
+    ``np.unique`` on ``x * 2**32 + y`` does it; a bincount over ``x * K + (y - y0)`` does
+    the same without the sort when that table is small.
+    """
+    y0 = int(y.min())
+    k = int(y.max()) - y0 + 1
+    top = (int(x.max()) + 1) * k
+    if top <= _MAX_TABLE:
+        cnt = np.bincount(x * k + (y - y0), minlength=top)
+        keys = np.flatnonzero(cnt)
+        return (keys // k).tolist(), (keys % k + y0).tolist(), cnt[keys].tolist()
+    keys, cnt = np.unique(x * (1 << 32) + y, return_counts=True)
+    return (keys >> 32).tolist(), (keys & 0xFFFFFFFF).tolist(), cnt.tolist()
+
+
+#: Largest count table :func:`_key_counts` allocates instead of sorting.
+_MAX_TABLE = 1 << 21
 
 
 def pair_counts(lab: npt.NDArray[np.int32]) -> dict[tuple[int, int], int]:
@@ -90,12 +131,11 @@ def pair_counts(lab: npt.NDArray[np.int32]) -> dict[tuple[int, int], int]:
         m = (a != b) & (a > 0) & (b > 0)
         if not m.any():
             continue
-        x = np.minimum(a[m], b[m]).astype(np.int64)
-        y = np.maximum(a[m], b[m]).astype(np.int64)
-        keys, cnt = np.unique(x * (1 << 32) + y, return_counts=True)
-        for key, c in zip(keys.tolist(), cnt.tolist()):
-            pair = (key >> 32, key & 0xFFFFFFFF)
-            out[pair] = out.get(pair, 0) + c
+        am, bm = a[m], b[m]
+        x = np.minimum(am, bm).astype(np.int64)
+        y = np.maximum(am, bm).astype(np.int64)
+        for i, j, c in zip(*_key_counts(x, y)):
+            out[(i, j)] = out.get((i, j), 0) + c
     return out
 
 
@@ -107,7 +147,10 @@ def apply_mapping(labels: npt.NDArray[np.int32], mapping: dict[int, int]) -> Non
     top = max(int(labels.max()), max(mapping)) + 1
     lut = np.arange(top, dtype=np.int64)
     lut[np.fromiter(mapping.keys(), np.int64)] = np.fromiter(mapping.values(), np.int64)
-    labels[...] = lut[labels].astype(np.int32)
+    if int(lut.max()) <= np.iinfo(np.int32).max:
+        labels[...] = lut.astype(np.int32)[labels]
+    else:
+        labels[...] = lut[labels].astype(np.int32)
 
 
 def match_ids(new: npt.NDArray[np.int32], old: npt.NDArray[np.int32],
@@ -124,10 +167,8 @@ def match_ids(new: npt.NDArray[np.int32], old: npt.NDArray[np.int32],
         return {}
     a = old[m].astype(np.int64)
     b = new[m].astype(np.int64)
-    keys, cnt = np.unique(a * (1 << 32) + b, return_counts=True)
     best: dict[int, tuple[int, int]] = {}
-    for key, c in zip(keys.tolist(), cnt.tolist()):
-        i, j = key >> 32, key & 0xFFFFFFFF
+    for i, j, c in zip(*_key_counts(a, b)):
         if i not in best or c > best[i][1] or (c == best[i][1] and j < best[i][0]):
             best[i] = (j, c)
     out: dict[int, int] = {}

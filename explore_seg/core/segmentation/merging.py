@@ -73,7 +73,7 @@ def merge_regions(labels: npt.NDArray[np.int32], out_mask: npt.NDArray[np.bool_]
         Only these ids may be merged away (None: all ids).
     """
     areas = {k: 0 for k in label_counts(labels)}
-    areas.update(label_counts(labels[out_mask]))
+    areas.update(label_counts(np.multiply(labels, out_mask, dtype=labels.dtype)))
     if not areas:
         return
     cand = set(areas) if candidates is None else {c for c in candidates if c in areas}
@@ -83,16 +83,17 @@ def merge_regions(labels: npt.NDArray[np.int32], out_mask: npt.NDArray[np.bool_]
     thin: set[int] = set()
     if params.min_region_width_m > 0 and cand:
         half_w = 0.5 * params.min_region_width_m / res
-        dist = cv2.distanceTransform((labels > 0).astype(np.uint8), cv2.DIST_L2, 3)
         # a region is thin when no cell is farther than half the width from its border;
-        # borders between regions count as borders too
+        # borders between regions count as borders too (one distance transform to the
+        # union of both: the chamfer distance to a union is the smaller of the two)
         edge = np.zeros(labels.shape, dtype=bool)
-        edge[:, :-1] |= labels[:, :-1] != labels[:, 1:]
-        edge[:, 1:] |= labels[:, :-1] != labels[:, 1:]
-        edge[:-1, :] |= labels[:-1, :] != labels[1:, :]
-        edge[1:, :] |= labels[:-1, :] != labels[1:, :]
-        dist2 = cv2.distanceTransform((~edge).astype(np.uint8), cv2.DIST_L2, 3)
-        dd = np.minimum(dist, dist2)
+        ne = labels[:, :-1] != labels[:, 1:]
+        edge[:, :-1] |= ne
+        edge[:, 1:] |= ne
+        ne = labels[:-1, :] != labels[1:, :]
+        edge[:-1, :] |= ne
+        edge[1:, :] |= ne
+        dd = cv2.distanceTransform(((labels > 0) & ~edge).astype(np.uint8), cv2.DIST_L2, 3)
         wide = label_counts(labels[dd >= half_w])
         thin = {k for k in cand if k not in wide}
     dropped: set[int] = set()

@@ -15,7 +15,9 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.segmentation.params import DudeSettings
-from explore_seg.core.segmentation.polygon import (dp_keep, hull_indices, seg_dist,
+from explore_seg.core.segmentation.polygon import (dp_keep, dp_keep_list, hull_indices,
+                                                   hull_indices_list, point_segment_dists,
+                                                   seg_dist_xy,
                                                    signed_area)
 
 
@@ -28,7 +30,8 @@ class Ring:
     perimeter: float = field(init=False)
 
     def __post_init__(self) -> None:
-        seg = np.hypot(*(np.roll(self.pts, -1, axis=0) - self.pts).T)
+        nxt = np.concatenate([self.pts[1:], self.pts[:1]])
+        seg = np.hypot(nxt[:, 0] - self.pts[:, 0], nxt[:, 1] - self.pts[:, 1])
         self.arc = np.concatenate([[0.0], np.cumsum(seg)[:-1]])
         self.perimeter = float(seg.sum())
 
@@ -57,7 +60,8 @@ def _simplify_ring(contour: npt.NDArray[np.int32], eps: float, want_positive: bo
         return None
     pts = pts.astype(np.float64)
     # drop consecutive duplicates
-    keep = np.any(pts != np.roll(pts, 1, axis=0), axis=1)
+    prev = np.concatenate([pts[-1:], pts[:-1]])
+    keep = (pts[:, 0] != prev[:, 0]) | (pts[:, 1] != prev[:, 1])
     pts = pts[keep]
     if len(pts) < 3:
         return None
@@ -101,62 +105,67 @@ def trace_rings(mask: npt.NDArray[np.uint8], st: DudeSettings
 # ------------------------------------------------------------------- notches: outer ring
 
 
-def _pocket_candidates(pts: npt.NDArray[np.float64], ring_idx: npt.NDArray[np.intp],
-                       tau: float, depth: int, max_depth: int
+def _pocket_candidates(pts: list[list[float]], tau: float, depth: int, max_depth: int
                        ) -> tuple[list[int], list[int]]:
-    """Notch candidates (ring indices) of one pocket chain and its nested dents.
+    """Notch candidates (chain indices) of one pocket chain and its nested dents.
 
-    ``pts`` is the pocket chain from one bridge end to the other. Its convex hull gives
-    the chain's extreme points (own candidates, simplified with 0.75 tau). Between two
-    consecutive hull vertices the free space bulges into the pocket; the hull of such a
-    bulge has its own dents, which are searched recursively (simplified pocket tree:
-    nested hulls instead of a cut search inside the pocket). An own candidate is a
-    shallow bump and dropped when it lies within tau/2 of the segment joining its
-    neighbours among the chain ends, kids' bridge ends, kids' notches and own
-    candidates (§6.3.6).
+    ``pts`` is the pocket chain from one bridge end to the other (integer ``[x, y]``
+    points). Its convex hull gives the chain's extreme points (own candidates,
+    simplified with 0.75 tau). Between two consecutive hull vertices the free space
+    bulges into the pocket; the hull of such a bulge has its own dents, which are
+    searched recursively (simplified pocket tree: nested hulls instead of a cut search
+    inside the pocket). An own candidate is a shallow bump and dropped when it lies
+    within tau/2 of the segment joining its neighbours among the chain ends, kids'
+    bridge ends, kids' notches and own candidates (§6.3.6).
 
     Returns
     -------
     notches : list of int
-        Ring indices of the candidates kept at this level and below.
+        Chain indices of the candidates kept at this level and below, ascending.
     bridge_ends : list of int
-        Ring indices of the bridge ends of the dents that produced candidates.
+        Chain indices of the bridge ends of the dents that produced candidates.
     """
     m = len(pts)
     if m < 3 or depth > max_depth:
         return [], []
-    h = hull_indices(pts)
-    h = np.union1d(h, [0, m - 1])
-    hk = dp_keep(pts[h], 0.75 * tau)
-    own = [int(h[k]) for k in hk if 0 < h[k] < m - 1]
-    kid_notches: list[int] = []      # local chain indices
+    h = _with_ends(hull_indices_list(pts), m)
+    own = [h[k] for k in dp_keep_list([pts[i] for i in h], 0.75 * tau) if 0 < h[k] < m - 1]
+    kid_notches: list[int] = []
     kid_ends: list[int] = []
     for a, b in zip(h[:-1], h[1:]):
         if b - a < 2:
             continue
         bulge = pts[a:b + 1]
-        hb = np.union1d(hull_indices(bulge), [0, len(bulge) - 1])
+        hb = _with_ends(hull_indices_list(bulge), len(bulge))
         for c, d in zip(hb[:-1], hb[1:]):
             if d - c < 2:
                 continue
             lo, hi = a + c, a + d
-            sub, sub_ends = _pocket_candidates(pts[lo:hi + 1], np.arange(lo, hi + 1),
-                                               tau, depth + 1, max_depth)
+            sub, sub_ends = _pocket_candidates(pts[lo:hi + 1], tau, depth + 1, max_depth)
             if sub:
-                kid_notches.extend(sub)
-                kid_ends.extend([lo, hi] + sub_ends)
+                kid_notches.extend(lo + k for k in sub)
+                kid_ends.extend([lo, hi] + [lo + k for k in sub_ends])
     walk = sorted(set([0, m - 1] + kid_ends + kid_notches + own))
     pos = {k: i for i, k in enumerate(walk)}
     kept = []
+    half_tau = 0.5 * tau
     for k in own:
         i = pos[k]
         if i == 0 or i == len(walk) - 1:
             continue
-        if seg_dist(pts[k], pts[walk[i - 1]], pts[walk[i + 1]]) > 0.5 * tau:
+        (px, py), (ax, ay), (bx, by) = pts[k], pts[walk[i - 1]], pts[walk[i + 1]]
+        if seg_dist_xy(px, py, ax, ay, bx, by) > half_tau:
             kept.append(k)
-    local = sorted(set(kept + kid_notches))
-    return ([int(ring_idx[k]) for k in local],
-            [int(ring_idx[k]) for k in set(kid_ends)])
+    return sorted(set(kept + kid_notches)), list(set(kid_ends))
+
+
+def _with_ends(h: list[int], m: int) -> list[int]:
+    """Sorted hull indices ``h`` with the chain ends 0 and m - 1 added."""
+    if not h or h[0] != 0:
+        h = [0] + h
+    if h[-1] != m - 1:
+        h = h + [m - 1]
+    return h
 
 
 def outer_features(ring: Ring, tau: float, max_depth: int
@@ -164,27 +173,32 @@ def outer_features(ring: Ring, tau: float, max_depth: int
     """Notches ``(index, concavity)`` and feature indices of the outer ring (§6)."""
     pts = ring.pts
     n = len(pts)
-    hull = hull_indices(pts)
+    hull = hull_indices(pts).tolist()
     if len(hull) < 3:
         return [], list(range(n))
-    notches: list[tuple[int, float]] = []
-    feats: set[int] = set(int(i) for i in hull)
+    plist = pts.tolist()
+    feats: set[int] = set(hull)
     nh = len(hull)
+    cands: list[tuple[int, int, int]] = []      # (vertex, bridge end a, bridge end b)
     for k in range(nh):
-        a = int(hull[k])
-        b = int(hull[(k + 1) % nh])
+        a = hull[k]
+        b = hull[(k + 1) % nh]
         gap = (b - a) % n
         if gap < 2:
             continue
-        chain_idx = (a + np.arange(gap + 1)) % n
-        chain = pts[chain_idx]
-        cand, ends = _pocket_candidates(chain, chain_idx, tau, 0, max_depth)
-        feats.update(ends)
-        for i in cand:
-            conc = seg_dist(pts[i], pts[a], pts[b])
-            if conc >= tau:
-                notches.append((i, conc))
-                feats.add(i)
+        chain = plist[a:a + gap + 1] if a + gap < n else plist[a:] + plist[:a + gap + 1 - n]
+        cand, ends = _pocket_candidates(chain, tau, 0, max_depth)
+        feats.update((a + i) % n for i in ends)
+        cands += [((a + c) % n, a, b) for c in cand]
+    if not cands:
+        return [], sorted(feats)
+    idx = np.array(cands, dtype=np.intp)
+    conc = point_segment_dists(pts[idx[:, 0]], pts[idx[:, 1]], pts[idx[:, 2]]).tolist()
+    notches: list[tuple[int, float]] = []
+    for (i, _a, _b), c in zip(cands, conc):
+        if c >= tau:
+            notches.append((i, c))
+            feats.add(i)
     return notches, sorted(feats)
 
 
