@@ -302,11 +302,19 @@ class ObjectCostmapNode(Node):
         self._observe("clock", self.get_clock().now().nanoseconds, period_ns)
         processed = self.frames_processed
         self._tick_inner()
-        reason = self._stall.tick(bool(self._depths), self.frames_processed > processed,
+        reason = self._stall.tick(self._frames_waiting(), self.frames_processed > processed,
                                   self._wait_reason)
         if reason is not None:
             self._warn("stall", f"camera frames arrive but none was processed for "
                                 f"{self._lp.params.stall_periods} periods: {reason}")
+
+    def _frames_waiting(self) -> bool:
+        """A buffered depth image is due (at least the least gap after the last processed
+        one): the buffer still holding the processed ones is no stall."""
+        if self._last_depth_ns is None:
+            return bool(self._depths)
+        due_ns = self._last_depth_ns + int(_MIN_GAP_PERIODS / self.params.rate_hz * 1e9)
+        return any(_stamp_ns(d) >= due_ns for d in self._depths)
 
     def _wait_reason(self) -> str:
         p = self.params

@@ -115,6 +115,25 @@ def test_odometry_on_another_time_base_is_reported_by_the_stall_watchdog(ros):
     assert node.frames_processed == 0
 
 
+def test_a_buffer_of_processed_frames_is_no_stall(ros):
+    # After the last frame was processed, the buffer still holds it (and older ones): no
+    # frame is due, so the watchdog stays quiet until a frame a period later waits.
+    node = _costmap(ros, **{"input.stall_periods": 2})
+    node._info = K
+    for k in range(5):
+        node._pose_in._on_odom(_odom(5 * S + k * S // 10))          # poses end at 5.4 s
+    for k in range(3):
+        _frame(node, 10 * S + k * S // 2)
+    node._last_depth_ns = 11 * S                          # the newest one was processed
+    for _ in range(8):                                    # stall_periods x 4 ticks
+        node._tick()
+    assert node._warn.text("stall") == ""
+    _frame(node, 11 * S + S // 2)                         # due, but no pose reaches it
+    for _ in range(8):                                    # stall_periods x 4 ticks
+        node._tick()
+    assert "no pose newer than image stamp 11.500 s" in node._warn.text("stall")
+
+
 # ------------------------------------------------------------------ finding 3
 def _selector(ros, **extra):
     from explore_seg.selector_node import TargetSelectorNode
