@@ -308,12 +308,16 @@ class ObjectCostmapNode(Node):
             self._warn("stall", f"camera frames arrive but none was processed for "
                                 f"{self._lp.params.stall_periods} periods: {reason}")
 
+    def _min_gap_ns(self) -> int:
+        """Least stamp gap between two processed frames (ns)."""
+        return int(_MIN_GAP_PERIODS / self.params.rate_hz * 1e9)
+
     def _frames_waiting(self) -> bool:
         """A buffered depth image is due (at least the least gap after the last processed
         one): the buffer still holding the processed ones is no stall."""
         if self._last_depth_ns is None:
             return bool(self._depths)
-        due_ns = self._last_depth_ns + int(_MIN_GAP_PERIODS / self.params.rate_hz * 1e9)
+        due_ns = self._last_depth_ns + self._min_gap_ns()
         return any(_stamp_ns(d) >= due_ns for d in self._depths)
 
     def _wait_reason(self) -> str:
@@ -383,7 +387,7 @@ class ObjectCostmapNode(Node):
         arrival = self._pose_in.arrival_ns
         poses_flow = (arrival is not None
                       and self.get_clock().now().nanoseconds - arrival < pose_tol_ns)
-        min_gap_ns = int(_MIN_GAP_PERIODS / self.params.rate_hz * 1e9)
+        min_gap_ns = self._min_gap_ns()
         for depth in sorted(self._depths, key=_stamp_ns):
             t = _stamp_ns(depth)
             if self._last_depth_ns is not None and t < self._last_depth_ns + min_gap_ns:

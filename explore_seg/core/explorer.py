@@ -174,7 +174,6 @@ class Explorer:
         self._key: tuple[GridMap, GridMap | None] | None = None
         self._frontiers: list[Frontier] = []
         self._graph: PathGraphs | None = None
-        self._passable: npt.NDArray[np.bool_] | None = None
         self._router = Router(frontier, selection) if selection.strategy == "routed" else None
         self._layer_warning = ""
         self._reported_blacklisted = 0
@@ -274,7 +273,6 @@ class Explorer:
         self._det = det
         self._layer_warning = det.layer_warning
         self._frontiers = det.frontiers
-        self._passable = det.passable
         self._graph = PathGraphs(grid, det.extra_obstacles, self._fp, self._sp, det.passable)
         self._key = (grid, layer)
 
@@ -335,7 +333,9 @@ class Explorer:
         start = self._start_cell(grid, robot_rc, (x, y), warnings)
         router, tour = self._router, None
         if router is not None:
-            frontiers = router.viewpoints(grid, frontiers, self._graph, start, self._passable)
+            assert self._det is not None
+            frontiers = router.viewpoints(grid, frontiers, self._graph, start,
+                                          self._det.passable)
         dist, excluded = self._distances(start, robot_rc, frontiers)
         if router is not None and dist is not None:
             tour = router.tour_costs(grid, frontiers, dist, excluded, self._graph, robot_rc,

@@ -8,6 +8,9 @@ import time
 
 import numpy as np
 
+from explore_seg.core.selection.nav_status import STATUS_ABORTED, STATUS_CANCELED, \
+    STATUS_SUCCEEDED
+
 
 def metrics_from_diagnostics(msg) -> dict[str, float | str]:
     """The ``sim_bridge`` status of a DiagnosticArray as a dict (numbers parsed).
@@ -51,7 +54,8 @@ def boxes_from_markers(msg) -> list[np.ndarray]:
 
 
 #: action_msgs/GoalStatus terminal codes.
-_TERMINAL = {4: "succeeded", 5: "canceled", 6: "aborted"}
+_TERMINAL = {STATUS_SUCCEEDED: "succeeded", STATUS_CANCELED: "canceled",
+             STATUS_ABORTED: "aborted"}
 
 
 def nav_outcomes(ends: list[tuple[int, float, bool]], goal_times: list[float]) -> dict:
