@@ -60,8 +60,8 @@ from explore_seg.core.detector import Detector, DetectorParams
 from explore_seg.core.explorer import Explorer, ExplorerStep
 from explore_seg.core.frontiers import Frontier, object_obstacles
 from explore_seg.core.grid import GridMap
-from explore_seg.core.objects import DepthFrame, ObjectMap, ObjectParams, WallMask, \
-    load_priors, process_frame, wall_mask
+from explore_seg.core.objects import WALL_OCCUPIED_THRESHOLD, DepthFrame, ObjectMap, ObjectParams, \
+    WallMask, load_priors, process_frame, wall_mask
 from explore_seg.core.segmentation import IncrementalSegmenter
 from explore_seg.core.selection import Action, NavOutcome
 from sim_bridge import worlds
@@ -77,8 +77,6 @@ from sim_bridge.world import World
 
 #: Layer name of the object costmap in the navigation stand-in.
 OBJECT_LAYER = "object_costmap"
-#: Occupied threshold of the wall mask (:func:`explore_seg.core.objects.wall_mask`'s).
-WALL_OCCUPIED_THRESHOLD = 65
 #: One black pixel, broadcast to the image passed to the oracle detector (which reads
 #: only the semantic and instance images).
 _BLACK = np.zeros(3, dtype=np.uint8)

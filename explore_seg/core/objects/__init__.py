@@ -72,7 +72,7 @@ from explore_seg.core.objects.params import (ORIENTATION_METHODS, POSE_SOURCES, 
                                              parse_class_ids)
 from explore_seg.core.objects.pipeline import FrameResult, process_frame
 from explore_seg.core.objects.priors import SizePrior, default_priors_path, load_priors
-from explore_seg.core.objects.walls import WallMask, wall_mask
+from explore_seg.core.objects.walls import WALL_OCCUPIED_THRESHOLD, WallMask, wall_mask
 
 __all__ = [
     # params, priors
@@ -86,7 +86,7 @@ __all__ = [
     "DepthFrame", "frame_points", "view_cut",
     # boxes, walls, detections, legs
     "Object3D", "MAX_SURFACE_POINTS", "surface_points", "clamp_to_prior", "fit_box",
-    "plausible_extent", "WallMask", "wall_mask", "rank_clusters", "select_cluster",
+    "plausible_extent", "WALL_OCCUPIED_THRESHOLD", "WallMask", "wall_mask", "rank_clusters", "select_cluster",
     "DetectionClusters", "cluster_detection", "fit_cluster", "segment_detection",
     "object_from_detection", "assign_clusters", "scan_legs", "scan_posts", "group_legs",
     "unknown_objects",

@@ -13,6 +13,9 @@ import numpy.typing as npt
 from explore_seg.core.grid import FREE_THRESHOLD, GridMap
 from explore_seg.core.objects.params import ObjectParams
 
+#: Occupancy from which a map cell counts as occupied for the wall mask.
+WALL_OCCUPIED_THRESHOLD = 65
+
 
 @dataclass(frozen=True)
 class WallMask:
@@ -50,7 +53,8 @@ class WallMask:
         return out
 
 
-def wall_mask(grid: GridMap, params: ObjectParams, occupied_threshold: int = 65) -> WallMask:
+def wall_mask(grid: GridMap, params: ObjectParams,
+              occupied_threshold: int = WALL_OCCUPIED_THRESHOLD) -> WallMask:
     """The walls of a 2D map: its long occupied structures, grown by ``wall_margin_m``.
 
     Occupied cells (``>= occupied_threshold``) form 8-connected components; those whose
