@@ -1,0 +1,314 @@
+"""Paired A/B comparison of parameter settings in seeded lock-step runs.
+
+Every arm explores the same worlds with the same strategies from the same seeded starts
+(the benchmark's settings: paper camera mount, sim time limit per m^2), differing only by
+the parameter overrides the arm names, so the start-to-start spread cancels in the
+per-seed ratios. Use it to decide a default before a full ``run_bench.py`` rerun, and to
+isolate one change (e.g. the segmenter's clutter filling) from everything else that
+landed since the benchmark was last run.
+
+An arm is ``NAME`` (no override: today's defaults) or ``NAME:KEY=VALUE[;KEY=VALUE...]``,
+where KEY is
+
+* ``explorer.SECTION.FIELD``: a field of :class:`ExplorerParams` (SECTION frontier,
+  selection, segmentation, objects or rrt), on top of ``config/explorer.yaml``;
+* ``sim.FIELD``: a :class:`SimParams` field (e.g. ``sim.nav_inflation_soft_margin_m``);
+* ``lockstep.FIELD``: a :class:`LockstepParams` field (e.g. ``lockstep.nav_feedback``).
+
+Values are parsed by the field's type (bool: true/false/1/0). The first arm is the
+reference of the ratios. Runs are appended to ``OUT/runs.jsonl`` as they finish; a second
+call with the same ``--out`` runs only what is missing (same arm names must mean the same
+overrides: they are stored in ``OUT/arms.json`` and checked).
+
+Usage::
+
+    .venv/bin/python bench/paired.py --out out/paired_seg --strategies paper \\
+        --worlds house_cluttered,shared/house_cluttered --seeds 0-19 \\
+        --arm new --arm old:explorer.segmentation.clutter_max_area_m2=0
+
+prints, per world and strategy, runs complete, contacts, median time to 95 % per arm and
+the median of the per-seed T95 ratios against the first arm (with wins / losses), then
+the same over all worlds; ``--md FILE`` also writes that report.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+for _p in (ROOT, ROOT / "bench"):
+    if str(_p) not in sys.path:
+        sys.path.insert(0, str(_p))
+
+import numpy as np  # noqa: E402
+
+from bench.progress import Progress  # noqa: E402
+from bench.worlds import PAPER_CAMERA_MOUNT, load, sim_params_for, sim_time_limit  # noqa: E402
+from sim_bridge.engine import SimParams  # noqa: E402
+from sim_bridge.lockstep import STRATEGIES, ExplorerParams, LockstepParams, \
+    load_explorer_params, run_exploration  # noqa: E402
+
+#: ExplorerParams sections an ``explorer.SECTION.FIELD`` override may name.
+SECTIONS = tuple(f.name for f in dataclasses.fields(ExplorerParams))
+
+
+@dataclasses.dataclass(frozen=True)
+class Arm:
+    """One setting of the comparison: a name and its overrides (key -> text value)."""
+
+    name: str
+    overrides: tuple[tuple[str, str], ...] = ()
+
+    def spec(self) -> str:
+        """The command-line form."""
+        if not self.overrides:
+            return self.name
+        return self.name + ":" + ";".join(f"{k}={v}" for k, v in self.overrides)
+
+
+def parse_arm(text: str) -> Arm:
+    """``NAME`` or ``NAME:KEY=VALUE[;KEY=VALUE...]`` -> :class:`Arm` (keys checked by
+    :func:`build_params`).
+
+    Raises
+    ------
+    ValueError
+        On an empty name or an override without ``=``.
+    """
+    name, _, rest = text.partition(":")
+    name = name.strip()
+    if not name:
+        raise ValueError(f"arm {text!r}: empty name")
+    ovs = []
+    for part in filter(None, (p.strip() for p in rest.split(";"))):
+        key, eq, val = part.partition("=")
+        if not eq or not key.strip():
+            raise ValueError(f"arm {name}: override {part!r} is not KEY=VALUE")
+        ovs.append((key.strip(), val.strip()))
+    return Arm(name, tuple(ovs))
+
+
+def _value(cls: Any, field: str, text: str, key: str) -> Any:
+    """``text`` converted to the type of ``cls``'s default for ``field``."""
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    if field not in fields:
+        raise ValueError(f"{key}: {cls.__name__} has no field {field!r} "
+                         f"(has {', '.join(sorted(fields))})")
+    f = fields[field]
+    default = (f.default if f.default is not dataclasses.MISSING
+               else f.default_factory())  # type: ignore[misc]
+    if isinstance(default, bool):
+        low = text.lower()
+        if low not in ("true", "false", "1", "0"):
+            raise ValueError(f"{key}: expected true/false, got {text!r}")
+        return low in ("true", "1")
+    if isinstance(default, int):
+        return int(text)
+    if isinstance(default, float):
+        return float(text)
+    if isinstance(default, str):
+        return text
+    if isinstance(default, tuple):
+        return tuple(type(default[0])(v) if default else float(v)
+                     for v in text.split(",") if v)
+    raise ValueError(f"{key}: fields of type {type(default).__name__} cannot be overridden")
+
+
+def build_params(arm: Arm, base_explorer: ExplorerParams, base_sim: SimParams,
+                 base_lockstep: LockstepParams) -> tuple[ExplorerParams, SimParams,
+                                                         LockstepParams]:
+    """The three parameter sets of ``arm``: the bases with its overrides applied (each
+    dataclass validates its values).
+
+    Raises
+    ------
+    ValueError
+        On an unknown key or a rejected value.
+    """
+    ex, sim, ls = base_explorer, base_sim, base_lockstep
+    for key, text in arm.overrides:
+        parts = key.split(".")
+        if parts[0] == "explorer" and len(parts) == 3:
+            if parts[1] not in SECTIONS:
+                raise ValueError(f"{key}: no explorer section {parts[1]!r} "
+                                 f"(has {', '.join(SECTIONS)})")
+            sec = getattr(ex, parts[1])
+            sec = dataclasses.replace(sec, **{parts[2]: _value(type(sec), parts[2], text, key)})
+            ex = dataclasses.replace(ex, **{parts[1]: sec})
+        elif parts[0] == "sim" and len(parts) == 2:
+            sim = dataclasses.replace(sim, **{parts[1]: _value(SimParams, parts[1], text, key)})
+        elif parts[0] == "lockstep" and len(parts) == 2:
+            ls = dataclasses.replace(ls, **{parts[1]: _value(LockstepParams, parts[1], text,
+                                                             key)})
+        else:
+            raise ValueError(f"{key}: expected explorer.SECTION.FIELD, sim.FIELD or "
+                             f"lockstep.FIELD")
+    return ex, sim, ls
+
+
+def parse_seeds(text: str) -> list[int]:
+    """``0-19`` / ``1,5,7`` / ``0-4,10`` -> seeds in order, without repeats."""
+    out: list[int] = []
+    for part in filter(None, (p.strip() for p in text.split(","))):
+        if "-" in part:
+            lo, hi = (int(v) for v in part.split("-"))
+            out += [s for s in range(lo, hi + 1) if s not in out]
+        elif int(part) not in out:
+            out.append(int(part))
+    return out
+
+
+# ------------------------------------------------------------------------------ runs
+
+#: Set in the main process before the workers fork.
+_ARMS: dict[str, tuple[ExplorerParams, SimParams, LockstepParams]] = {}
+
+
+def _run(task: tuple[str, str, str, int, float]) -> dict[str, Any]:
+    arm, world_spec, strategy, seed, limit = task
+    ex, sim, ls = _ARMS[arm]
+    world, gt = load(world_spec)
+    t0 = time.process_time()
+    res = run_exploration(world, strategy, seed, max_sim_time_s=limit, params=ls,
+                          sim_params=sim, explorer_params=ex, ground_truth=gt)
+    row = res.summary_row()
+    row.update(arm=arm, cpu_s=round(time.process_time() - t0, 2))
+    return row
+
+
+def _key(r: dict[str, Any]) -> tuple[str, str, str, int]:
+    return (r["arm"], r["world"], r["strategy"], int(r["seed"]))
+
+
+def _t95(r: dict[str, Any]) -> float:
+    v = r.get("time_to_95_s")
+    return float(v) if v is not None and math.isfinite(float(v)) else math.nan
+
+
+def report(rows: list[dict[str, Any]], arms: list[str]) -> str:
+    """Markdown: per world x strategy and overall, per arm: complete / runs, contacts,
+    median T95, and against the first arm the median per-seed T95 ratio with wins
+    (ratio < 0.99) / losses (> 1.01). A seed whose run of either arm never reached 95 %
+    counts in neither ratio."""
+    by = {_key(r): r for r in rows}
+    worlds = list(dict.fromkeys(r["world"] for r in rows))
+    strats = list(dict.fromkeys(r["strategy"] for r in rows))
+    ref = arms[0]
+    lines = [f"Reference arm: `{ref}`; ratio = arm / reference T95, per seed (median; "
+             "wins < 0.99, losses > 1.01).", "",
+             "| world | strategy | arm | complete | contacts | median T95 [s] "
+             "| T95 ratio (median) | wins/losses |", "|---|---|---|---|---|---|---|---|"]
+    overall: dict[tuple[str, str], list[float]] = {}
+    for w in worlds + ["(all)"]:
+        for s in strats:
+            for a in arms:
+                rs = [r for r in rows if r["arm"] == a and r["strategy"] == s
+                      and (w == "(all)" or r["world"] == w)]
+                if not rs:
+                    continue
+                t95 = [_t95(r) for r in rs]
+                ratios = []
+                for r in rs:
+                    b = by.get((ref, r["world"], s, int(r["seed"])))
+                    if b is not None and math.isfinite(_t95(r)) and math.isfinite(_t95(b)):
+                        ratios.append(_t95(r) / _t95(b))
+                fin = [t for t in t95 if math.isfinite(t)]
+                med = f"{np.median(fin):.1f}" if fin else "-"
+                if a == ref:
+                    rat, wl = "1", "-"
+                elif ratios:
+                    rat = f"{np.median(ratios):.3f}"
+                    wl = f"{sum(x < 0.99 for x in ratios)}/{sum(x > 1.01 for x in ratios)}"
+                else:
+                    rat, wl = "-", "-"
+                if w == "(all)":
+                    overall[(s, a)] = ratios
+                lines.append(f"| {w} | {s} | {a} | {sum(int(r['completed']) for r in rs)}/"
+                             f"{len(rs)} | {sum(int(r['collisions']) for r in rs)} | {med} "
+                             f"| {rat} | {wl} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", required=True, help="folder of runs.jsonl and arms.json")
+    ap.add_argument("--worlds", required=True, help="comma-separated world specs")
+    ap.add_argument("--strategies", default="paper",
+                    help=f"comma-separated, from {','.join(STRATEGIES)}")
+    ap.add_argument("--seeds", default="0-19", help="e.g. 0-19 or 1,5,7")
+    ap.add_argument("--arm", action="append", default=[],
+                    help="NAME or NAME:KEY=VALUE[;KEY=VALUE]; the first is the reference "
+                         "(at least two)")
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--max-sim-time", type=float, default=0.0,
+                    help="sim time limit per run in s (0 = the benchmark's per-area limit)")
+    ap.add_argument("--md", default="", help="also write the report to this file")
+    a = ap.parse_args(argv)
+    try:
+        arms = [parse_arm(t) for t in a.arm]
+        if len(arms) < 2 or len({x.name for x in arms}) != len(arms):
+            raise ValueError("give at least two --arm with distinct names")
+        strategies = [s for s in a.strategies.split(",") if s]
+        bad = [s for s in strategies if s not in STRATEGIES]
+        if bad:
+            raise ValueError(f"unknown strategies {bad} (have {', '.join(STRATEGIES)})")
+        seeds = parse_seeds(a.seeds)
+        base = (load_explorer_params(), sim_params_for(PAPER_CAMERA_MOUNT), LockstepParams())
+        for arm in arms:
+            _ARMS[arm.name] = build_params(arm, *base)
+    except ValueError as err:
+        ap.error(str(err))
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    spec_file = out / "arms.json"
+    specs = {x.name: x.spec() for x in arms}
+    if spec_file.exists():
+        old = json.loads(spec_file.read_text())
+        clash = {n: (old[n], s) for n, s in specs.items() if n in old and old[n] != s}
+        if clash:
+            ap.error(f"arm names reused with other overrides in {out}: {clash}")
+        specs = {**old, **specs}
+    spec_file.write_text(json.dumps(specs, indent=1) + "\n")
+    runs_file = out / "runs.jsonl"
+    rows = [json.loads(line) for line in runs_file.read_text().splitlines()
+            ] if runs_file.exists() else []
+    have = {_key(r) for r in rows}
+    worlds = [w for w in a.worlds.split(",") if w]
+    limits = {w: sim_time_limit(float(load(w)[1].explorable_area_m2), a.max_sim_time)
+              for w in worlds}
+    # seed-major so an interrupted comparison holds whole pairs
+    tasks = [(x.name, w, s, seed, limits[w]) for seed in seeds for w in worlds
+             for s in strategies for x in arms if (x.name, w, s, seed) not in have]
+    print(f"[paired] {len(tasks)} runs to do, {len(rows)} kept in {runs_file}", flush=True)
+    if tasks:
+        import multiprocessing as mp
+        bar = Progress(len(tasks), "paired")
+        with mp.get_context("fork").Pool(max(1, a.jobs), maxtasksperchild=10) as pool, \
+                runs_file.open("a") as fh:
+            for r in pool.imap_unordered(_run, tasks):
+                fh.write(json.dumps(r) + "\n")
+                fh.flush()
+                rows.append(r)
+                bar.update(f"{r['arm']} {r['world']} {r['strategy']} {r['seed']}: "
+                           f"{r['stop_reason']} {r['coverage_pct']:.1f} %")
+    wanted = {x.name for x in arms}
+    sel = [r for r in rows if r["arm"] in wanted and r["world"] in worlds
+           and r["strategy"] in strategies and int(r["seed"]) in seeds]
+    text = report(sel, [x.name for x in arms])
+    print(text)
+    if a.md:
+        Path(a.md).write_text(f"Command: `bench/paired.py {' '.join(argv or sys.argv[1:])}`"
+                              "\n\n" + text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,99 @@
+"""bench/paired.py: arms of parameter overrides, their parameters, the paired report, and
+one tiny end-to-end comparison where the arms must differ."""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from bench import paired  # noqa: E402
+from sim_bridge.engine import SimParams  # noqa: E402
+from sim_bridge.lockstep import ExplorerParams, LockstepParams  # noqa: E402
+
+
+def test_parse_arm_plain_and_with_overrides():
+    assert paired.parse_arm("new") == paired.Arm("new")
+    arm = paired.parse_arm("old:explorer.segmentation.clutter_max_extent_m=0; sim.x=1")
+    assert arm.name == "old"
+    assert arm.overrides == (("explorer.segmentation.clutter_max_extent_m", "0"),
+                             ("sim.x", "1"))
+    assert paired.parse_arm(arm.spec()) == arm
+    for bad in (":a=1", "x:novalue", "x:=3"):
+        with pytest.raises(ValueError):
+            paired.parse_arm(bad)
+
+
+def test_build_params_applies_each_override_by_type_and_leaves_the_rest():
+    base = (ExplorerParams(), SimParams(), LockstepParams())
+    arm = paired.parse_arm("a:explorer.segmentation.clutter_max_extent_m=0;"
+                           "sim.nav_inflation_soft_margin_m=0.05;lockstep.nav_feedback=true;"
+                           "explorer.selection.strategy=nearest")
+    ex, sim, ls = paired.build_params(arm, *base)
+    assert ex.segmentation.clutter_max_extent_m == 0.0
+    assert ex.selection.strategy == "nearest"
+    assert sim.nav_inflation_soft_margin_m == 0.05
+    assert ls.nav_feedback is True
+    assert ex.frontier == base[0].frontier
+    assert sim.robot_radius_m == base[1].robot_radius_m
+    assert paired.build_params(paired.Arm("b"), *base) == base
+
+
+@pytest.mark.parametrize("spec", [
+    "a:explorer.nosuch.x=1",                          # unknown section
+    "a:explorer.segmentation.nosuch=1",               # unknown field
+    "a:sim.nav_inflation_soft_margin_m=-1",           # rejected by the dataclass
+    "a:lockstep.nav_feedback=maybe",                  # not a bool
+    "a:other.x=1",                                    # unknown prefix
+])
+def test_build_params_rejects(spec):
+    with pytest.raises(ValueError):
+        paired.build_params(paired.parse_arm(spec), ExplorerParams(), SimParams(),
+                            LockstepParams())
+
+
+def _row(arm, world, seed, t95, completed=1, collisions=0):
+    return {"arm": arm, "world": world, "strategy": "paper", "seed": seed,
+            "time_to_95_s": t95, "completed": completed, "collisions": collisions}
+
+
+def test_report_pairs_by_seed_and_skips_unfinished_pairs():
+    rows = [_row("ref", "w", 0, 100.0), _row("ref", "w", 1, 200.0), _row("ref", "w", 2, 50.0),
+            _row("b", "w", 0, 80.0), _row("b", "w", 1, 220.0, collisions=2),
+            _row("b", "w", 2, None, completed=0)]
+    text = paired.report(rows, ["ref", "b"])
+    line = next(x for x in text.splitlines() if x.startswith("| w | paper | b |"))
+    cells = [c.strip() for c in line.strip("|").split("|")]
+    # complete, contacts, median T95 of the finished runs, median of the ratios 0.8 / 1.1
+    assert cells[3:] == ["2/3", "2", "150.0", "0.950", "1/1"]
+    assert "| (all) | paper | ref | 3/3 | 0 | 100.0 | 1 | - |" in text
+
+
+def test_parse_seeds():
+    assert paired.parse_seeds("0-2,5,1") == [0, 1, 2, 5]
+
+
+def test_tiny_comparison_end_to_end(tmp_path):
+    """Two arms on one short run: a 1 s decision period cannot give the same run as the
+    default, the kept runs are not run again, and a reused arm name is refused."""
+    os.environ.setdefault("EXPLORE_SEG_STRICT", "1")
+    out = tmp_path / "p"
+    args = ["--out", str(out), "--worlds", "eb/corridor_asym", "--seeds", "0",
+            "--max-sim-time", "30", "--jobs", "1", "--arm", "ref",
+            "--arm", "slow:lockstep.decision_period_s=3"]
+    assert paired.main(args) == 0
+    rows = [json.loads(x) for x in (out / "runs.jsonl").read_text().splitlines()]
+    assert sorted(r["arm"] for r in rows) == ["ref", "slow"]
+    by = {r["arm"]: r for r in rows}
+    assert by["ref"]["goals_sent"] != by["slow"]["goals_sent"] or \
+        by["ref"]["path_length_m"] != by["slow"]["path_length_m"]
+    assert paired.main(args) == 0
+    assert len((out / "runs.jsonl").read_text().splitlines()) == 2
+    with pytest.raises(SystemExit):
+        paired.main(args[:-1] + ["slow:lockstep.decision_period_s=2"])
