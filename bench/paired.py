@@ -50,6 +50,7 @@ for _p in (ROOT, ROOT / "bench"):
 import numpy as np  # noqa: E402
 
 from bench.progress import Progress  # noqa: E402
+from bench.store import code_version  # noqa: E402
 from bench.worlds import PAPER_CAMERA_MOUNT, load, sim_params_for, sim_time_limit  # noqa: E402
 from sim_bridge.engine import SimParams  # noqa: E402
 from sim_bridge.lockstep import STRATEGIES, ExplorerParams, LockstepParams, \
@@ -250,7 +251,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--max-sim-time", type=float, default=0.0,
                     help="sim time limit per run in s (0 = the benchmark's per-area limit)")
-    ap.add_argument("--md", default="", help="also write the report to this file")
+    ap.add_argument("--md", default="", help="also write the report to this file (with "
+                    "--title, the command and the code version); BENCHMARKS.md includes "
+                    "bench/results/paired/*.md")
+    ap.add_argument("--title", default="", help="heading of the --md report")
     a = ap.parse_args(argv)
     try:
         arms = [parse_arm(t) for t in a.arm]
@@ -305,8 +309,14 @@ def main(argv: list[str] | None = None) -> int:
     text = report(sel, [x.name for x in arms])
     print(text)
     if a.md:
-        Path(a.md).write_text(f"Command: `bench/paired.py {' '.join(argv or sys.argv[1:])}`"
-                              "\n\n" + text)
+        head = f"### {a.title}\n\n" if a.title else ""
+        cmd = " ".join(argv if argv is not None else sys.argv[1:])
+        cpu = sum(float(r.get("cpu_s", 0.0)) for r in sel)
+        Path(a.md).parent.mkdir(parents=True, exist_ok=True)
+        Path(a.md).write_text(
+            f"{head}Command (code {code_version()}, {time.strftime('%Y-%m-%d')}, "
+            f"{len(sel)} runs, {cpu / 3600:.1f} CPU hours):\n\n```sh\n.venv/bin/python "
+            f"bench/paired.py {cmd}\n```\n\n" + text)
     return 0
 
 

@@ -445,6 +445,7 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
                      f"{row.get('goals', '-')} | {row.get('objects', '-')} | "
                      f"{row.get('object_frames', '-')} |")
         L.append("")
+    L += paired_sections(out)
     n_csv = sum(1 for r in runs if r.get("record") == "csv")
     L += ["Files: `runs.csv` (one row per run), `runs.jsonl.gz` (every run's record without "
           "its per-update timings, which are pooled into histograms: what `--resume` reads "
@@ -457,6 +458,23 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
              "(figures kept, timing cells marked †)." if n_csv else ""), ""]
     md.write_text("\n".join(L))
     return md
+
+
+def paired_sections(out: Path) -> list[str]:
+    """The reports of ``bench/paired.py`` kept in ``out/paired/*.md`` (by name), under one
+    heading: comparisons of parameter settings run since (or beside) the full benchmark,
+    each with its command and code version. Empty when there are none."""
+    files = sorted((out / "paired").glob("*.md")) if (out / "paired").is_dir() else []
+    if not files:
+        return []
+    L = ["## Paired comparisons", "",
+         "Parameter settings compared on the same worlds, strategies and seeded starts with "
+         "`bench/paired.py` (the benchmark's settings; ratio = arm / first arm, per seed). "
+         "These runs are not in the tables above: they are what a change is decided on "
+         "before the full benchmark is rerun.", ""]
+    for f in files:
+        L += [f.read_text().rstrip(), ""]
+    return L
 
 
 def _fmt(v: Any) -> str:

@@ -87,7 +87,9 @@ def test_tiny_comparison_end_to_end(tmp_path):
     args = ["--out", str(out), "--worlds", "eb/corridor_asym", "--seeds", "0",
             "--max-sim-time", "30", "--jobs", "1", "--arm", "ref",
             "--arm", "slow:lockstep.decision_period_s=3"]
-    assert paired.main(args) == 0
+    assert paired.main(args + ["--md", str(out / "r.md"), "--title", "tiny"]) == 0
+    md = (out / "r.md").read_text()
+    assert md.startswith("### tiny\n") and "--arm ref" in md and "| eb/corridor_asym | paper | slow |" in md
     rows = [json.loads(x) for x in (out / "runs.jsonl").read_text().splitlines()]
     assert sorted(r["arm"] for r in rows) == ["ref", "slow"]
     by = {r["arm"]: r for r in rows}
@@ -97,3 +99,17 @@ def test_tiny_comparison_end_to_end(tmp_path):
     assert len((out / "runs.jsonl").read_text().splitlines()) == 2
     with pytest.raises(SystemExit):
         paired.main(args[:-1] + ["slow:lockstep.decision_period_s=2"])
+
+
+def test_benchmark_report_includes_the_kept_paired_reports_in_name_order(tmp_path):
+    from bench import report
+
+    assert report.paired_sections(tmp_path) == []
+    (tmp_path / "paired").mkdir()
+    (tmp_path / "paired" / "b_soft.md").write_text("### soft margin\n\nrows b\n")
+    (tmp_path / "paired" / "a_seg.md").write_text("### segmenter\n\nrows a\n")
+    (tmp_path / "paired" / "notes.txt").write_text("not a report")
+    text = "\n".join(report.paired_sections(tmp_path))
+    assert text.startswith("## Paired comparisons")
+    assert text.index("### segmenter") < text.index("### soft margin")
+    assert "not a report" not in text
