@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import fcntl
 import json
 import math
 import sys
@@ -272,6 +273,11 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(str(err))
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
+    lock = (out / ".lock").open("w")
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        ap.error(f"another bench/paired.py is running on {out}")
     spec_file = out / "arms.json"
     specs = {x.name: x.spec() for x in arms}
     if spec_file.exists():

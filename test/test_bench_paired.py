@@ -75,6 +75,18 @@ def test_report_pairs_by_seed_and_skips_unfinished_pairs():
     assert "| (all) | paper | ref | 3/3 | 0 | 100.0 | 1 | - |" in text
 
 
+def test_a_second_comparison_on_the_same_folder_is_refused_while_one_runs(tmp_path):
+    import fcntl
+
+    (tmp_path / "p").mkdir()
+    with (tmp_path / "p" / ".lock").open("w") as held:
+        fcntl.flock(held, fcntl.LOCK_EX)
+        with pytest.raises(SystemExit):
+            paired.main(["--out", str(tmp_path / "p"), "--worlds", "eb/corridor_asym",
+                         "--arm", "a", "--arm", "b"])
+    assert not (tmp_path / "p" / "runs.jsonl").exists()
+
+
 def test_parse_seeds():
     assert paired.parse_seeds("0-2,5,1") == [0, 1, 2, 5]
 
