@@ -290,6 +290,7 @@ def main(argv: list[str] | None = None) -> int:
     runs_file = out / "runs.jsonl"
     rows = [json.loads(line) for line in runs_file.read_text().splitlines()
             ] if runs_file.exists() else []
+    rows = list({_key(r): r for r in rows}.values())    # a run written twice counts once
     have = {_key(r) for r in rows}
     worlds = [w for w in a.worlds.split(",") if w]
     limits = {w: sim_time_limit(float(load(w)[1].explorable_area_m2), a.max_sim_time)
