@@ -394,7 +394,10 @@ class GoalManager:
                 if math.isfinite(self._best_path_dist):
                     self._last_progress_s = now_s
                 self._best_path_dist = d_path
-        if d_goal <= p.goal_reached_tolerance_m or self._nav_succeeded:
+        reached_m = p.goal_reached_tolerance_m
+        if p.strategy == "routed" and not self.goal.is_return:
+            reached_m = max(reached_m, p.handover_m)
+        if d_goal <= reached_m or self._nav_succeeded:
             if self.goal.is_return:
                 self.goal = None
                 self.done = True
