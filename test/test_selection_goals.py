@@ -243,3 +243,21 @@ def test_blacklist_added_counts_entries_past_the_bound():
     assert m.blacklist_added == 5 and m.blacklist == ((3.0, 0.0), (4.0, 0.0))
     m.reset(clear_blacklist=True)
     assert m.blacklist == () and m.blacklist_added == 5
+
+
+@pytest.mark.parametrize("strategy,handover_m,reached", [
+    ("routed", 1.0, True), ("routed", 0.0, False), ("nearest", 1.0, False)])
+def test_routed_goal_counts_as_reached_within_handover_m(strategy, handover_m, reached):
+    g, fr = manager_world()
+    m = GoalManager(SelectionParams(strategy=strategy, handover_m=handover_m,
+                                    arrival_wait_s=0.0))
+    cost = np.array([1.0, 3.0])
+    goal = m.step(0.0, (0.6, 2.0), g, fr, cost, tour_cost_m=cost).goal
+    assert goal.xy_m == fr[0].point_xy_m
+    near = (goal.xy_m[0] + 0.8, goal.xy_m[1])     # 0.8 m away, the frontier still there
+    res = m.step(1.0, near, g, fr, [0.8, 2.0], tour_cost_m=np.array([0.8, 2.0]))
+    if reached:
+        assert res.action is Action.NEW_GOAL and res.goal.xy_m == fr[1].point_xy_m
+        assert "frontier remains" in res.reason and m.blacklist == (goal.xy_m,)
+    else:
+        assert res.action is Action.KEEP and res.goal is goal and m.blacklist == ()

@@ -88,7 +88,8 @@ class GoalManager:
        it (``goal_reached_tolerance_m``) while its frontier (a frontier with a cell
        within ``frontier_match_radius_m`` + the goal's gap to its frontier) is still
        there after a newer map (or ``arrival_wait_s``) blacklists it too; reaching a
-       return-to-start goal ends exploration (DONE).
+       return-to-start goal ends exploration (DONE). A ``routed`` goal counts as reached
+       within ``handover_m`` already (the robot drives on while it is judged).
     2. Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted goal
        are excluded. When no reachable frontier is detected but the current goal's
        frontier cells are still unknown (a thin frontier seen at a grazing angle comes and
@@ -394,7 +395,10 @@ class GoalManager:
                 if math.isfinite(self._best_path_dist):
                     self._last_progress_s = now_s
                 self._best_path_dist = d_path
-        if d_goal <= p.goal_reached_tolerance_m or self._nav_succeeded:
+        reached_m = p.goal_reached_tolerance_m
+        if p.strategy == "routed" and not self.goal.is_return:
+            reached_m = max(reached_m, p.handover_m)
+        if d_goal <= reached_m or self._nav_succeeded:
             if self.goal.is_return:
                 self.goal = None
                 self.done = True

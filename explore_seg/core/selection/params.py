@@ -126,6 +126,11 @@ class SelectionParams:
     gain_weight_m_per_m2: float = _non_negative(
         "routed: a group's cost is its tour length minus this times the unknown area its "
         "viewpoint sees (big views first when the detour is small)", "m/m^2", default=0.1)
+    handover_m: float = _non_negative(
+        "routed: a goal this close to the robot counts as reached (its frontier is judged "
+        "and the next goal sent while the robot still drives: no final turn and no stop "
+        "at each viewpoint); below goal_reached_tolerance_m it has no effect", "m",
+        default=1.0)
 
     def __post_init__(self) -> None:
         if self.strategy not in STRATEGIES:
@@ -136,7 +141,7 @@ class SelectionParams:
                      "progress_min_m", "goal_reached_tolerance_m", "frontier_match_radius_m",
                      "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
                      "flicker_radius_m", "viewpoint_radius_m", "region_switch_m",
-                     "gain_weight_m_per_m2", "min_gain_m2"):
+                     "gain_weight_m_per_m2", "min_gain_m2", "handover_m"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {v}")

@@ -38,6 +38,46 @@ viewpoints + tour + goal, median of 5 decisions on snapshots of a ``paper`` run 
 generated house at 60, 200 and 400 s, load average 3.8): 27-34 ms of CPU (``paper``:
 6-7 ms), about three quarters of it viewpoints and tour; no p95 over whole runs on a
 quiet machine yet.
+
+Where the time went (issue #20, measured with ``bench/trace_decisions.py`` and lock-step
+runs with the benchmark's settings, paired per seed with the ``explore_lite`` and
+``nearest`` rows of bench/results/runs.csv):
+
+- **Arrivals.** A viewpoint is a place the robot actually reaches, where a frontier cPoint
+  recedes while the robot drives to it: routed ended 16 goals by arrival on eb/room_with_corner
+  seed 0 (``explore_lite`` 4) and 6 on eb/room_2 seed 100 (``explore_lite`` and ``nearest``
+  0), and stood still 30 s (23) and 8 s (1, 4). Each arrival costs the navigator's final
+  turn and a decision period waiting for a newer map. ``handover_m`` = 1 m judges the goal
+  while the robot still drives (:class:`~.goals.GoalManager`). Seeds 0-2 of eb/corner,
+  eb/corridor, eb/room, eb/room_2 (12 pairs, handover 1 m vs 0): median T95 /
+  ``explore_lite`` 1.096 -> 1.082, / ``nearest`` 1.051 -> 0.934, mean / ``explore_lite``
+  1.199 -> 1.144; per pair (handover / none) median 0.995, mean 0.972, from 0.67 and 0.76
+  (eb/corner seeds 0, 1: 387, 408 s -> 260, 312 s; ``explore_lite`` 274, 264) to 1.25 and
+  1.26 (eb/room seed 2 209 -> 261 s, eb/room_2 seed 2 299 -> 376 s): a goal judged 1 m
+  early whose frontier is still there is blacklisted, and some of those would have been
+  cleared on arrival. Not a clear win; it stays on because the mean gains.
+- **Goal switches are not the cost.** The tour hysteresis holds: 1 switch per run on
+  eb/room_2 seed 100 and eb/room_with_corner seed 0 (``explore_lite`` 7 and 11,
+  ``nearest`` 13).
+- **Views that reveal little still bind the tour.** Without the handover, eb/corner seed 0
+  sat at 93-94 % from 240 to 400 s: the tour's first goal was a 0.77 m^2 view 8.9 m away
+  (it lay on the tour's way to the rest), then a 18 m drive. Holding views under 5 m^2 out
+  of the tour unless they cost at most 2 m of detour (tried, not kept) made it worse there
+  (338, 407 s vs 260, 312 s with the handover alone; eb/room_2 seed 0 282 vs 284 s).
+- **Region routing helps.** ``region_switch_m`` 0 instead of 2 (with the handover):
+  eb/corner 406, 377 s vs 260, 312 s; eb/room_2 286, 287 s vs 284, 289 s.
+  ``gain_weight_m_per_m2`` 0.3 instead of 0.1: eb/corner seed 0 424 s vs 260 s.
+- **The furnished houses' lead is the object costmap's.** ``routed`` runs with the object
+  costmap, ``explore_lite`` and ``nearest`` without; ``paper`` / ``paper_noobj`` (same
+  strategy, 20 seeds) has a median T95 ratio of 0.70 on shared/house, 0.84 on house, 0.95
+  on house_cluttered and 1.00 in all 12 eb worlds (no objects there), so the 0.67 / 0.77
+  above are not the routing's alone; the eb worlds compare the routing.
+- **Decision time** (CPU ms of the decision core per decision: frontier detection +
+  viewpoints + tour + goal; process time, seed 0, load average 8-10 on 2 cores): p50 37,
+  p95 52 on the generated house (whole run; ``explore_lite`` 13 / 26); p50 105, p95 201 on
+  office_floor over its first 600 s (30 % coverage). Both are above the 50 / 150 ms targets;
+  the lock step's decision_ms (with segmentation and the navigator's goal call) was p95 74
+  and 239 ms.
 """
 
 from __future__ import annotations
