@@ -256,6 +256,9 @@ def main(argv: list[str] | None = None) -> int:
                     "--title, the command and the code version); BENCHMARKS.md includes "
                     "bench/results/paired/*.md")
     ap.add_argument("--title", default="", help="heading of the --md report")
+    ap.add_argument("--no-runs", action="store_true",
+                    help="run nothing: report the runs kept in --out that the other options "
+                         "select (e.g. worlds compared on different seed ranges)")
     a = ap.parse_args(argv)
     try:
         arms = [parse_arm(t) for t in a.arm]
@@ -293,11 +296,14 @@ def main(argv: list[str] | None = None) -> int:
     rows = list({_key(r): r for r in rows}.values())    # a run written twice counts once
     have = {_key(r) for r in rows}
     worlds = [w for w in a.worlds.split(",") if w]
-    limits = {w: sim_time_limit(float(load(w)[1].explorable_area_m2), a.max_sim_time)
+    limits = {w: (0.0 if a.no_runs else
+                  sim_time_limit(float(load(w)[1].explorable_area_m2), a.max_sim_time))
               for w in worlds}
     # seed-major so an interrupted comparison holds whole pairs
     tasks = [(x.name, w, s, seed, limits[w]) for seed in seeds for w in worlds
              for s in strategies for x in arms if (x.name, w, s, seed) not in have]
+    if a.no_runs:
+        tasks = []
     print(f"[paired] {len(tasks)} runs to do, {len(rows)} kept in {runs_file}", flush=True)
     if tasks:
         import multiprocessing as mp

@@ -109,6 +109,8 @@ def test_tiny_comparison_end_to_end(tmp_path):
         by["ref"]["path_length_m"] != by["slow"]["path_length_m"]
     assert paired.main(args) == 0
     assert len((out / "runs.jsonl").read_text().splitlines()) == 2
+    assert paired.main(args[:5] + ["0-3", "--no-runs"] + args[6:]) == 0   # seeds 1-3: none run
+    assert len((out / "runs.jsonl").read_text().splitlines()) == 2
     with pytest.raises(SystemExit):
         paired.main(args[:-1] + ["slow:lockstep.decision_period_s=2"])
 
