@@ -313,7 +313,7 @@ class _ObjectPipeline:
             last = self._walls_occ
             if (self._walls is not None and last is not None and last.shape == occ.shape
                     and np.array_equal(last, occ)):
-                walls = WallMask(grid, self._walls[1].mask)
+                walls = self._walls[1].with_grid(grid)
             else:
                 walls = wall_mask(grid, self.params, WALL_OCCUPIED_THRESHOLD)
             self._walls, self._walls_occ = (version, walls), occ

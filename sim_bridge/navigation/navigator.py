@@ -10,6 +10,7 @@ periodically and when the plan gets blocked, and reports ``ACTIVE`` / ``SUCCEEDE
 from __future__ import annotations
 
 import enum
+import functools
 import math
 from dataclasses import dataclass
 from typing import Callable
@@ -17,8 +18,8 @@ from typing import Callable
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.grid import GridMap
-from explore_seg.core.paths import inflate
+from explore_seg.core.grid import GridMap, metres_to_cells
+from explore_seg.core.paths import _MAX_KERNEL_RADIUS_CELLS, disk_kernel, inflate
 from sim_bridge.navigation.params import NavParams
 from sim_bridge.navigation.planner import coarsen, cost_grid, path_cost, plan_path
 
@@ -41,6 +42,22 @@ class NavStatus:
     reason: str = ""
     goal: tuple[float, float, float] | None = None
 
+
+#: Largest lethal radius (cells) that :meth:`Navigator._plan_blocked` checks through disk
+#: offsets: the radii :func:`inflate` grows with its disk kernel (beyond, it inflates the
+#: window as before).
+_DISK_LOOKUP_MAX_CELLS = _MAX_KERNEL_RADIUS_CELLS
+
+
+@functools.lru_cache(maxsize=8)
+def _disk_offsets(r: int) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """(rows, cols) offsets of the cells of :func:`disk_kernel` ``(r)`` (its centre at 0)."""
+    dr, dc = np.nonzero(disk_kernel(r))
+    return dr.astype(np.int64) - r, dc.astype(np.int64) - r
+
+
+#: Plan points measured at a time when looking for the lookahead point.
+_LOOKAHEAD_CHUNK = 64
 
 #: The pure-pursuit arc check skips this much of the arc next to the robot (m).
 ARC_FREE_START_M = 0.1
@@ -87,6 +104,8 @@ class Navigator:
         # Cost of the last plan per (goal cell, downsampling): only a hint that saves
         # planning work (plan_path's result does not depend on it).
         self._goal_cost: dict[tuple[tuple[int, int], int], float] = {}
+        # (key, mask, lattice-aligned) of :meth:`_layer_blocked`.
+        self._layer_mask: tuple[tuple, npt.NDArray[np.bool_], bool] | None = None
 
     # ---------------------------------------------------------------- inputs
     @property
@@ -219,14 +238,48 @@ class Navigator:
         blocked = data >= p.occupied_threshold
         unknown = data < 0
         if self._layers:
-            corner = grid.cells_to_world(r0 - 0.5, c0 - 0.5)
-            geom = GridMap(np.zeros_like(data),
-                           grid.resolution_m, corner, grid.origin_yaw_rad, grid.frame_id)
-            for layer in self._layers.values():
-                blocked |= layer.resample_to(geom, fill=0) >= p.occupied_threshold
+            whole, aligned = self._layer_blocked(grid)
+            if window is None or aligned:
+                blocked |= whole[r0:r1, c0:c1]
+            else:
+                blocked |= self._resampled_layers(grid, window)
         if not p.allow_unknown:
             blocked |= unknown
         return blocked, unknown
+
+    def _resampled_layers(self, grid: GridMap, window: tuple[int, int, int, int]
+                          ) -> npt.NDArray[np.bool_]:
+        """Cells of a window (r0, r1, c0, c1) of the map that a layer blocks."""
+        r0, r1, c0, c1 = window
+        corner = grid.cells_to_world(r0 - 0.5, c0 - 0.5)
+        geom = GridMap(np.zeros((r1 - r0, c1 - c0), dtype=np.int8),
+                       grid.resolution_m, corner, grid.origin_yaw_rad, grid.frame_id)
+        out = np.zeros(geom.shape, dtype=bool)
+        for layer in self._layers.values():
+            out |= layer.resample_to(geom, fill=0) >= self.params.occupied_threshold
+        return out
+
+    def _layer_blocked(self, grid: GridMap) -> tuple[npt.NDArray[np.bool_], bool]:
+        """Cells of the whole map that a layer blocks, computed once per layer set and map
+        geometry (the map changes every scan, its geometry and the layers rarely), and
+        whether every layer lies on the map's cell lattice (same resolution and
+        orientation, origin a whole number of cells away): a window of the map then
+        samples each layer at cell centres whose layer cell is the whole map's, so the
+        window's mask is a slice of this one."""
+        key = (self._layer_version, grid.shape, grid.origin_xy_m, grid.resolution_m,
+               grid.origin_yaw_rad, grid.frame_id, self.params.occupied_threshold)
+        if self._layer_mask is None or self._layer_mask[0] != key:
+            mask = self._resampled_layers(grid, (0, grid.height, 0, grid.width))
+            res = grid.resolution_m
+            aligned = all(
+                layer.resolution_m == res and layer.origin_yaw_rad == grid.origin_yaw_rad
+                and grid.origin_yaw_rad == 0.0
+                and all(abs(d - round(d)) < 1e-6 for d in (
+                    (layer.origin_xy_m[0] - grid.origin_xy_m[0]) / res,
+                    (layer.origin_xy_m[1] - grid.origin_xy_m[1]) / res))
+                for layer in self._layers.values())
+            self._layer_mask = (key, mask, aligned)
+        return self._layer_mask[1], self._layer_mask[2]
 
     def _cost(self, grid: GridMap) -> npt.NDArray[np.float64]:
         blocked, unknown = self._obstacles(grid)
@@ -357,8 +410,19 @@ class Navigator:
         blocked, _ = self._obstacles(grid, (r0, r1, c0, c1))
         if not blocked.any():
             return False
-        lethal = inflate(blocked, self.params.lethal_radius_m, grid.resolution_m)
-        return bool(lethal[rows - r0, cols - c0].any())
+        k = metres_to_cells(self.params.lethal_radius_m, grid.resolution_m)
+        if k > _DISK_LOOKUP_MAX_CELLS:
+            lethal = inflate(blocked, self.params.lethal_radius_m, grid.resolution_m)
+            return bool(lethal[rows - r0, cols - c0].any())
+        # inflate(blocked)[plan cells] without inflating the window: a plan cell is lethal
+        # when a blocked cell of the window lies in the disk of inflate's radius around it.
+        h, w = blocked.shape
+        flat = np.unique((rows - r0) * w + (cols - c0))
+        dr, dc = _disk_offsets(k)
+        rr = (flat // w)[:, None] + dr[None, :]
+        cc = (flat % w)[:, None] + dc[None, :]
+        ok = (rr >= 0) & (rr < h) & (cc >= 0) & (cc < w)
+        return bool(blocked[rr[ok], cc[ok]].any())
 
     # ------------------------------------------------------------- following
     def update(self, pose: tuple[float, float, float], now_s: float
@@ -417,9 +481,15 @@ class Navigator:
         d = np.hypot(path[i0:i1, 0] - x, path[i0:i1, 1] - y)
         self._plan_index = i0 + int(np.argmin(d))
         rest = path[self._plan_index:]
-        dr = np.hypot(rest[:, 0] - x, rest[:, 1] - y)
-        beyond = np.nonzero(dr >= p.lookahead_m)[0]
-        k = int(beyond[0]) if beyond.size else len(rest) - 1
+        # The first point at least the lookahead away, searched in chunks (the rest of a
+        # long plan is not measured at every step).
+        k = len(rest) - 1
+        for i0 in range(0, len(rest), _LOOKAHEAD_CHUNK):
+            part = rest[i0:i0 + _LOOKAHEAD_CHUNK]
+            beyond = np.flatnonzero(np.hypot(part[:, 0] - x, part[:, 1] - y) >= p.lookahead_m)
+            if beyond.size:
+                k = i0 + int(beyond[0])
+                break
         # A lookahead point behind an obstacle corner would make the arc cut the corner:
         # step back along the plan to the farthest point whose arc stays clear.
         while k > 1 and not self._arc_clear(pose, rest[k]):
