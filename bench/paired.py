@@ -38,6 +38,7 @@ import dataclasses
 import fcntl
 import json
 import math
+import shlex
 import sys
 import time
 from pathlib import Path
@@ -171,6 +172,8 @@ def parse_seeds(text: str) -> list[int]:
 
 #: Set in the main process before the workers fork.
 _ARMS: dict[str, tuple[ExplorerParams, SimParams, LockstepParams]] = {}
+#: The code version the runs of this call are made with (read once, before forking).
+_CODE = ["unknown"]
 
 
 def _run(task: tuple[str, str, str, int, float]) -> dict[str, Any]:
@@ -181,7 +184,7 @@ def _run(task: tuple[str, str, str, int, float]) -> dict[str, Any]:
     res = run_exploration(world, strategy, seed, max_sim_time_s=limit, params=ls,
                           sim_params=sim, explorer_params=ex, ground_truth=gt)
     row = res.summary_row()
-    row.update(arm=arm, cpu_s=round(time.process_time() - t0, 2))
+    row.update(arm=arm, cpu_s=round(time.process_time() - t0, 2), code=_CODE[0])
     return row
 
 
@@ -307,6 +310,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"[paired] {len(tasks)} runs to do, {len(rows)} kept in {runs_file}", flush=True)
     if tasks:
         import multiprocessing as mp
+        _CODE[0] = code_version()
         bar = Progress(len(tasks), "paired")
         with mp.get_context("fork").Pool(max(1, a.jobs), maxtasksperchild=10) as pool, \
                 runs_file.open("a") as fh:
@@ -323,12 +327,18 @@ def main(argv: list[str] | None = None) -> int:
     print(text)
     if a.md:
         head = f"### {a.title}\n\n" if a.title else ""
-        cmd = " ".join(argv if argv is not None else sys.argv[1:])
+        # the command that makes these runs (--no-runs only reports them)
+        cmd = " ".join(shlex.quote(x) for x in (argv if argv is not None else sys.argv[1:])
+                       if x != "--no-runs")
         cpu = sum(float(r.get("cpu_s", 0.0)) for r in sel)
         Path(a.md).parent.mkdir(parents=True, exist_ok=True)
+        codes: dict[str, int] = {}
+        for r in sel:
+            codes[r.get("code", "unrecorded")] = codes.get(r.get("code", "unrecorded"), 0) + 1
+        made = ", ".join(f"{c} ({n} runs)" for c, n in sorted(codes.items()))
         Path(a.md).write_text(
-            f"{head}Command (code {code_version()}, {time.strftime('%Y-%m-%d')}, "
-            f"{len(sel)} runs, {cpu / 3600:.1f} CPU hours):\n\n```sh\n.venv/bin/python "
+            f"{head}Runs made with code {made}; {len(sel)} runs, {cpu / 3600:.1f} CPU hours; "
+            f"reported {time.strftime('%Y-%m-%d')}. Command:\n\n```sh\n.venv/bin/python "
             f"bench/paired.py {cmd}\n```\n\n" + text)
     return 0
 

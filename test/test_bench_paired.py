@@ -102,8 +102,10 @@ def test_tiny_comparison_end_to_end(tmp_path):
     assert paired.main(args + ["--md", str(out / "r.md"), "--title", "tiny"]) == 0
     md = (out / "r.md").read_text()
     assert md.startswith("### tiny\n") and "--arm ref" in md and "| eb/corridor_asym | paper | slow |" in md
+    assert "Runs made with code " in md and "(2 runs)" in md
     rows = [json.loads(x) for x in (out / "runs.jsonl").read_text().splitlines()]
     assert sorted(r["arm"] for r in rows) == ["ref", "slow"]
+    assert all(r["code"] for r in rows)
     by = {r["arm"]: r for r in rows}
     assert by["ref"]["goals_sent"] != by["slow"]["goals_sent"] or \
         by["ref"]["path_length_m"] != by["slow"]["path_length_m"]
