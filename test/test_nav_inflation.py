@@ -83,5 +83,6 @@ def test_soft_margin_keeps_clear_where_it_can_and_still_passes_a_narrow_door():
     blocked[19:21, 29:31] = True
     cells = _plan(blocked, (20, 3), (20, 56), soft)
     assert (_wall_distance_m(blocked, cells) - 0.22).min() >= 0.0
-    cells = _plan(blocked, (20, 3), (20, 56), NavParams(inflation_cost_weight=0.0))
+    cells = _plan(blocked, (20, 3), (20, 56), NavParams(inflation_cost_weight=0.0,
+                                                         inflation_soft_margin_m=0.0))
     assert (_wall_distance_m(blocked, cells) - 0.22).min() < 0.0
