@@ -172,6 +172,33 @@ def test_pursuit_arc_check_rejects_a_lookahead_point_around_an_obstacle_corner()
     assert nav._arc_clear(pose, np.array([2.1, 1.62]))
 
 
+def test_pursuit_arc_keeps_clear_of_the_cell_edges_with_arc_check_edges():
+    """The lethal zone is judged at cell centres, half a cell diagonal closer than the
+    obstacle cells' edges: an arc the lethal check lets within 0.235 m of a wall's edge is
+    refused with arc_check_edges (0.22 + 0.02 m), one at 0.24 m is taken, and a robot
+    already closer may drive on at its clearance or away, not closer."""
+    res = 0.05
+    blocked = np.zeros((60, 60), bool)
+    blocked[30:, :] = True                # a wall whose edge is the line y = 1.5
+    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
+    plain = Navigator(NavParams())
+    edges = Navigator(NavParams(arc_check_edges=True, arc_clearance_m=0.02))
+    for nav in (plain, edges):
+        nav._plan_cost = cost_grid(blocked, None, res, nav.params)
+        nav._plan_grid = grid
+    pose = (1.0, 1.24, 0.0)               # 0.26 m from the edge, heading +x
+    closer = np.array([1.5, 1.265])       # the arc ends 0.235 m from the edge
+    assert plain._arc_clear(pose, closer)
+    assert not edges._arc_clear(pose, closer)
+    assert edges._arc_clear(pose, np.array([1.5, 1.26]))
+    assert edges._arc_clear(pose, np.array([1.5, 1.1]))
+    tight = (1.0, 1.29, 0.0)              # 0.21 m from the edge (after a contact)
+    assert edges._arc_clear(tight, np.array([1.5, 1.29]))
+    assert edges._arc_clear(tight, np.array([1.5, 1.2]))
+    assert not edges._arc_clear(tight, np.array([1.5, 1.3]))
+    assert plain._arc_clear(tight, np.array([1.5, 1.3]))
+
+
 def _door_world(door_lo: float, door_hi: float, start) -> World:
     """A 6 x 4 m room split at x = 3 by a wall with a door between door_lo and door_hi."""
     t = WALL_T
