@@ -199,6 +199,31 @@ def test_pursuit_arc_keeps_clear_of_the_cell_edges_with_arc_check_edges():
     assert plain._arc_clear(tight, np.array([1.5, 1.3]))
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_arc_edge_check_shortcut_by_inflation_cost_agrees_with_the_exact_check(seed,
+                                                                               monkeypatch):
+    """Arcs the inflation cost shows to be far from every obstacle skip the exact edge
+    distances: on random clutter the answers are those of the exact check alone."""
+    rng = np.random.default_rng(seed)
+    res = 0.05
+    blocked = rng.random((80, 80)) < 0.01
+    blocked[:, :2] = blocked[:, -2:] = blocked[:2, :] = blocked[-2:, :] = True
+    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
+    nav = Navigator(NavParams(arc_check_edges=True))
+    nav._plan_cost = cost_grid(blocked, None, res, nav.params)
+    nav._plan_grid = grid
+    cases = [((float(x), float(y), float(t)), np.array([x + 0.4 * np.cos(t + a),
+                                                         y + 0.4 * np.sin(t + a)]))
+             for x, y, t, a in zip(rng.uniform(0.6, 3.4, 400), rng.uniform(0.6, 3.4, 400),
+                                   rng.uniform(-np.pi, np.pi, 400),
+                                   rng.uniform(-0.7, 0.7, 400))]
+    fast = [nav._arc_clear(pose, tgt) for pose, tgt in cases]
+    monkeypatch.setattr(Navigator, "_edge_safe_cost", lambda self, res: None)
+    exact = [nav._arc_clear(pose, tgt) for pose, tgt in cases]
+    assert fast == exact
+    assert 0 < sum(exact) < len(exact)
+
+
 def _door_world(door_lo: float, door_hi: float, start) -> World:
     """A 6 x 4 m room split at x = 3 by a wall with a door between door_lo and door_hi."""
     t = WALL_T

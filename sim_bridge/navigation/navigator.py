@@ -542,9 +542,29 @@ class Navigator:
                                                          step))
         if len(qx) + len(px) < 2:
             return True
+        safe = self._edge_safe_cost(grid.resolution_m)
+        if safe is not None and len(qx):
+            rq, cq = grid.world_to_cells(qx, qy)
+            inside = ((rq >= 0) & (rq < cost.shape[0]) & (cq >= 0) & (cq < cost.shape[1])).all()
+            if inside and (cost[rq, cq] <= safe).all() and (cost[r, c] <= safe).all():
+                return True    # every sample's cell is far enough by its inflation cost
         clear = self._edge_clearance(grid, np.concatenate([qx, px]), np.concatenate([qy, py]))
         need = min(self.params.robot_radius_m + self.params.arc_clearance_m, float(clear[0]))
         return bool(clear[1:].min(initial=math.inf) >= need - 1e-9)
+
+    def _edge_safe_cost(self, res: float) -> float | None:
+        """A cost grid value at or below which a cell is far enough from every obstacle
+        cell for any point in it to keep ``robot_radius_m + arc_clearance_m`` from their
+        edges (None: the inflation cost cannot tell). The inflation band's cost
+        ``1 + w exp(-s (d - lethal))`` falls with the centre distance d, and an edge is at
+        most a cell diagonal closer than the two centres; soft margin and unknown cells
+        cost more, so they are checked exactly."""
+        p = self.params
+        d_safe = p.robot_radius_m + p.arc_clearance_m + math.sqrt(2.0) * res
+        if p.inflation_cost_weight <= 0 or not d_safe < p.inflation_radius_m:
+            return None
+        return 1.0 + p.inflation_cost_weight * math.exp(
+            -p.inflation_cost_scale * max(d_safe - p.lethal_radius_m, 0.0))
 
     def _edge_clearance(self, grid: GridMap, px: npt.NDArray[np.float64],
                         py: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
