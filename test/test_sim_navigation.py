@@ -167,8 +167,13 @@ def test_pursuit_arc_check_rejects_a_lookahead_point_around_an_obstacle_corner()
     pose = (1.3, 1.25, 0.0)               # 0.25 m below the block, heading +x
     # Around the corner: the arc passes ~0.1 m from it (robot radius 0.22).
     assert not nav._arc_clear(pose, np.array([1.7, 1.62]))
-    # Straight on along the lane, or around the corner with room: clear.
+    # Straight on along the lane, or around the corner with room (0.26 m): clear.
     assert nav._arc_clear(pose, np.array([1.7, 1.25]))
+    assert nav._arc_clear(pose, np.array([2.6, 1.55]))
+    # 0.225 m from the corner's edge: out of the lethal zone (cell centres), refused by
+    # the edge check (0.22 + 0.02 m), taken without it.
+    assert not nav._arc_clear(pose, np.array([2.1, 1.62]))
+    nav.params = NavParams(arc_check_edges=False)
     assert nav._arc_clear(pose, np.array([2.1, 1.62]))
 
 
@@ -181,7 +186,7 @@ def test_pursuit_arc_keeps_clear_of_the_cell_edges_with_arc_check_edges():
     blocked = np.zeros((60, 60), bool)
     blocked[30:, :] = True                # a wall whose edge is the line y = 1.5
     grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
-    plain = Navigator(NavParams())
+    plain = Navigator(NavParams(arc_check_edges=False))
     edges = Navigator(NavParams(arc_check_edges=True, arc_clearance_m=0.02))
     for nav in (plain, edges):
         nav._plan_cost = cost_grid(blocked, None, res, nav.params)

@@ -72,11 +72,13 @@ class NavParams:
     heading_gain: float = field(default=2.5, metadata=param_meta(
         "turn rate per rad of heading error when rotating on the spot",
         "1/s", range=(0.0, math.inf)))
-    arc_check_edges: bool = field(default=False, metadata=param_meta(
+    arc_check_edges: bool = field(default=True, metadata=param_meta(
         "the pure-pursuit arc also keeps arc_clearance_m beyond the robot radius from the "
         "edges of obstacle cells (the lethal zone is judged at cell centres, half a cell "
         "diagonal closer); an arc that cannot is shortened toward the plan, and one that "
-        "starts closer than that only may not get closer still"))
+        "starts closer than that only may not get closer still (paper, 18 worlds, seeds "
+        "0-9, paired: contacts 20 -> 0, complete 176 -> 178 of 180, median T95 ratio 1.000; "
+        "BENCHMARKS.md, paired comparisons); false = the lethal zone only"))
     arc_clearance_m: float = field(default=0.02, metadata=param_meta(
         "clearance beyond the robot radius the arc keeps with arc_check_edges", "m",
         range=(0.0, math.inf)))
