@@ -202,7 +202,8 @@ def _settings(a: argparse.Namespace) -> dict[str, Any]:
         "camera_mount": list(a.mount) if a.mount is not None else None,
         "lockstep_params": {k: v for k, v in vars(LockstepParams()).items()},
         "nav_inflation_margin_m": sim_params_for(None, a.nav_margin).nav_inflation_margin_m,
-        "nav_inflation_soft_margin_m": SimParams().nav_inflation_soft_margin_m}
+        "nav_inflation_soft_margin_m": SimParams().nav_inflation_soft_margin_m,
+        "nav_arc_check_edges": SimParams().nav_arc_check_edges}
     return json.loads(json.dumps(settings))
 
 

@@ -22,7 +22,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: Settings that parts of earlier versions did not record, with the value they ran on.
 SETTING_DEFAULTS: dict[str, Any] = {"nav_inflation_margin_m": 0.0,
-                                     "nav_inflation_soft_margin_m": 0.0}
+                                     "nav_inflation_soft_margin_m": 0.0,
+                                     "nav_arc_check_edges": False}
 
 
 def code_version() -> str:

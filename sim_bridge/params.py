@@ -156,6 +156,12 @@ class SimParams:
         "replan at most this often while the map changes", "s", range=(0.0, math.inf)))
     nav_plan_downsample: int = field(default=NavParams.plan_downsample, metadata=param_meta(
         "plan on cells this many times coarser than the map", range=(1, 8)))
+    nav_arc_check_edges: bool = field(default=NavParams.arc_check_edges, metadata=param_meta(
+        "the controller's arc keeps nav_arc_clearance_m beyond the robot radius from the "
+        "edges of obstacle cells"))
+    nav_arc_clearance_m: float = field(default=NavParams.arc_clearance_m, metadata=param_meta(
+        "clearance beyond the robot radius the controller's arc keeps (with "
+        "nav_arc_check_edges)", "m", range=(0.0, math.inf)))
     nav_goal_tolerance_xy_m: float = field(
         default=NavParams.goal_tolerance_xy_m,
         metadata=param_meta("goal position tolerance", "m", range=(0.0, math.inf)))
@@ -265,6 +271,8 @@ class SimParams:
             allow_unknown=self.nav_allow_unknown,
             replan_period_s=self.nav_replan_period_s,
             plan_downsample=self.nav_plan_downsample,
+            arc_check_edges=self.nav_arc_check_edges,
+            arc_clearance_m=self.nav_arc_clearance_m,
             goal_tolerance_xy_m=self.nav_goal_tolerance_xy_m,
             goal_tolerance_yaw_rad=self.nav_goal_tolerance_yaw_rad,
             max_linear_speed_mps=self.max_linear_speed_mps,

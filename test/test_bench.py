@@ -273,21 +273,22 @@ def test_nav_margin_is_a_setting_and_earlier_folders_ran_on_zero(first, tmp_path
     assert run_bench.sim_params_for(None, 0.03).nav_inflation_margin_m == 0.03
 
 
-def test_soft_margin_is_a_setting_and_folders_that_did_not_record_it_ran_without(first,
-                                                                                  tmp_path):
+@pytest.mark.parametrize("name", ["nav_inflation_soft_margin_m", "nav_arc_check_edges"])
+def test_navigation_safety_setting_is_recorded_and_folders_that_did_not_record_it_ran_without(
+        first, tmp_path, name):
     from sim_bridge.engine import SimParams
 
     out, _ = first
     meta = json.loads((out / "meta.json").read_text())
-    soft = SimParams().nav_inflation_soft_margin_m
-    assert soft > 0
-    assert meta["settings"]["nav_inflation_soft_margin_m"] == soft
+    value = getattr(SimParams(), name)
+    assert value
+    assert meta["settings"][name] == value
     same = _copy_results(out, tmp_path / "same")
     assert run_bench.main(ARGS + ["--runs", "1", "--out", str(same), "--md", "", "--resume",
                                   "--no-runs"]) == 0
     # a folder of a version that did not record it ran without it (0): not mixed with these
-    res = _copy_results(out, tmp_path / "soft")
-    del meta["settings"]["nav_inflation_soft_margin_m"]
+    res = _copy_results(out, tmp_path / "old")
+    del meta["settings"][name]
     (res / "meta.json").write_text(json.dumps(meta))
     assert run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
                                   "--no-runs"]) == 2

@@ -167,9 +167,66 @@ def test_pursuit_arc_check_rejects_a_lookahead_point_around_an_obstacle_corner()
     pose = (1.3, 1.25, 0.0)               # 0.25 m below the block, heading +x
     # Around the corner: the arc passes ~0.1 m from it (robot radius 0.22).
     assert not nav._arc_clear(pose, np.array([1.7, 1.62]))
-    # Straight on along the lane, or around the corner with room: clear.
+    # Straight on along the lane, or around the corner with room (0.26 m): clear.
     assert nav._arc_clear(pose, np.array([1.7, 1.25]))
+    assert nav._arc_clear(pose, np.array([2.6, 1.55]))
+    # 0.225 m from the corner's edge: out of the lethal zone (cell centres), refused by
+    # the edge check (0.22 + 0.02 m), taken without it.
+    assert not nav._arc_clear(pose, np.array([2.1, 1.62]))
+    nav.params = NavParams(arc_check_edges=False)
     assert nav._arc_clear(pose, np.array([2.1, 1.62]))
+
+
+def test_pursuit_arc_keeps_clear_of_the_cell_edges_with_arc_check_edges():
+    """The lethal zone is judged at cell centres, half a cell diagonal closer than the
+    obstacle cells' edges: an arc the lethal check lets within 0.235 m of a wall's edge is
+    refused with arc_check_edges (0.22 + 0.02 m), one at 0.24 m is taken, and a robot
+    already closer may drive on at its clearance or away, not closer."""
+    res = 0.05
+    blocked = np.zeros((60, 60), bool)
+    blocked[30:, :] = True                # a wall whose edge is the line y = 1.5
+    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
+    plain = Navigator(NavParams(arc_check_edges=False))
+    edges = Navigator(NavParams(arc_check_edges=True, arc_clearance_m=0.02))
+    for nav in (plain, edges):
+        nav._plan_cost = cost_grid(blocked, None, res, nav.params)
+        nav._plan_grid = grid
+    pose = (1.0, 1.24, 0.0)               # 0.26 m from the edge, heading +x
+    closer = np.array([1.5, 1.265])       # the arc ends 0.235 m from the edge
+    assert plain._arc_clear(pose, closer)
+    assert not edges._arc_clear(pose, closer)
+    assert edges._arc_clear(pose, np.array([1.5, 1.26]))
+    assert edges._arc_clear(pose, np.array([1.5, 1.1]))
+    tight = (1.0, 1.29, 0.0)              # 0.21 m from the edge (after a contact)
+    assert edges._arc_clear(tight, np.array([1.5, 1.29]))
+    assert edges._arc_clear(tight, np.array([1.5, 1.2]))
+    assert not edges._arc_clear(tight, np.array([1.5, 1.3]))
+    assert plain._arc_clear(tight, np.array([1.5, 1.3]))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_arc_edge_check_shortcut_by_inflation_cost_agrees_with_the_exact_check(seed,
+                                                                               monkeypatch):
+    """Arcs the inflation cost shows to be far from every obstacle skip the exact edge
+    distances: on random clutter the answers are those of the exact check alone."""
+    rng = np.random.default_rng(seed)
+    res = 0.05
+    blocked = rng.random((80, 80)) < 0.01
+    blocked[:, :2] = blocked[:, -2:] = blocked[:2, :] = blocked[-2:, :] = True
+    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
+    nav = Navigator(NavParams(arc_check_edges=True))
+    nav._plan_cost = cost_grid(blocked, None, res, nav.params)
+    nav._plan_grid = grid
+    cases = [((float(x), float(y), float(t)), np.array([x + 0.4 * np.cos(t + a),
+                                                         y + 0.4 * np.sin(t + a)]))
+             for x, y, t, a in zip(rng.uniform(0.6, 3.4, 400), rng.uniform(0.6, 3.4, 400),
+                                   rng.uniform(-np.pi, np.pi, 400),
+                                   rng.uniform(-0.7, 0.7, 400))]
+    fast = [nav._arc_clear(pose, tgt) for pose, tgt in cases]
+    monkeypatch.setattr(Navigator, "_edge_safe_cost", lambda self, res: None)
+    exact = [nav._arc_clear(pose, tgt) for pose, tgt in cases]
+    assert fast == exact
+    assert 0 < sum(exact) < len(exact)
 
 
 def _door_world(door_lo: float, door_hi: float, start) -> World:

@@ -512,30 +512,93 @@ class Navigator:
                    ) -> bool:
         """True when the pure-pursuit arc from ``pose`` to ``target`` keeps out of the
         lethal zone of the cost grid of the current plan (its first ``ARC_FREE_START_M``
-        are not checked: the robot may stand in the margin after a back-up)."""
+        are not checked: the robot may stand in the margin after a back-up) and, with
+        ``arc_check_edges``, keeps ``robot_radius_m + arc_clearance_m`` from the edges of
+        the obstacle cells all along (or, starting closer, gets no closer)."""
         cost, grid = self._plan_cost, self._plan_grid
         if cost is None or grid is None:
             return True
         x, y, yaw = pose
         ld = math.hypot(target[0] - x, target[1] - y)
-        if ld <= ARC_FREE_START_M:
+        if ld <= ARC_FREE_START_M and not self.params.arc_check_edges:
             return True
         alpha = wrap_angle(math.atan2(target[1] - y, target[0] - x) - yaw)
         if abs(alpha) > self.params.rotate_in_place_angle_rad:
             return True          # turned in place first, then driven almost straight
         kappa = 2.0 * math.sin(alpha) / ld
         length = ld if abs(alpha) < 1e-6 else ld * alpha / math.sin(alpha)
-        s = np.arange(ARC_FREE_START_M, length + 1e-9, 0.5 * grid.resolution_m)
-        if abs(kappa) < 1e-9:
-            px, py = x + s * math.cos(yaw), y + s * math.sin(yaw)
-        else:
-            px = x + (np.sin(yaw + kappa * s) - math.sin(yaw)) / kappa
-            py = y - (np.cos(yaw + kappa * s) - math.cos(yaw)) / kappa
+        step = 0.5 * grid.resolution_m
+        s = np.arange(ARC_FREE_START_M, length + 1e-9, step)
+        px, py = _arc_points(x, y, yaw, kappa, s)
         r, c = grid.world_to_cells(px, py)
         ok = (r >= 0) & (r < cost.shape[0]) & (c >= 0) & (c < cost.shape[1])
         if not ok.all():
             return False
-        return bool(np.isfinite(cost[r, c]).all())
+        if not np.isfinite(cost[r, c]).all():
+            return False
+        if not self.params.arc_check_edges:
+            return True
+        qx, qy = _arc_points(x, y, yaw, kappa, np.arange(0.0, min(ARC_FREE_START_M, length),
+                                                         step))
+        if len(qx) + len(px) < 2:
+            return True
+        safe = self._edge_safe_cost(grid.resolution_m)
+        if safe is not None and len(qx):
+            rq, cq = grid.world_to_cells(qx, qy)
+            inside = ((rq >= 0) & (rq < cost.shape[0]) & (cq >= 0) & (cq < cost.shape[1])).all()
+            if inside and (cost[rq, cq] <= safe).all() and (cost[r, c] <= safe).all():
+                return True    # every sample's cell is far enough by its inflation cost
+        clear = self._edge_clearance(grid, np.concatenate([qx, px]), np.concatenate([qy, py]))
+        need = min(self.params.robot_radius_m + self.params.arc_clearance_m, float(clear[0]))
+        return bool(clear[1:].min(initial=math.inf) >= need - 1e-9)
+
+    def _edge_safe_cost(self, res: float) -> float | None:
+        """A cost grid value at or below which a cell is far enough from every obstacle
+        cell for any point in it to keep ``robot_radius_m + arc_clearance_m`` from their
+        edges (None: the inflation cost cannot tell). The inflation band's cost
+        ``1 + w exp(-s (d - lethal))`` falls with the centre distance d, and an edge is at
+        most a cell diagonal closer than the two centres; soft margin and unknown cells
+        cost more, so they are checked exactly."""
+        p = self.params
+        d_safe = p.robot_radius_m + p.arc_clearance_m + math.sqrt(2.0) * res
+        if p.inflation_cost_weight <= 0 or not d_safe < p.inflation_radius_m:
+            return None
+        return 1.0 + p.inflation_cost_weight * math.exp(
+            -p.inflation_cost_scale * max(d_safe - p.lethal_radius_m, 0.0))
+
+    def _edge_clearance(self, grid: GridMap, px: npt.NDArray[np.float64],
+                        py: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+        """Distance from each point to the nearest edge of an obstacle cell (map or layer),
+        exact for the cells within ``robot_radius_m + arc_clearance_m`` + a cell of the
+        points (further: that bound)."""
+        p = self.params
+        res = grid.resolution_m
+        reach = p.robot_radius_m + p.arc_clearance_m + res
+        fr, fc = grid.world_to_cell_float(px, py)
+        k = reach / res
+        r0 = max(0, int(math.floor(float(fr.min()) - k)))
+        r1 = min(grid.height, int(math.ceil(float(fr.max()) + k)) + 1)
+        c0 = max(0, int(math.floor(float(fc.min()) - k)))
+        c1 = min(grid.width, int(math.ceil(float(fc.max()) + k)) + 1)
+        out = np.full(len(px), reach)
+        if r0 >= r1 or c0 >= c1:
+            return out
+        blocked, _ = self._obstacles(grid, (r0, r1, c0, c1))
+        br, bc = np.nonzero(blocked)
+        if br.size == 0:
+            return out
+        du = np.maximum(np.abs(fc[:, None] - (bc[None, :] + c0 + 0.5)) - 0.5, 0.0)
+        dv = np.maximum(np.abs(fr[:, None] - (br[None, :] + r0 + 0.5)) - 0.5, 0.0)
+        return np.minimum(np.sqrt(du * du + dv * dv).min(axis=1) * res, reach)
+
+
+def _arc_points(x: float, y: float, yaw: float, kappa: float, s: npt.NDArray[np.float64]
+                ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """Points at arc lengths ``s`` along the arc of curvature ``kappa`` from (x, y, yaw)."""
+    if abs(kappa) < 1e-9:
+        return x + s * math.cos(yaw), y + s * math.sin(yaw)
+    return (x + (np.sin(yaw + kappa * s) - math.sin(yaw)) / kappa,
+            y - (np.cos(yaw + kappa * s) - math.cos(yaw)) / kappa)
 
 
 def _clip(v: float, limit: float) -> float:

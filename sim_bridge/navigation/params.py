@@ -72,6 +72,16 @@ class NavParams:
     heading_gain: float = field(default=2.5, metadata=param_meta(
         "turn rate per rad of heading error when rotating on the spot",
         "1/s", range=(0.0, math.inf)))
+    arc_check_edges: bool = field(default=True, metadata=param_meta(
+        "the pure-pursuit arc also keeps arc_clearance_m beyond the robot radius from the "
+        "edges of obstacle cells (the lethal zone is judged at cell centres, half a cell "
+        "diagonal closer); an arc that cannot is shortened toward the plan, and one that "
+        "starts closer than that only may not get closer still (paper, 18 worlds, seeds "
+        "0-9, paired: contacts 20 -> 0, complete 176 -> 178 of 180, median T95 ratio 1.000; "
+        "BENCHMARKS.md, paired comparisons); false = the lethal zone only"))
+    arc_clearance_m: float = field(default=0.02, metadata=param_meta(
+        "clearance beyond the robot radius the arc keeps with arc_check_edges", "m",
+        range=(0.0, math.inf)))
     approach_gain: float = field(default=1.0, metadata=param_meta(
         "speed per metre of remaining distance near the goal", "1/s", range=(0.0, math.inf)))
     min_approach_speed_mps: float = field(default=0.05, metadata=param_meta(
@@ -98,7 +108,7 @@ class NavParams:
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
         non_negative = ("inflation_margin_m", "inflation_cost_weight", "unknown_cost",
-                        "inflation_soft_margin_m", "inflation_soft_margin_cost",
+                        "inflation_soft_margin_m", "inflation_soft_margin_cost", "arc_clearance_m",
                         "planner_goal_tolerance_m", "plan_window_margin_m",
                         "progress_timeout_s", "goal_timeout_s", "min_approach_speed_mps")
         for name in non_negative:
