@@ -26,8 +26,9 @@ avoids the back-and-forth a planner through unknown space otherwise shows as wal
 appear piece by piece.
 
 Following: pure pursuit towards the plan point ``lookahead_m`` ahead, pulled back along
-the plan while the arc to it would enter the lethal zone (so the robot does not cut
-obstacle corners). After a collision (the engine backs the robot off) the goal stays
+the plan while the arc to it would enter the lethal zone or, with ``arc_check_edges``,
+come closer than ``robot_radius_m + arc_clearance_m`` to an obstacle cell's edge (so the
+robot does not cut obstacle corners). After a collision (the engine backs the robot off) the goal stays
 active and is replanned up to ``collision_retries`` times, like Nav2's recoveries, and is
 then aborted.
 
@@ -35,7 +36,9 @@ Modules: :mod:`~sim_bridge.navigation.params` (:class:`NavParams`),
 :mod:`~sim_bridge.navigation.goal_status` (goal ids and statuses as Nav2's action reports
 them, :class:`GoalBook`; outcomes for the lock step, :class:`OutcomeFollower`),
 :mod:`~sim_bridge.navigation.planner` (costmap and windowed Dijkstra),
-:mod:`~sim_bridge.navigation.navigator` (goal state machine and pure-pursuit following).
+:mod:`~sim_bridge.navigation.navigator` (goal state machine and pure-pursuit following),
+:mod:`~sim_bridge.navigation.clearance` (the arc check's exact distances to obstacle cells'
+edges).
 This package re-exports their public names.
 """
 

@@ -20,6 +20,8 @@ import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap, metres_to_cells
 from explore_seg.core.paths import _MAX_KERNEL_RADIUS_CELLS, disk_kernel, inflate
+from sim_bridge.navigation.clearance import (arc_points, clearance_window, edge_distances,
+                                             edge_safe_cost)
 from sim_bridge.navigation.params import NavParams
 from sim_bridge.navigation.planner import coarsen, cost_grid, path_cost, plan_path
 
@@ -529,7 +531,7 @@ class Navigator:
         length = ld if abs(alpha) < 1e-6 else ld * alpha / math.sin(alpha)
         step = 0.5 * grid.resolution_m
         s = np.arange(ARC_FREE_START_M, length + 1e-9, step)
-        px, py = _arc_points(x, y, yaw, kappa, s)
+        px, py = arc_points(x, y, yaw, kappa, s)
         r, c = grid.world_to_cells(px, py)
         ok = (r >= 0) & (r < cost.shape[0]) & (c >= 0) & (c < cost.shape[1])
         if not ok.all():
@@ -538,11 +540,11 @@ class Navigator:
             return False
         if not self.params.arc_check_edges:
             return True
-        qx, qy = _arc_points(x, y, yaw, kappa, np.arange(0.0, min(ARC_FREE_START_M, length),
-                                                         step))
+        qx, qy = arc_points(x, y, yaw, kappa, np.arange(0.0, min(ARC_FREE_START_M, length),
+                                                        step))
         if len(qx) + len(px) < 2:
             return True
-        safe = self._edge_safe_cost(grid.resolution_m)
+        safe = edge_safe_cost(self.params, grid.resolution_m)
         if safe is not None and len(qx):
             rq, cq = grid.world_to_cells(qx, qy)
             inside = ((rq >= 0) & (rq < cost.shape[0]) & (cq >= 0) & (cq < cost.shape[1])).all()
@@ -552,53 +554,18 @@ class Navigator:
         need = min(self.params.robot_radius_m + self.params.arc_clearance_m, float(clear[0]))
         return bool(clear[1:].min(initial=math.inf) >= need - 1e-9)
 
-    def _edge_safe_cost(self, res: float) -> float | None:
-        """A cost grid value at or below which a cell is far enough from every obstacle
-        cell for any point in it to keep ``robot_radius_m + arc_clearance_m`` from their
-        edges (None: the inflation cost cannot tell). The inflation band's cost
-        ``1 + w exp(-s (d - lethal))`` falls with the centre distance d, and an edge is at
-        most a cell diagonal closer than the two centres; soft margin and unknown cells
-        cost more, so they are checked exactly."""
-        p = self.params
-        d_safe = p.robot_radius_m + p.arc_clearance_m + math.sqrt(2.0) * res
-        if p.inflation_cost_weight <= 0 or not d_safe < p.inflation_radius_m:
-            return None
-        return 1.0 + p.inflation_cost_weight * math.exp(
-            -p.inflation_cost_scale * max(d_safe - p.lethal_radius_m, 0.0))
-
     def _edge_clearance(self, grid: GridMap, px: npt.NDArray[np.float64],
                         py: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
-        """Distance from each point to the nearest edge of an obstacle cell (map or layer),
-        exact for the cells within ``robot_radius_m + arc_clearance_m`` + a cell of the
-        points (further: that bound)."""
-        p = self.params
+        """Distance from each point to the nearest edge of an obstacle cell of the map or
+        the layers, up to ``robot_radius_m + arc_clearance_m`` + a cell."""
         res = grid.resolution_m
-        reach = p.robot_radius_m + p.arc_clearance_m + res
+        reach = self.params.robot_radius_m + self.params.arc_clearance_m + res
         fr, fc = grid.world_to_cell_float(px, py)
-        k = reach / res
-        r0 = max(0, int(math.floor(float(fr.min()) - k)))
-        r1 = min(grid.height, int(math.ceil(float(fr.max()) + k)) + 1)
-        c0 = max(0, int(math.floor(float(fc.min()) - k)))
-        c1 = min(grid.width, int(math.ceil(float(fc.max()) + k)) + 1)
-        out = np.full(len(px), reach)
-        if r0 >= r1 or c0 >= c1:
-            return out
-        blocked, _ = self._obstacles(grid, (r0, r1, c0, c1))
-        br, bc = np.nonzero(blocked)
-        if br.size == 0:
-            return out
-        du = np.maximum(np.abs(fc[:, None] - (bc[None, :] + c0 + 0.5)) - 0.5, 0.0)
-        dv = np.maximum(np.abs(fr[:, None] - (br[None, :] + r0 + 0.5)) - 0.5, 0.0)
-        return np.minimum(np.sqrt(du * du + dv * dv).min(axis=1) * res, reach)
-
-
-def _arc_points(x: float, y: float, yaw: float, kappa: float, s: npt.NDArray[np.float64]
-                ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
-    """Points at arc lengths ``s`` along the arc of curvature ``kappa`` from (x, y, yaw)."""
-    if abs(kappa) < 1e-9:
-        return x + s * math.cos(yaw), y + s * math.sin(yaw)
-    return (x + (np.sin(yaw + kappa * s) - math.sin(yaw)) / kappa,
-            y - (np.cos(yaw + kappa * s) - math.cos(yaw)) / kappa)
+        window = clearance_window(fr, fc, reach / res, grid.shape)
+        if window is None:
+            return np.full(len(px), reach)
+        blocked, _ = self._obstacles(grid, window)
+        return edge_distances(blocked, window[0], window[2], fr, fc, res, reach)
 
 
 def _clip(v: float, limit: float) -> float:
