@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from explore_seg.core.grid import OCCUPIED_THRESHOLD, GridMap
+from sim_bridge.navigation.clearance import edge_distances
 from sim_bridge.world import World
 
 
@@ -115,14 +116,9 @@ class Collider:
         c0, c1 = max(0, c - rad), min(g.width, c + rad + 1)
         if r0 >= r1 or c0 >= c1:
             return math.inf
-        rr, cc = np.nonzero(g.data[r0:r1, c0:c1] >= OCCUPIED_THRESHOLD)
-        if rr.size == 0:
-            return math.inf
-        # Point in the grid frame (cells), then distance to each unit square.
         fr, fc = g.world_to_cell_float(x, y)
-        du = np.maximum(np.abs(float(fc) - (cc + c0 + 0.5)) - 0.5, 0.0)
-        dv = np.maximum(np.abs(float(fr) - (rr + r0 + 0.5)) - 0.5, 0.0)
-        return float(np.hypot(du, dv).min() * res)
+        return float(edge_distances(g.data[r0:r1, c0:c1] >= OCCUPIED_THRESHOLD, r0, c0,
+                                    np.atleast_1d(fr), np.atleast_1d(fc), res, math.inf)[0])
 
     def overlaps(self, x: float, y: float) -> bool:
         """True when the robot disk at (x, y) overlaps a solid."""

@@ -28,8 +28,8 @@ appear piece by piece.
 Following: pure pursuit towards the plan point ``lookahead_m`` ahead, pulled back along
 the plan while the arc to it would enter the lethal zone or, with ``arc_check_edges``,
 come closer than ``robot_radius_m + arc_clearance_m`` to an obstacle cell's edge (so the
-robot does not cut obstacle corners). After a collision (the engine backs the robot off) the goal stays
-active and is replanned up to ``collision_retries`` times, like Nav2's recoveries, and is
+robot does not cut obstacle corners). After a collision (the engine backs the robot off)
+the goal stays active and is replanned up to ``collision_retries`` times, like Nav2's recoveries, and is
 then aborted.
 
 Modules: :mod:`~sim_bridge.navigation.params` (:class:`NavParams`),

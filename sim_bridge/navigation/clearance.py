@@ -54,12 +54,12 @@ def clearance_window(fr: npt.NDArray[np.float64], fc: npt.NDArray[np.float64], k
 def edge_distances(blocked: npt.NDArray[np.bool_], r0: int, c0: int,
                    fr: npt.NDArray[np.float64], fc: npt.NDArray[np.float64], res: float,
                    reach: float) -> npt.NDArray[np.float64]:
-    """Distance (m, at most ``reach``) from points at continuous cell coordinates
-    (``fr``, ``fc``) to the nearest edge of a cell of ``blocked``, a window whose first
-    cell is (r0, c0)."""
+    """Distance (m, at most ``reach``, which may be inf) from points at continuous cell
+    coordinates (``fr``, ``fc``) to the nearest edge of a cell of ``blocked``, a window
+    whose first cell is (r0, c0)."""
     br, bc = np.nonzero(blocked)
     if br.size == 0:
         return np.full(len(fr), reach)
     du = np.maximum(np.abs(fc[:, None] - (bc[None, :] + c0 + 0.5)) - 0.5, 0.0)
     dv = np.maximum(np.abs(fr[:, None] - (br[None, :] + r0 + 0.5)) - 0.5, 0.0)
-    return np.minimum(np.sqrt(du * du + dv * dv).min(axis=1) * res, reach)
+    return np.minimum(np.hypot(du, dv).min(axis=1) * res, reach)
