@@ -38,6 +38,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Sequence
@@ -51,6 +52,7 @@ from explore_seg.core.grid import GridMap, metres_to_cells
 from explore_seg.core.rrt import RrtFrontierDetector, RrtParams
 from explore_seg.core.selection import (RRT_STRATEGIES, Action, Goal, GoalManager, NavOutcome,
                                         PathGraphs, Selection, SelectionParams)
+from explore_seg.core.selection.lookout import lookouts
 from explore_seg.core.selection.router import Router, TourPlan
 
 #: Keys of :attr:`ExplorerStep.warnings` (the caller throttles its log per key).
@@ -337,6 +339,14 @@ class Explorer:
             frontiers = router.viewpoints(grid, frontiers, self._graph, start,
                                           self._det.passable)
         dist, excluded = self._distances(start, robot_rc, frontiers)
+        if (self._sp.lookout_goals and dist is not None and excluded is not None
+                and start is not None and len(dist) and not (np.isfinite(dist) & ~excluded).any()):
+            assert self._det is not None and self._graph is not None
+            hop = math.hypot(start[0] - robot_rc[0], start[1] - robot_rc[1]) * grid.resolution_m
+            frontiers, dist = lookouts(grid, frontiers, dist, self._graph.graph, start,
+                                       self._det.passable, self._sp,
+                                       self._fp.occupied_threshold, excluded, hop)
+            excluded = manager.excluded(frontiers)
         if router is not None and dist is not None:
             tour = router.tour_costs(grid, frontiers, dist, excluded, self._graph, robot_rc,
                                      labels, manager.goal_frontier(grid, frontiers))

@@ -8,6 +8,8 @@ One concern per module:
 * :mod:`.costs`: costs of all frontiers and the cheapest (:func:`select_goal`);
 * :mod:`.distances`: path lengths robot -> cPoints (:class:`PathGraphs`);
 * :mod:`.goals`: :class:`GoalManager` (keep, switch, blacklist, done);
+* :mod:`.lookout`: lookout goals, when no frontier has a path (look at an unreachable one
+  from a reachable spot in line of sight before exploration ends);
 * the ``routed`` strategy: :mod:`.viewpoints` (ray-cast view gain, one viewpoint per
   group), :mod:`.tour` (open tour: greedy, 2-opt, Or-opt), :mod:`.router` (viewpoints +
   tour costs per decision, :class:`~.router.Router`).

@@ -100,28 +100,33 @@ class SelectionParams:
         range=(1, INT_MAX)))
     return_to_start: bool = field(default=False, metadata=param_meta(
         "drive back to the start pose when exploration is done"))
+    lookout_goals: bool = field(default=True, metadata=param_meta(
+        "when no frontier has a path, drive to a lookout from which an unreachable one is "
+        "in sight (within sensor_range_m) and look, before exploration ends (a gap behind "
+        "a passage narrower than the robot)"))
     use_regions: bool = field(default=True, metadata=param_meta(
         "use the regions labels for regionGain (paper strategy) and region_switch_m "
         "(routed)"))
     sensor_range_m: float = field(default=5.0, metadata=param_meta(
-        "routed: range of the 360-degree sensor whose view of unknown space rates the "
-        "viewpoints", "m", range=(0.0, _INF)))
+        "routed and lookout goals: range of the 360-degree sensor whose view of "
+        "unknown space rates the viewpoints", "m", range=(0.0, _INF)))
     gain_rays: int = field(default=24, metadata=param_meta(
-        "routed: rays cast over 360 degrees per viewpoint candidate", range=(4, 720)))
+        "routed and lookout goals: rays cast over 360 degrees per viewpoint candidate", range=(4, 720)))
     viewpoint_radius_m: float = _non_negative(
         "routed: viewpoint candidates lie within this distance of their frontier's cells",
         "m", default=0.75)
     viewpoint_step_m: float = field(default=0.3, metadata=param_meta(
-        "routed: spacing of the viewpoint candidates' lattice", "m", range=(0.0, _INF)))
+        "routed and lookout goals: spacing of the viewpoint candidates' lattice", "m", range=(0.0, _INF)))
     viewpoint_gain_tolerance: float = field(default=0.1, metadata=param_meta(
-        "routed: among candidates seeing at least (1 - this) of the best view, the one "
-        "closest to the robot is the viewpoint", range=(0.0, 1.0)))
+        "routed and lookout goals: among candidates seeing at least (1 - this) of the "
+        "best view, the one closest to the robot is the viewpoint", range=(0.0, 1.0)))
     region_switch_m: float = _non_negative(
         "routed: extra tour cost of an edge between viewpoints of two different regions "
         "(finish a region unless its rest is a longer detour)", "m", default=2.0)
     min_gain_m2: float = _non_negative(
-        "routed: a group whose viewpoint sees less unknown area than this is not a goal "
-        "(it would reveal nothing: exploration ends instead of chasing it)", "m^2",
+        "routed and lookout goals: a group whose viewpoint (lookout) sees less unknown "
+        "area than this is not a goal (it would reveal nothing: exploration ends instead "
+        "of chasing it)", "m^2",
         default=0.25)
     gain_weight_m_per_m2: float = _non_negative(
         "routed: a group's cost is its tour length minus this times the unknown area its "
