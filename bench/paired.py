@@ -16,7 +16,8 @@ where KEY is
 * ``lockstep.FIELD``: a :class:`LockstepParams` field (e.g. ``lockstep.nav_feedback``).
 
 Values are parsed by the field's type (bool: true/false/1/0). The first arm is the
-reference of the ratios. Runs are appended to ``OUT/runs.jsonl`` as they finish; a second
+reference of the ratios; a single arm runs and reports its absolute figures (complete,
+contacts, median T95) only, e.g. more seeds of today's defaults. Runs are appended to ``OUT/runs.jsonl`` as they finish; a second
 call with the same ``--out`` runs only what is missing (same arm names must mean the same
 overrides: they are stored in ``OUT/arms.json`` and checked).
 
@@ -251,7 +252,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", default="0-19", help="e.g. 0-19 or 1,5,7")
     ap.add_argument("--arm", action="append", default=[],
                     help="NAME or NAME:KEY=VALUE[;KEY=VALUE]; the first is the reference "
-                         "(at least two)")
+                         "(one arm: absolute figures only)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--max-sim-time", type=float, default=0.0,
                     help="sim time limit per run in s (0 = the benchmark's per-area limit)")
@@ -265,8 +266,8 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
     try:
         arms = [parse_arm(t) for t in a.arm]
-        if len(arms) < 2 or len({x.name for x in arms}) != len(arms):
-            raise ValueError("give at least two --arm with distinct names")
+        if not arms or len({x.name for x in arms}) != len(arms):
+            raise ValueError("give at least one --arm, with distinct names")
         strategies = [s for s in a.strategies.split(",") if s]
         bad = [s for s in strategies if s not in STRATEGIES]
         if bad:

@@ -87,6 +87,19 @@ def test_a_second_comparison_on_the_same_folder_is_refused_while_one_runs(tmp_pa
     assert not (tmp_path / "p" / "runs.jsonl").exists()
 
 
+def test_one_arm_reports_absolute_figures_and_no_arm_is_refused(tmp_path, capsys):
+    out = tmp_path / "p"
+    out.mkdir()
+    rows = [_row("cur", "eb/corridor_asym", 0, 90.0), _row("cur", "eb/corridor_asym", 1, 110.0,
+                                                          collisions=1)]
+    (out / "runs.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    args = ["--out", str(out), "--worlds", "eb/corridor_asym", "--seeds", "0-1", "--no-runs"]
+    assert paired.main(args + ["--arm", "cur"]) == 0
+    assert "| eb/corridor_asym | paper | cur | 2/2 | 1 | 100.0 | 1 | - |" in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        paired.main(args)
+
+
 def test_parse_seeds():
     assert paired.parse_seeds("0-2,5,1") == [0, 1, 2, 5]
 
