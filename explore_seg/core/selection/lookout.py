@@ -146,12 +146,17 @@ def lookouts(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray[n
     step = max(1, metres_to_cells(params.viewpoint_step_m, res))
     blocked = grid.data >= occupied_threshold
     codes = coarse_codes(grid, occupied_threshold)
-    for i in todo:
+    cands = [candidate_cells(frontiers[i].cells, frontiers[i].point_rc, passable, radius,
+                             step)[1:] for i in todo]
+    counts = [len(c) for c in cands]
+    if not sum(counts):
+        return out, d_out
+    # One Dijkstra sweep for the candidates of every frontier.
+    dist_all = graph.distances(start_rc, np.concatenate(cands)) + hop_m
+    bounds = np.concatenate([[0], np.cumsum(counts)])
+    for j, i in enumerate(todo):
         f = frontiers[i]
-        cand = candidate_cells(f.cells, f.point_rc, passable, radius, step)[1:]
-        if len(cand) == 0:
-            continue
-        d = graph.distances(start_rc, cand) + hop_m
+        cand, d = cands[j], dist_all[bounds[j]:bounds[j + 1]]
         reach = np.isfinite(d)
         cand, d = cand[reach], d[reach]
         if len(cand) == 0:
