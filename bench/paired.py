@@ -17,9 +17,10 @@ where KEY is
 
 Values are parsed by the field's type (bool: true/false/1/0). The first arm is the
 reference of the ratios; a single arm runs and reports its absolute figures (complete,
-contacts, median T95) only, e.g. more seeds of today's defaults. Runs are appended to ``OUT/runs.jsonl`` as they finish; a second
-call with the same ``--out`` runs only what is missing (same arm names must mean the same
-overrides: they are stored in ``OUT/arms.json`` and checked).
+contacts, median T95) only, e.g. more seeds of today's defaults. Runs are appended to
+``OUT/runs.jsonl`` as they finish; a second call with the same ``--out`` runs only what is
+missing (same arm names must mean the same overrides: they are stored in
+``OUT/arms.json`` and checked).
 
 Usage::
 

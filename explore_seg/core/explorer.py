@@ -339,9 +339,10 @@ class Explorer:
             frontiers = router.viewpoints(grid, frontiers, self._graph, start,
                                           self._det.passable)
         dist, excluded = self._distances(start, robot_rc, frontiers)
-        if (self._sp.lookout_goals and dist is not None and excluded is not None
-                and start is not None and len(dist) and not (np.isfinite(dist) & ~excluded).any()):
-            assert self._det is not None and self._graph is not None
+        if (self._sp.lookout_goals and dist is not None and len(dist)
+                and not (np.isfinite(dist) & ~excluded).any()):
+            # No selectable frontier: look at the unreachable ones (lookout.py).
+            assert start is not None and self._det is not None and self._graph is not None
             hop = math.hypot(start[0] - robot_rc[0], start[1] - robot_rc[1]) * grid.resolution_m
             frontiers, dist = lookouts(grid, frontiers, dist, self._graph.graph, start,
                                        self._det.passable, self._sp,

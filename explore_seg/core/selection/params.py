@@ -111,12 +111,14 @@ class SelectionParams:
         "routed and lookout goals: range of the 360-degree sensor whose view of "
         "unknown space rates the viewpoints", "m", range=(0.0, _INF)))
     gain_rays: int = field(default=24, metadata=param_meta(
-        "routed and lookout goals: rays cast over 360 degrees per viewpoint candidate", range=(4, 720)))
+        "routed and lookout goals: rays cast over 360 degrees per viewpoint candidate",
+        range=(4, 720)))
     viewpoint_radius_m: float = _non_negative(
         "routed: viewpoint candidates lie within this distance of their frontier's cells",
         "m", default=0.75)
     viewpoint_step_m: float = field(default=0.3, metadata=param_meta(
-        "routed and lookout goals: spacing of the viewpoint candidates' lattice", "m", range=(0.0, _INF)))
+        "routed and lookout goals: spacing of the viewpoint candidates' lattice", "m",
+        range=(0.0, _INF)))
     viewpoint_gain_tolerance: float = field(default=0.1, metadata=param_meta(
         "routed and lookout goals: among candidates seeing at least (1 - this) of the "
         "best view, the one closest to the robot is the viewpoint", range=(0.0, 1.0)))
