@@ -203,7 +203,9 @@ def _settings(a: argparse.Namespace) -> dict[str, Any]:
         "lockstep_params": {k: v for k, v in vars(LockstepParams()).items()},
         "nav_inflation_margin_m": sim_params_for(None, a.nav_margin).nav_inflation_margin_m,
         "nav_inflation_soft_margin_m": SimParams().nav_inflation_soft_margin_m,
-        "nav_arc_check_edges": SimParams().nav_arc_check_edges}
+        "nav_arc_check_edges": SimParams().nav_arc_check_edges,
+        "nav_inflation_edge_cost": SimParams().nav_inflation_edge_cost,
+        "object_confirm_hits": explorer_params().objects.confirm_hits}
     return json.loads(json.dumps(settings))
 
 

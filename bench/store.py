@@ -23,7 +23,9 @@ ROOT = Path(__file__).resolve().parents[1]
 #: Settings that parts of earlier versions did not record, with the value they ran on.
 SETTING_DEFAULTS: dict[str, Any] = {"nav_inflation_margin_m": 0.0,
                                      "nav_inflation_soft_margin_m": 0.0,
-                                     "nav_arc_check_edges": False}
+                                     "nav_arc_check_edges": False,
+                                     "nav_inflation_edge_cost": 0.0,
+                                     "object_confirm_hits": 1}
 
 
 def code_version() -> str:

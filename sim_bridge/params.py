@@ -146,6 +146,11 @@ class SimParams:
         default=NavParams.inflation_soft_margin_m, metadata=param_meta(
         "clearance beyond the lethal zone that plans keep where the room allows (a high "
         "cost, not lethal: narrower doors still pass); 0 = off", "m", range=(0.0, math.inf)))
+    nav_inflation_edge_cost: float = field(
+        default=NavParams.inflation_edge_cost, metadata=param_meta(
+        "extra cost per metre through cells outside the lethal zone from which the robot's "
+        "disk would overlap an obstacle cell (paths avoid them where another way exists); "
+        "0 = off", range=(0.0, math.inf)))
     nav_inflation_radius_m: float = field(
         default=NavParams.inflation_radius_m, metadata=param_meta(
         "obstacle cost decays to zero at this distance (Nav2 inflation_radius)", "m",
@@ -267,6 +272,7 @@ class SimParams:
             inflation_margin_m=self.nav_inflation_margin_m,
             inflation_radius_m=self.nav_inflation_radius_m,
             inflation_soft_margin_m=self.nav_inflation_soft_margin_m,
+            inflation_edge_cost=self.nav_inflation_edge_cost,
             unknown_cost=self.nav_unknown_cost,
             allow_unknown=self.nav_allow_unknown,
             replan_period_s=self.nav_replan_period_s,

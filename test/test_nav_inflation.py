@@ -84,5 +84,23 @@ def test_soft_margin_keeps_clear_where_it_can_and_still_passes_a_narrow_door():
     cells = _plan(blocked, (20, 3), (20, 56), soft)
     assert (_wall_distance_m(blocked, cells) - 0.22).min() >= 0.0
     cells = _plan(blocked, (20, 3), (20, 56), NavParams(inflation_cost_weight=0.0,
-                                                         inflation_soft_margin_m=0.0))
+                                                         inflation_soft_margin_m=0.0,
+                                                         inflation_edge_cost=0.0))
     assert (_wall_distance_m(blocked, cells) - 0.22).min() < 0.0
+
+
+@pytest.mark.parametrize("start", [(24, 27), (23, 26)])
+def test_edge_cost_keeps_the_disk_off_a_corner_cell_inside_the_soft_band(start):
+    """A 0.45 m passage (rows 21..29) between a cabinet's top face (rows <= 20 from col 30)
+    and a wall (rows >= 30): every cell of it lies in the soft band, and the cell-centre
+    lethal zone (4 cells) lets the plan cut the cabinet's corner, where a 0.22 m disk
+    overlaps the corner cell by 4 cm (house seed 17's contact with cabinet_2). The edge
+    cost makes the plan keep the disk off every obstacle cell; the passage stays open."""
+    blocked = np.zeros((50, 60), bool)
+    blocked[:21, 30:] = True
+    blocked[30:, :] = True
+    goal = (25, 38)
+    cells = _plan(blocked, start, goal)
+    assert (_wall_distance_m(blocked, cells[1:]) - 0.22).min() >= 0.0
+    bare = _plan(blocked, start, goal, NavParams(inflation_edge_cost=0.0))
+    assert (_wall_distance_m(blocked, bare[1:]) - 0.22).min() < -0.03

@@ -27,7 +27,7 @@ def test_classified_detection_replaces_unknown_object():
 
 
 def test_object_removed_after_misses_when_the_camera_sees_through_it():
-    params = ObjectParams(clear_after_misses=3)
+    params = ObjectParams(clear_after_misses=3, confirm_hits=1)   # misses alone
     omap = ObjectMap(params, PRIORS)
     pose = camera_pose()
     chair = [box_parts((2.0, 0.0), (0.5, 0.5, 0.9))]
@@ -48,7 +48,7 @@ def test_table_seen_under_its_top_is_not_missed_but_a_removed_one_is(robot):
     """A top above the camera's view line: the camera sees under it, through most of the
     box. Misses are judged on the measured surface (top and legs), not the box faces
     (which would drop the table while it stands there, undetected)."""
-    params = ObjectParams(clear_after_misses=2)
+    params = ObjectParams(clear_after_misses=2, confirm_hits=1)   # misses alone
     table, obj = measured_table(0.95, params)
     assert obj.surface is not None and 20 <= len(obj.surface) <= MAX_SURFACE_POINTS
     pose = camera_pose(*robot)
@@ -67,6 +67,37 @@ def test_table_seen_under_its_top_is_not_missed_but_a_removed_one_is(robot):
     assert omap.tracked[0].misses == 1
     omap.update([], gone)
     assert len(omap) == 0
+
+
+def test_tentative_object_removed_when_its_place_is_seen_without_it():
+    """A box detected in one frame (a false detection, or a box fitted to a neighbour's
+    points) goes after tentative_max_unmatched frames that see its place unoccluded
+    without detecting it, even where its measured surface is really there; a box
+    detected twice stays, and so does a tentative one behind an occluder."""
+    params = ObjectParams(confirm_hits=2, tentative_max_unmatched=3)
+    pose = camera_pose()
+    chair = [box_parts((2.0, 0.0), (0.5, 0.5, 0.9))]
+    present = DepthFrame(render_depth(chair, pose), K, pose)
+    omap = ObjectMap(params, PRIORS)
+    omap.update([make_obj(2.0, 0.0, size=(0.5, 0.5, 0.9))], present)
+    for expected in (1, 2):
+        omap.update([], present)
+        assert len(omap) == 1 and omap.tracked[0].unmatched == expected
+        assert omap.tracked[0].misses == 0          # the chair is there: never seen through
+    omap.update([], present)
+    assert len(omap) == 0
+    confirmed = ObjectMap(params, PRIORS)
+    for _ in range(2):
+        confirmed.update([make_obj(2.0, 0.0, size=(0.5, 0.5, 0.9))], present)
+    for _ in range(5):
+        confirmed.update([], present)
+    assert len(confirmed) == 1 and confirmed.tracked[0].hits == 2
+    hidden = ObjectMap(params, PRIORS)
+    hidden.update([make_obj(3.0, 0.0, size=(0.5, 0.5, 0.9))])
+    wall = DepthFrame(render_depth([box_parts((1.5, 0.0), (0.1, 6.0, 3.0))], pose), K, pose)
+    for _ in range(5):
+        hidden.update([], wall)
+    assert len(hidden) == 1 and hidden.tracked[0].unmatched == 0
 
 
 def test_object_not_missed_when_occluded_or_out_of_view():

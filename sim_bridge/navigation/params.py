@@ -26,6 +26,11 @@ class NavParams:
         "comparisons); 0 = off", "m", range=(0.0, math.inf)))
     inflation_soft_margin_cost: float = field(default=20.0, metadata=param_meta(
         "extra cost per metre inside inflation_soft_margin_m", range=(0.0, math.inf)))
+    inflation_edge_cost: float = field(default=50.0, metadata=param_meta(
+        "extra cost per metre through cells outside the lethal zone from which the robot's "
+        "disk would overlap an obstacle cell (the lethal zone is judged at cell centres, "
+        "up to half a cell diagonal closer than the cells' edges): paths avoid them where "
+        "another way exists and still pass where none does; 0 = off", range=(0.0, math.inf)))
     inflation_radius_m: float = field(default=0.6, metadata=param_meta(
         "obstacle cost decays to zero at this distance (Nav2 inflation_radius)",
         "m", range=(0.0, math.inf)))
@@ -109,6 +114,7 @@ class NavParams:
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
         non_negative = ("inflation_margin_m", "inflation_cost_weight", "unknown_cost",
                         "inflation_soft_margin_m", "inflation_soft_margin_cost", "arc_clearance_m",
+                        "inflation_edge_cost",
                         "planner_goal_tolerance_m", "plan_window_margin_m",
                         "progress_timeout_s", "goal_timeout_s", "min_approach_speed_mps")
         for name in non_negative:

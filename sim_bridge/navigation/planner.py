@@ -2,7 +2,9 @@
 
 :func:`cost_grid` builds the per-metre cost of an inflated costmap (lethal within
 ``robot_radius_m + inflation_margin_m``, an exponentially decaying inflation band, a
-surcharge through unknown cells); :func:`plan_path` runs the cost-weighted 8-connected
+near-lethal soft margin, a surcharge through the cells whose distance to an obstacle cell's
+edge is inside the lethal radius though their centre distance is not
+(:func:`edge_overlap_kernel`), a surcharge through unknown cells); :func:`plan_path` runs the cost-weighted 8-connected
 Dijkstra on a window around start and goal that grows until it provably holds the
 cheapest path; :func:`coarsen` downsamples a cost grid for planning on coarser cells.
 """
@@ -18,6 +20,22 @@ import numpy.typing as npt
 from explore_seg.core.grid import GridMap
 from explore_seg.core.paths import SQRT2, cost_distance_field, extract_path, inflate
 from sim_bridge.navigation.params import NavParams
+
+
+def edge_overlap_kernel(radius_m: float, resolution_m: float) -> npt.NDArray[np.uint8]:
+    """Offsets (as a dilation kernel) of the obstacle cells whose square lies closer than
+    ``radius_m`` to a cell's centre: ``hypot(max(|dc| - 1/2, 0), max(|dr| - 1/2, 0)) *
+    resolution_m < radius_m``.
+
+    Examples
+    --------
+    >>> k = edge_overlap_kernel(0.22, 0.05)
+    >>> k.shape, int(k[5, 5 + 4]), int(k[5 + 4, 5 + 3]), int(k[5 + 4, 5 + 4])
+    ((11, 11), 1, 1, 0)
+    """
+    r = int(math.ceil(radius_m / resolution_m + 0.5))
+    d = np.maximum(np.abs(np.arange(-r, r + 1, dtype=np.float64)) - 0.5, 0.0)
+    return (np.hypot(d[:, None], d[None, :]) * resolution_m < radius_m).astype(np.uint8)
 
 
 def cost_grid(blocked: npt.NDArray[np.bool_], unknown: npt.NDArray[np.bool_] | None,
@@ -51,6 +69,10 @@ def cost_grid(blocked: npt.NDArray[np.bool_], unknown: npt.NDArray[np.bool_] | N
         soft = inflate(blocked, params.lethal_radius_m + params.inflation_soft_margin_m,
                        resolution_m) & ~lethal
         cost[soft] += params.inflation_soft_margin_cost
+    if params.inflation_edge_cost > 0 and blocked.any():   # disk overlaps a cell's square
+        kernel = edge_overlap_kernel(params.lethal_radius_m, resolution_m)
+        edge = cv2.dilate(blocked.astype(np.uint8), kernel).astype(bool) & ~lethal
+        cost[edge] += params.inflation_edge_cost
     if unknown is not None and params.unknown_cost > 0:
         cost[unknown] += params.unknown_cost
     cost[lethal] = np.inf

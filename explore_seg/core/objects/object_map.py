@@ -33,6 +33,8 @@ class TrackedObject:
     hits: int = 1
     misses: int = 0
     last_seen_ns: int = 0
+    #: Frames that saw a tentative object's place unoccluded without detecting it.
+    unmatched: int = 0
 
 
 def box_samples(obj: Object3D, spacing_m: float, surface_only: bool = True
@@ -148,11 +150,18 @@ class ObjectMap:
             matched.add(t.id)
         self._merge_overlapping()
         if frame is not None:
+            p = self.params
             for t, visible in zip(self._objects, self._in_view(frame)):
-                if visible and t.id not in matched and self._seen_through(t.obj, frame):
+                if not visible or t.id in matched:
+                    continue
+                if self._seen_through(t.obj, frame):
                     t.misses += 1
+                if t.hits < p.confirm_hits and self._centre_unoccluded(t.obj, frame):
+                    t.unmatched += 1
             self._objects = [t for t in self._objects
-                             if t.misses < self.params.clear_after_misses]
+                             if t.misses < p.clear_after_misses
+                             and (t.hits >= p.confirm_hits
+                                  or t.unmatched < p.tentative_max_unmatched)]
         if len(self._objects) > self.params.max_objects:
             self._objects.sort(key=lambda t: (t.misses, -t.hits, -t.last_seen_ns, t.id))
             del self._objects[self.params.max_objects:]
@@ -251,6 +260,27 @@ class ObjectMap:
             ok &= (f * coord - lo * z) / math.hypot(f, lo) >= -r
             ok &= (hi * z - f * coord) / math.hypot(f, hi) >= -r
         return ok
+
+    def _centre_unoccluded(self, obj: Object3D, frame: DepthFrame) -> bool:
+        """True when the box's centre is in the image, within ``max_depth_m``, and nothing
+        stands in front of the box there (the depth at its pixel reaches the box: at least
+        its centre's depth - half its footprint diagonal - ``miss_depth_margin_m``)."""
+        p = self.params
+        opt = apply_transform(invert_transform(frame.map_from_optical),
+                              np.asarray([obj.center_xyz], dtype=np.float64))[0]
+        z = float(opt[2])
+        if not 1e-6 < z <= p.max_depth_m:
+            return False
+        k = frame.intrinsics
+        u = int(round(k.fx * float(opt[0]) / z + k.cx))
+        v = int(round(k.fy * float(opt[1]) / z + k.cy))
+        if not (0 <= u < k.width and 0 <= v < k.height):
+            return False
+        measured = float(frame.depth_m[v, u])
+        if not (math.isfinite(measured) and measured > 0):
+            return False
+        front = z - 0.5 * math.hypot(obj.size_xyz[0], obj.size_xyz[1]) - p.miss_depth_margin_m
+        return measured >= front
 
     def _seen_through(self, obj: Object3D, frame: DepthFrame) -> bool:
         """True when the camera sees beyond most of the object's visible measured surface

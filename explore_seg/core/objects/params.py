@@ -130,6 +130,14 @@ class ObjectParams:
         "An object is removed after this many frames in which the camera sees past where "
         "its points were measured (its surface; not the empty space under a table top)",
         range=(1, 2**31 - 1)))
+    confirm_hits: int = field(default=2, metadata=param_meta(
+        "An object detected in fewer frames is tentative (a false detection, or a box fitted "
+        "to a neighbour's points): it is removed after tentative_max_unmatched frames that "
+        "see its place unoccluded without detecting it (its measured body stays in the "
+        "depth obstacles); 1 = every object is confirmed at once", range=(1, 2**31 - 1)))
+    tentative_max_unmatched: int = field(default=3, metadata=param_meta(
+        "Frames seeing a tentative object's centre unoccluded, without detecting it, before "
+        "it is removed", range=(1, 2**31 - 1)))
     miss_depth_margin_m: float = field(default=0.15, metadata=param_meta(
         "Depth must exceed an object's surface point by this to count as seeing past it",
         "m", range=(0.0, math.inf)))
@@ -280,7 +288,7 @@ class ObjectParams:
             if not 0.0 <= v <= 1.0:
                 raise ValueError(f"{name} must be in [0, 1], got {v}")
         at_least_one = ("pixel_stride", "max_box_samples", "sor_k", "min_cluster_points", "max_objects",
-                        "clear_after_misses", "miss_min_samples", "max_cloud_points",
+                        "clear_after_misses", "confirm_hits", "tentative_max_unmatched", "miss_min_samples", "max_cloud_points",
                         "leg_min_points", "min_legs", "unknown_min_points",
                         "unknown_pixel_stride", "depth_pixel_stride", "depth_min_points",
                         "depth_max_score", "depth_max_voxels")
