@@ -138,6 +138,8 @@ class ObjectMap:
         matched: set[int] = set()
         for obs in observations:
             t = self._best_match(obs)
+            if t is None and self._explained_by_other(obs):
+                continue
             if t is None:
                 t = TrackedObject(self._next_id, obs, last_seen_ns=stamp_ns)
                 self._next_id += 1
@@ -178,6 +180,29 @@ class ObjectMap:
         out_u = max(abs(dx * c + dy * s) - 0.5 * obj.size_xyz[0], 0.0)
         out_v = max(abs(-dx * s + dy * c) - 0.5 * obj.size_xyz[1], 0.0)
         return math.hypot(out_u, out_v) <= margin
+
+    def _explained_by_other(self, obs: Object3D) -> bool:
+        """True when at least ``explained_fraction`` of ``obs``'s measured surface points
+        lie inside the footprint (grown by ``miss_sample_spacing_m``) of one confirmed
+        object of another known class: the detection's depth crop held that object."""
+        p = self.params
+        pts = obs.surface
+        if (p.explained_fraction <= 0 or pts is None or len(pts) < p.miss_min_samples
+                or obs.cls == UNKNOWN_CLASS):
+            return False
+        xy = np.asarray(pts[:, :2], dtype=np.float64)
+        for t in self._objects:
+            o = t.obj
+            if t.hits < p.confirm_hits or o.cls == obs.cls or o.cls == UNKNOWN_CLASS:
+                continue
+            c, s = math.cos(o.yaw), math.sin(o.yaw)
+            dx, dy = xy[:, 0] - o.center_xyz[0], xy[:, 1] - o.center_xyz[1]
+            inside = ((np.abs(dx * c + dy * s) <= 0.5 * o.size_xyz[0] + p.miss_sample_spacing_m)
+                      & (np.abs(-dx * s + dy * c) <= 0.5 * o.size_xyz[1]
+                         + p.miss_sample_spacing_m))
+            if float(np.mean(inside)) >= p.explained_fraction:
+                return True
+        return False
 
     @staticmethod
     def _compatible(a: str, b: str) -> bool:

@@ -130,6 +130,12 @@ class ObjectParams:
         "An object is removed after this many frames in which the camera sees past where "
         "its points were measured (its surface; not the empty space under a table top)",
         range=(1, 2**31 - 1)))
+    explained_fraction: float = field(default=0.6, metadata=param_meta(
+        "A new detection with at least this fraction of its measured points inside the "
+        "footprint (+ miss_sample_spacing_m) of a confirmed object of another class is that "
+        "object seen again, not a new one (a desk's box fitted to the chair in front of it "
+        "and grown to the desk's size, closing the way past both); 0 = off", "0..1",
+        range=(0.0, 1.0)))
     confirm_hits: int = field(default=2, metadata=param_meta(
         "An object detected in fewer frames is tentative (a false detection, or a box fitted "
         "to a neighbour's points): it is removed after tentative_max_unmatched frames that "
@@ -280,7 +286,8 @@ class ObjectParams:
             v = getattr(self, name)
             if not math.isfinite(v):
                 raise ValueError(f"{name} must be finite, got {v}")
-        fractions = ("min_score", "merge_iou", "miss_free_fraction", "min_extent_fraction",
+        fractions = ("min_score", "merge_iou", "miss_free_fraction", "explained_fraction",
+                     "min_extent_fraction",
                      "merge_parts_fraction", "unknown_top_fraction", "near_vote_share", "robot_clear_fraction",
                      "unknown_min_top_cover")
         for name in fractions:
