@@ -4,9 +4,10 @@
 ``robot_radius_m + inflation_margin_m``, an exponentially decaying inflation band, a
 near-lethal soft margin, a surcharge through the cells whose distance to an obstacle cell's
 edge is inside the lethal radius though their centre distance is not
-(:func:`edge_overlap_kernel`), a surcharge through unknown cells); :func:`plan_path` runs the cost-weighted 8-connected
-Dijkstra on a window around start and goal that grows until it provably holds the
-cheapest path; :func:`coarsen` downsamples a cost grid for planning on coarser cells.
+(:func:`edge_overlap_kernel`), a surcharge through unknown cells); :func:`plan_path` runs
+the cost-weighted 8-connected Dijkstra on a window around start and goal that grows until
+it provably holds the cheapest path; :func:`coarsen` downsamples a cost grid for planning
+on coarser cells.
 """
 
 from __future__ import annotations

@@ -295,7 +295,8 @@ class ObjectParams:
             if not 0.0 <= v <= 1.0:
                 raise ValueError(f"{name} must be in [0, 1], got {v}")
         at_least_one = ("pixel_stride", "max_box_samples", "sor_k", "min_cluster_points", "max_objects",
-                        "clear_after_misses", "confirm_hits", "tentative_max_unmatched", "miss_min_samples", "max_cloud_points",
+                        "clear_after_misses", "confirm_hits", "tentative_max_unmatched",
+                        "miss_min_samples", "max_cloud_points",
                         "leg_min_points", "min_legs", "unknown_min_points",
                         "unknown_pixel_stride", "depth_pixel_stride", "depth_min_points",
                         "depth_max_score", "depth_max_voxels")
