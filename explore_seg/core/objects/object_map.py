@@ -12,12 +12,13 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.camera import apply_transform, invert_transform
+from explore_seg.core.camera import apply_transform, invert_transform, project_points
 from explore_seg.core.grid import GridMap
 from explore_seg.core.objects.boxes import Object3D
 from explore_seg.core.objects.depth_obstacles import DepthObstacles
 from explore_seg.core.objects.frame import DepthFrame
 from explore_seg.core.objects.fusion import footprint_iou, fuse_boxes
+from explore_seg.core.objects.geometry import points_in_rect
 from explore_seg.core.objects.params import UNKNOWN_CLASS, ObjectParams
 from explore_seg.core.objects.priors import SizePrior
 from explore_seg.core.objects.walls import WallMask
@@ -195,11 +196,8 @@ class ObjectMap:
             o = t.obj
             if t.hits < p.confirm_hits or o.cls == obs.cls or o.cls == UNKNOWN_CLASS:
                 continue
-            c, s = math.cos(o.yaw), math.sin(o.yaw)
-            dx, dy = xy[:, 0] - o.center_xyz[0], xy[:, 1] - o.center_xyz[1]
-            inside = ((np.abs(dx * c + dy * s) <= 0.5 * o.size_xyz[0] + p.miss_sample_spacing_m)
-                      & (np.abs(-dx * s + dy * c) <= 0.5 * o.size_xyz[1]
-                         + p.miss_sample_spacing_m))
+            inside = points_in_rect(xy, o.center_xyz[:2], o.size_xyz[:2], o.yaw,
+                                    p.miss_sample_spacing_m)
             if float(np.mean(inside)) >= p.explained_fraction:
                 return True
         return False
@@ -297,8 +295,8 @@ class ObjectMap:
         if not 1e-6 < z <= p.max_depth_m:
             return False
         k = frame.intrinsics
-        u = int(round(k.fx * float(opt[0]) / z + k.cx))
-        v = int(round(k.fy * float(opt[1]) / z + k.cy))
+        fu, fv, _ = project_points(opt[None, :], k)
+        u, v = int(round(float(fu[0]))), int(round(float(fv[0])))
         if not (0 <= u < k.width and 0 <= v < k.height):
             return False
         measured = float(frame.depth_m[v, u])
