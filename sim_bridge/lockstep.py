@@ -97,7 +97,8 @@ class StrategySpec:
     description : str
     nav_feedback : bool
         Feed the navigation stand-in's outcome to the decision core in this strategy's
-        runs (as :attr:`LockstepParams.nav_feedback` does for every strategy).
+        runs even when :attr:`LockstepParams.nav_feedback` (on by default, for every
+        strategy) is off.
     """
 
     selection: str
@@ -164,11 +165,11 @@ class LockstepParams:
     object_update_tolerance_m: float = field(default=0.05, metadata=param_meta(
         "the planner's object layer is replaced only when a box moved or grew "
         "by more than this (or appeared/vanished)", "m"))
-    nav_feedback: bool = field(default=False, metadata=param_meta(
+    nav_feedback: bool = field(default=True, metadata=param_meta(
         "tell the decision core how the navigation stand-in ended each goal (succeeded: "
         "judge its frontier now; aborted/rejected: blacklist it now), as the "
-        "target_selector does with Nav2's action status; false (default) keeps the "
-        "earlier benchmark results reproducible: goals end by distance and "
+        "target_selector does with Nav2's action status (default); false reproduces "
+        "benchmark results recorded before this default: goals end by distance and "
         "progress_timeout_s only"))
 
     def __post_init__(self) -> None:
