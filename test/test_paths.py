@@ -152,6 +152,25 @@ def test_cost_distance_field_matches_reference_on_random_costs(seed):
     np.testing.assert_allclose(got[np.isfinite(want)], want[np.isfinite(want)], rtol=1e-12)
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_cost_distance_field_limit_drops_only_costlier_cells(seed):
+    """With a limit, cells costlier than it are inf and every other cell keeps its exact
+    value (the planner's pruned search relies on both)."""
+    rng = np.random.default_rng(200 + seed)
+    shape = (30, 27)
+    cost = 1.0 + 3.0 * rng.random(shape)
+    cost[rng.random(shape) < 0.2] = np.inf
+    start = (15, 13)
+    cost[start] = 1.0
+    full = cost_distance_field(cost, start, RES)
+    limit = float(np.median(full[np.isfinite(full)]))
+    got = cost_distance_field(cost, start, RES, limit)
+    keep = full <= limit
+    assert 10 < keep.sum() < np.isfinite(full).sum()
+    np.testing.assert_array_equal(got[keep], full[keep])
+    assert np.isinf(got[~keep]).all()
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_path_length_at_least_straight_line(seed):
     pas = random_passable(seed, density=0.25)

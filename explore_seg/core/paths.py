@@ -7,7 +7,8 @@ Two one-sweep solvers share one graph model (8-connected moves, a diagonal only 
 both side cells are passable, so reachability equals 4-connectivity):
 
 * :func:`distance_field` is exact: Dijkstra on every passable cell of the start's
-  connected component (cropped to its bounding box), graph built directly in CSR form.
+  connected component (cropped to its bounding box); :func:`cost_distance_field`, its
+  weighted form, builds every cell's 8 move costs from slices of the padded grid.
 * :func:`explore_seg.core.block_graph.block_distances` is the fast approximation used by
   target selection: Dijkstra on a graph whose nodes are the 4-connected pieces of
   passable cells inside ``k x k`` blocks. Reachability stays exact (a piece is internally connected and two pieces are
@@ -17,6 +18,7 @@ both side cells are passable, so reachability equals 4-connectivity):
 
 from __future__ import annotations
 
+import functools
 import math
 
 import cv2
@@ -114,15 +116,13 @@ def _component_box(pas: npt.NDArray[np.bool_], start_rc: tuple[int, int]
     return lab[y:y + h, x:x + w] == k, y, x
 
 
-def grid_csr(pas: npt.NDArray[np.bool_], resolution_m: float,
-              cell_cost: npt.NDArray[np.float64] | None = None
-              ) -> tuple[csr_matrix, npt.NDArray[np.signedinteger]]:
+def grid_csr(pas: npt.NDArray[np.bool_], resolution_m: float
+             ) -> tuple[csr_matrix, npt.NDArray[np.signedinteger]]:
     """Directed CSR graph (both directions stored) of the passable cells of ``pas``.
 
     Returns the graph and an (H, W) integer image of node ids (-1 where not passable).
     Edges are built row by row in node order, so no sorting is needed. A move costs its
-    length; with ``cell_cost`` (same shape, finite on ``pas``) its length times the mean
-    of the two cells' costs.
+    length (weighted fields use :func:`_cost_graph`).
 
     Neighbours are gathered through flat indices into a one-cell padded copy of the
     grid (one gather of N values per move instead of masking the whole box), in int32
@@ -143,11 +143,6 @@ def grid_csr(pas: npt.NDArray[np.bool_], resolution_m: float,
     ok = np.empty((n, 8), dtype=bool)
     counts = np.zeros(n, dtype=itype)
     wts = np.empty(8, dtype=np.float64)
-    if cell_cost is not None:
-        padc = np.ones(size, dtype=np.float64)
-        padc[flat] = cell_cost[pas]
-        own = padc[flat]
-        ecost = np.empty((n, 8), dtype=np.float64)
     for j, (dr, dc, step) in enumerate(_MOVES8):
         off = flat + itype(dr * w2 + dc)
         sub = idx_flat[off]
@@ -159,14 +154,62 @@ def grid_csr(pas: npt.NDArray[np.bool_], resolution_m: float,
         ok[:, j] = good
         counts += good
         wts[j] = step * resolution_m
-        if cell_cost is not None:
-            ecost[:, j] = 0.5 * wts[j] * (own + padc[off])
     indptr = np.zeros(n + 1, dtype=itype)
     np.cumsum(counts, out=indptr[1:])
     indices = nbr[ok]
-    data = ecost[ok] if cell_cost is not None else np.broadcast_to(wts, (n, 8))[ok]
+    data = np.broadcast_to(wts, (n, 8))[ok]
     graph = csr_matrix((data, indices, indptr), shape=(n, n))
     return graph, idx_flat.reshape(h + 2, w2)[1:h + 1, 1:w + 1]
+
+
+@functools.lru_cache(maxsize=8)
+def _padded_topology(h: int, w: int) -> tuple[npt.NDArray[np.signedinteger],
+                                              npt.NDArray[np.signedinteger]]:
+    """CSR ``indices`` and ``indptr`` of the 8-neighbour graph of an (h, w) grid padded by
+    one cell: node ``r * (w + 2) + c`` of the padded grid; each interior cell has its 8
+    moves (in :data:`_MOVES8` order) as out-edges, the border cells none. Read-only,
+    cached per shape (the planner's windows repeat)."""
+    w2 = w + 2
+    n = (h + 2) * w2
+    itype = np.int32 if 8 * n < np.iinfo(np.int32).max else np.int64
+    interior = np.zeros((h + 2, w2), dtype=itype)
+    interior[1:h + 1, 1:w + 1] = 8
+    indptr = np.zeros(n + 1, dtype=itype)
+    np.cumsum(interior.ravel(), out=indptr[1:])
+    base = (np.arange(1, h + 1, dtype=itype)[:, None] * itype(w2)
+            + np.arange(1, w + 1, dtype=itype)[None, :]).ravel()
+    offsets = np.array([dr * w2 + dc for dr, dc, _ in _MOVES8], dtype=itype)
+    indices = (base[:, None] + offsets[None, :]).ravel()
+    indices.flags.writeable = False
+    indptr.flags.writeable = False
+    return indices, indptr
+
+
+def _cost_graph(cost: npt.NDArray[np.float64], resolution_m: float) -> csr_matrix:
+    """:func:`cost_distance_field`'s graph of an (h, w) cost grid, on the padded grid of
+    :func:`_padded_topology` (node of cell (r, c): ``(r + 1) * (w + 2) + c + 1``).
+
+    A move costs ``0.5 * length * (cost of its two cells)``, ``inf`` (never relaxed by
+    Dijkstra, as if absent) when a cell is impassable or, for a diagonal, a side cell
+    is. Every cell gets its 8 edges with the same arithmetic, so the weights are
+    built from slices instead of a compressed node set.
+    """
+    h, w = cost.shape
+    pad = np.full((h + 2, w + 2), np.inf)
+    pad[1:h + 1, 1:w + 1] = cost
+    own = pad[1:h + 1, 1:w + 1]
+    data = np.empty((h, w, 8), dtype=np.float64)
+    for j, (dr, dc, step) in enumerate(_MOVES8):
+        out = data[:, :, j]
+        np.add(own, pad[1 + dr:h + 1 + dr, 1 + dc:w + 1 + dc], out=out)
+        out *= 0.5 * (step * resolution_m)
+        if dr and dc:
+            cut = ~(np.isfinite(pad[1 + dr:h + 1 + dr, 1:w + 1])
+                    & np.isfinite(pad[1:h + 1, 1 + dc:w + 1 + dc]))
+            out[cut] = np.inf
+    indices, indptr = _padded_topology(h, w)
+    n = indptr.shape[0] - 1
+    return csr_matrix((data.ravel(), indices, indptr), shape=(n, n))
 
 
 def distance_field(passable: npt.NDArray[np.bool_], start_rc: tuple[int, int],
@@ -248,13 +291,12 @@ def cost_distance_field(cost: npt.NDArray[np.float64], start_rc: tuple[int, int]
         cost[start] = 1.0
     pas = np.isfinite(cost)
     comp, r0, c0 = _component_box(pas, start)
-    box = cost[r0:r0 + comp.shape[0], c0:c0 + comp.shape[1]]
-    graph, idx = grid_csr(comp, resolution_m, box)
-    d = dijkstra(graph, directed=True, indices=int(idx[start[0] - r0, start[1] - c0]),
-                 limit=limit)
+    hb, wb = comp.shape
+    box = np.where(comp, cost[r0:r0 + hb, c0:c0 + wb], np.inf)
+    d = dijkstra(_cost_graph(box, resolution_m), directed=True,
+                 indices=(start[0] - r0 + 1) * (wb + 2) + start[1] - c0 + 1, limit=limit)
     out = np.full(pas.shape, np.inf)
-    sub = out[r0:r0 + comp.shape[0], c0:c0 + comp.shape[1]]
-    sub[comp] = d
+    out[r0:r0 + hb, c0:c0 + wb] = d.reshape(hb + 2, wb + 2)[1:hb + 1, 1:wb + 1]
     return out
 
 
