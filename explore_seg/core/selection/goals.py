@@ -87,7 +87,8 @@ class GoalManager:
        ``progress_min_m``; none for ``progress_timeout_s`` blacklists the goal. Reaching
        it (``goal_reached_tolerance_m``) while its frontier (a frontier with a cell
        within ``frontier_match_radius_m`` + the goal's gap to its frontier) is still
-       there after a newer map (or ``arrival_wait_s``) blacklists it too; reaching a
+       there after a newer map (or ``arrival_wait_s``) blacklists it too, unless the
+       visit revealed the frontier's cells (``reached_unknown_fraction``); reaching a
        return-to-start goal ends exploration (DONE). A ``routed`` goal counts as reached
        within ``handover_m`` already (the robot drives on while it is judged).
     2. Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted goal
@@ -411,8 +412,11 @@ class GoalManager:
                                   "goal reached: waiting for the map to update"), ""
             self._arrived_s = None
             if self._matching(grid, frontiers) is not None:
-                self.abandon_goal(blacklist=True)
-                return None, "goal reached but its frontier remains: blacklisted"
+                if self._still_unknown(grid) >= p.reached_unknown_fraction:
+                    self.abandon_goal(blacklist=True)
+                    return None, "goal reached but its frontier remains: blacklisted"
+                self.goal = None
+                return None, "goal reached: its frontier's cells were revealed, the space goes on"
             self.goal = None
             return None, "goal reached"
         if now_s - self._last_progress_s > p.progress_timeout_s:

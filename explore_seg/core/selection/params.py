@@ -74,6 +74,12 @@ class SelectionParams:
     arrival_wait_s: float = _non_negative(
         "after reaching a goal, wait this long (or for a newer map) before judging whether "
         "its frontier was cleared", "s", default=2.0)
+    reached_unknown_fraction: float = field(default=0.5, metadata=param_meta(
+        "a reached goal whose frontier remains is blacklisted only when at least this "
+        "share of its frontier's cells (as last matched before arrival) are still unknown: "
+        "the visit revealed little; when the visit revealed them, the frontier that "
+        "remains is where the space goes on (a corridor longer than the sensor range) and "
+        "stays selectable; 0 = always blacklist", range=(0.0, 1.0)))
     goal_change_min_m: float = _non_negative(
         "a new goal closer than this to the current one is not sent", "m", default=0.3)
     blacklist_radius_m: float = _non_negative(
@@ -152,6 +158,9 @@ class SelectionParams:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {v}")
+        if not 0.0 <= self.reached_unknown_fraction <= 1.0:
+            raise ValueError(f"reached_unknown_fraction must be in [0, 1], "
+                             f"got {self.reached_unknown_fraction}")
         if not (math.isfinite(self.progress_timeout_s) and self.progress_timeout_s > 0):
             raise ValueError(f"progress_timeout_s must be finite and > 0, "
                              f"got {self.progress_timeout_s}")
