@@ -60,6 +60,7 @@ def test_progress_keeps_goal_alive():
 
 def test_goal_reached_with_frontier_left_is_blacklisted_after_the_wait():
     g, fr = manager_world()
+    g.data[5, 10:20] = -1          # fr[0]'s cells stay unknown: the visit revealed nothing
     m = GoalManager(SelectionParams(strategy="nearest", arrival_wait_s=2.0))
     goal = m.step(0.0, (1.0, 1.0), g, fr, [1.0, 3.0]).goal
     res = m.step(5.0, goal.xy_m, g, fr, [0.0, 2.0])
@@ -249,6 +250,7 @@ def test_blacklist_added_counts_entries_past_the_bound():
     ("routed", 1.0, True), ("routed", 0.0, False), ("nearest", 1.0, False)])
 def test_routed_goal_counts_as_reached_within_handover_m(strategy, handover_m, reached):
     g, fr = manager_world()
+    g.data[5, 10:20] = -1          # fr[0]'s cells stay unknown: the visit revealed nothing
     m = GoalManager(SelectionParams(strategy=strategy, handover_m=handover_m,
                                     arrival_wait_s=0.0))
     cost = np.array([1.0, 3.0])
@@ -261,3 +263,33 @@ def test_routed_goal_counts_as_reached_within_handover_m(strategy, handover_m, r
         assert "frontier remains" in res.reason and m.blacklist == (goal.xy_m,)
     else:
         assert res.action is Action.KEEP and res.goal is goal and m.blacklist == ()
+
+
+@pytest.mark.parametrize("fraction,revealed,blacklisted", [
+    (0.5, True, False), (0.5, False, True), (0.0, True, True)])
+def test_reached_goal_whose_frontier_moved_on_is_not_blacklisted(fraction, revealed,
+                                                                  blacklisted):
+    """A corridor longer than the sensor range: at the goal, the frontier it was chosen
+    for is revealed and a new one lies just beyond it (within the match radius). That is
+    where the space goes on, not a frontier the robot failed to clear."""
+    g = GridMap(np.zeros((60, 60), np.int8), 0.05, (0.0, 0.0))
+    g.data[:6] = -1
+    f0 = make_frontier(0, [(5, c) for c in range(10, 20)], (6, 12), g)
+    far = make_frontier(1, [(50, c) for c in range(10, 40)], (49, 20), g)
+    g.data[50, 10:40] = -1
+    m = GoalManager(SelectionParams(strategy="nearest", arrival_wait_s=0.0,
+                                    reached_unknown_fraction=fraction))
+    goal = m.step(0.0, (1.0, 2.0), g, [f0, far], [1.0, 3.0]).goal
+    assert goal.xy_m == f0.point_xy_m
+    after = GridMap(g.data.copy(), 0.05, (0.0, 0.0))
+    if revealed:
+        after.data[3:6] = 0                               # rows 3-5 seen: free
+    on = make_frontier(0, [(2, c) for c in range(10, 20)], (3, 12), after)
+    res = m.step(1.0, goal.xy_m, after, [on, far], [0.15, 2.5])
+    assert m.blacklist == ((goal.xy_m,) if blacklisted else ())
+    if blacklisted:
+        assert "frontier remains" in res.reason
+        assert res.action is Action.NEW_GOAL and res.goal.xy_m == far.point_xy_m
+    else:
+        assert "revealed" in res.reason
+        assert res.action is Action.NEW_GOAL and res.goal.xy_m == on.point_xy_m

@@ -45,6 +45,7 @@ def test_succeeded_counts_as_arrival_beyond_the_tolerance():
     # Nav2's goal checker can be looser than goal_reached_tolerance_m (or its planner moved
     # the goal out of a lethal cell): SUCCEEDED still ends the goal and judges its frontier.
     g, fr = manager_world()
+    g.data[5, 10:20] = -1          # fr[0]'s cells stay unknown: the visit revealed nothing
     m = GoalManager(SelectionParams(strategy="nearest", goal_reached_tolerance_m=0.01,
                                     arrival_wait_s=2.0))
     m.step(0.0, (1.0, 1.0), g, fr, [1.0, 3.0])
