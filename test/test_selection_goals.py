@@ -266,19 +266,20 @@ def test_routed_goal_counts_as_reached_within_handover_m(strategy, handover_m, r
 
 
 @pytest.mark.parametrize("fraction,revealed,blacklisted", [
-    (0.5, True, False), (0.5, False, True), (0.0, True, True)])
+    (0.5, True, False), (0.5, False, True), (0.0, True, True), (None, True, True)])
 def test_reached_goal_whose_frontier_moved_on_is_not_blacklisted(fraction, revealed,
                                                                   blacklisted):
     """A corridor longer than the sensor range: at the goal, the frontier it was chosen
     for is revealed and a new one lies just beyond it (within the match radius). That is
-    where the space goes on, not a frontier the robot failed to clear."""
+    where the space goes on, not a frontier the robot failed to clear: with
+    reached_unknown_fraction > 0 it stays selectable; by default (0) it is blacklisted."""
     g = GridMap(np.zeros((60, 60), np.int8), 0.05, (0.0, 0.0))
     g.data[:6] = -1
     f0 = make_frontier(0, [(5, c) for c in range(10, 20)], (6, 12), g)
     far = make_frontier(1, [(50, c) for c in range(10, 40)], (49, 20), g)
     g.data[50, 10:40] = -1
-    m = GoalManager(SelectionParams(strategy="nearest", arrival_wait_s=0.0,
-                                    reached_unknown_fraction=fraction))
+    extra = {} if fraction is None else {"reached_unknown_fraction": fraction}
+    m = GoalManager(SelectionParams(strategy="nearest", arrival_wait_s=0.0, **extra))
     goal = m.step(0.0, (1.0, 2.0), g, [f0, far], [1.0, 3.0]).goal
     assert goal.xy_m == f0.point_xy_m
     after = GridMap(g.data.copy(), 0.05, (0.0, 0.0))

@@ -87,8 +87,9 @@ class GoalManager:
        ``progress_min_m``; none for ``progress_timeout_s`` blacklists the goal. Reaching
        it (``goal_reached_tolerance_m``) while its frontier (a frontier with a cell
        within ``frontier_match_radius_m`` + the goal's gap to its frontier) is still
-       there after a newer map (or ``arrival_wait_s``) blacklists it too, unless the
-       visit revealed the frontier's cells (``reached_unknown_fraction``); reaching a
+       there after a newer map (or ``arrival_wait_s``) blacklists it too (with
+       ``reached_unknown_fraction`` > 0: unless the visit revealed the frontier's
+       cells); reaching a
        return-to-start goal ends exploration (DONE). A ``routed`` goal counts as reached
        within ``handover_m`` already (the robot drives on while it is judged).
     2. Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted goal

@@ -74,12 +74,13 @@ class SelectionParams:
     arrival_wait_s: float = _non_negative(
         "after reaching a goal, wait this long (or for a newer map) before judging whether "
         "its frontier was cleared", "s", default=2.0)
-    reached_unknown_fraction: float = field(default=0.5, metadata=param_meta(
-        "a reached goal whose frontier remains is blacklisted only when at least this "
-        "share of its frontier's cells (as last matched before arrival) are still unknown: "
-        "the visit revealed little; when the visit revealed them, the frontier that "
-        "remains is where the space goes on (a corridor longer than the sensor range) and "
-        "stays selectable; 0 = always blacklist", range=(0.0, 1.0)))
+    reached_unknown_fraction: float = field(default=0.0, metadata=param_meta(
+        "experimental: a reached goal whose frontier remains is blacklisted only when at "
+        "least this share of its frontier's cells (as last matched before arrival) are "
+        "still unknown (the visit revealed little); when the visit revealed them, the "
+        "frontier that remains is where the space goes on (a corridor longer than the "
+        "sensor range) and stays selectable; 0 (default) = always blacklist",
+        range=(0.0, 1.0)))
     goal_change_min_m: float = _non_negative(
         "a new goal closer than this to the current one is not sent", "m", default=0.3)
     blacklist_radius_m: float = _non_negative(
