@@ -284,26 +284,33 @@ class ObjectMap:
             ok &= (hi * z - f * coord) / math.hypot(f, hi) >= -r
         return ok
 
+    def _depths_at(self, points_map: npt.NDArray[np.float64], frame: DepthFrame
+                   ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """For the map points in front of the camera (up to ``max_depth_m``) whose pixel
+        lies in the image with a valid depth (finite, > 0): their depth along the optical
+        axis and the frame's measured depth at their pixel, both shape (M,)."""
+        opt = apply_transform(invert_transform(frame.map_from_optical), points_map)
+        z = opt[:, 2]
+        front = (z > 1e-6) & (z <= self.params.max_depth_m)
+        opt, z = opt[front], z[front]
+        k = frame.intrinsics
+        fu, fv, _ = project_points(opt, k)
+        u, v = np.round(fu).astype(np.int64), np.round(fv).astype(np.int64)
+        inside = (u >= 0) & (u < k.width) & (v >= 0) & (v < k.height)
+        measured = frame.depth_m[v[inside], u[inside]]
+        ok = np.isfinite(measured) & (measured > 0)
+        return z[inside][ok], measured[ok]
+
     def _centre_unoccluded(self, obj: Object3D, frame: DepthFrame) -> bool:
         """True when the box's centre is in the image, within ``max_depth_m``, and nothing
         stands in front of the box there (the depth at its pixel reaches the box: at least
         its centre's depth - half its footprint diagonal - ``miss_depth_margin_m``)."""
-        p = self.params
-        opt = apply_transform(invert_transform(frame.map_from_optical),
-                              np.asarray([obj.center_xyz], dtype=np.float64))[0]
-        z = float(opt[2])
-        if not 1e-6 < z <= p.max_depth_m:
+        z, measured = self._depths_at(np.asarray([obj.center_xyz], dtype=np.float64), frame)
+        if len(z) == 0:
             return False
-        k = frame.intrinsics
-        fu, fv, _ = project_points(opt[None, :], k)
-        u, v = int(round(float(fu[0]))), int(round(float(fv[0])))
-        if not (0 <= u < k.width and 0 <= v < k.height):
-            return False
-        measured = float(frame.depth_m[v, u])
-        if not (math.isfinite(measured) and measured > 0):
-            return False
-        front = z - 0.5 * math.hypot(obj.size_xyz[0], obj.size_xyz[1]) - p.miss_depth_margin_m
-        return measured >= front
+        front = (float(z[0]) - 0.5 * math.hypot(obj.size_xyz[0], obj.size_xyz[1])
+                 - self.params.miss_depth_margin_m)
+        return float(measured[0]) >= front
 
     def _seen_through(self, obj: Object3D, frame: DepthFrame) -> bool:
         """True when the camera sees beyond most of the object's visible measured surface
@@ -312,22 +319,10 @@ class ObjectMap:
         samples = (obj.surface.astype(np.float64) if obj.surface is not None
                    and len(obj.surface) >= p.miss_min_samples
                    else box_samples(obj, p.miss_sample_spacing_m, surface_only=True))
-        opt = apply_transform(invert_transform(frame.map_from_optical), samples)
-        z = opt[:, 2]
-        k = frame.intrinsics
-        front = (z > 1e-6) & (z <= p.max_depth_m)
-        if not np.any(front):
+        z, measured = self._depths_at(samples, frame)
+        if len(z) < p.miss_min_samples:
             return False
-        opt, z = opt[front], z[front]
-        u = np.round(k.fx * opt[:, 0] / z + k.cx).astype(np.int64)
-        v = np.round(k.fy * opt[:, 1] / z + k.cy).astype(np.int64)
-        inside = (u >= 0) & (u < k.width) & (v >= 0) & (v < k.height)
-        u, v, z = u[inside], v[inside], z[inside]
-        measured = frame.depth_m[v, u]
-        ok = np.isfinite(measured) & (measured > 0)
-        if np.count_nonzero(ok) < p.miss_min_samples:
-            return False
-        through = measured[ok] > z[ok] + p.miss_depth_margin_m
+        through = measured > z + p.miss_depth_margin_m
         return float(np.mean(through)) >= p.miss_free_fraction
 
     # ----------------------------------------------------------------- outputs
