@@ -198,6 +198,7 @@ def _cost_graph(cost: npt.NDArray[np.float64], resolution_m: float) -> csr_matri
     h, w = cost.shape
     pad = np.full((h + 2, w + 2), np.inf)
     pad[1:h + 1, 1:w + 1] = cost
+    fin = np.isfinite(pad)
     own = pad[1:h + 1, 1:w + 1]
     data = np.empty((h, w, 8), dtype=np.float64)
     for j, (dr, dc, step) in enumerate(_MOVES8):
@@ -205,8 +206,7 @@ def _cost_graph(cost: npt.NDArray[np.float64], resolution_m: float) -> csr_matri
         np.add(own, pad[1 + dr:h + 1 + dr, 1 + dc:w + 1 + dc], out=out)
         out *= 0.5 * (step * resolution_m)
         if dr and dc:
-            cut = ~(np.isfinite(pad[1 + dr:h + 1 + dr, 1:w + 1])
-                    & np.isfinite(pad[1:h + 1, 1 + dc:w + 1 + dc]))
+            cut = ~(fin[1 + dr:h + 1 + dr, 1:w + 1] & fin[1:h + 1, 1 + dc:w + 1 + dc])
             out[cut] = np.inf
     indices, indptr = _padded_topology(h, w)
     n = indptr.shape[0] - 1
