@@ -294,3 +294,36 @@ def test_reached_goal_whose_frontier_moved_on_is_not_blacklisted(fraction, revea
     else:
         assert "revealed" in res.reason
         assert res.action is Action.NEW_GOAL and res.goal.xy_m == on.point_xy_m
+
+
+@pytest.mark.parametrize("limit,blacklisted", [(2, True), (3, False), (0, False)])
+def test_revealed_arrivals_in_one_area_are_limited(limit, blacklisted):
+    """A small leftover re-chosen after each revealed arrival (the frontier recedes by a
+    row per visit): the arrival that brings an area's count to revealed_arrivals_max
+    blacklists every goal of the area, as a plain reached-but-remains goal is."""
+    g = GridMap(np.zeros((60, 60), np.int8), 0.05, (0.0, 0.0))
+    g.data[:6] = -1
+    f0 = make_frontier(0, [(5, c) for c in range(10, 20)], (6, 12), g)
+    far = make_frontier(1, [(50, c) for c in range(10, 40)], (49, 20), g)
+    g.data[50, 10:40] = -1
+    m = GoalManager(SelectionParams(strategy="nearest", arrival_wait_s=0.0,
+                                    reached_unknown_fraction=0.5,
+                                    revealed_arrivals_max=limit))
+    first = m.step(0.0, (1.0, 2.0), g, [f0, far], [1.0, 3.0]).goal
+    g1 = GridMap(g.data.copy(), 0.05, (0.0, 0.0))
+    g1.data[3:6] = 0                                      # rows 3-5 revealed
+    on1 = make_frontier(0, [(2, c) for c in range(10, 20)], (3, 12), g1)
+    second = m.step(1.0, first.xy_m, g1, [on1, far], [0.15, 2.5]).goal
+    assert second.xy_m == on1.point_xy_m and m.blacklist == ()
+    g2 = GridMap(g1.data.copy(), 0.05, (0.0, 0.0))
+    g2.data[1:3] = 0                                      # rows 1-2 revealed
+    on2 = make_frontier(0, [(0, c) for c in range(10, 20)], (1, 12), g2)
+    res = m.step(2.0, second.xy_m, g2, [on2, far], [0.1, 2.4])
+    assert res.action is Action.NEW_GOAL
+    if blacklisted:
+        assert "area blacklisted" in res.reason and res.goal.xy_m == far.point_xy_m
+        assert set(m.blacklist) == {first.xy_m, second.xy_m}
+        assert m.blacklist_added == 2
+    else:
+        assert "revealed" in res.reason and res.goal.xy_m == on2.point_xy_m
+        assert m.blacklist == ()

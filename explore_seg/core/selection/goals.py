@@ -89,7 +89,7 @@ class GoalManager:
        within ``frontier_match_radius_m`` + the goal's gap to its frontier) is still
        there after a newer map (or ``arrival_wait_s``) blacklists it too (with
        ``reached_unknown_fraction`` > 0: unless the visit revealed the frontier's
-       cells); reaching a
+       cells, at most ``revealed_arrivals_max`` - 1 times per area); reaching a
        return-to-start goal ends exploration (DONE). A ``routed`` goal counts as reached
        within ``handover_m`` already (the robot drives on while it is judged).
     2. Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted goal
@@ -120,6 +120,8 @@ class GoalManager:
         self._blacklist_version = 0
         # Areas where a goal's frontier vanished before arrival: [count, goal points].
         self._vanished: list[tuple[list[int], list[tuple[float, float]]]] = []
+        # Areas where a reached goal's frontier remained with its cells revealed.
+        self._revealed: list[tuple[list[int], list[tuple[float, float]]]] = []
         self.reset()
 
     def reset(self, clear_blacklist: bool = False) -> None:
@@ -141,6 +143,7 @@ class GoalManager:
         if clear_blacklist:
             self._clear_blacklist()
             self._vanished.clear()
+            self._revealed.clear()
 
     def _clear_blacklist(self) -> None:
         self._blacklist.clear()
@@ -227,21 +230,33 @@ class GoalManager:
     def _note_vanished(self, xy_m: tuple[float, float]) -> bool:
         """Count a goal whose frontier vanished before arrival; True when its area reached
         ``flicker_vanish_count`` (its goal points are then blacklisted)."""
-        p = self.params
-        if p.flicker_vanish_count < 1:
+        return self._note_area(self._vanished, xy_m, self.params.flicker_vanish_count)
+
+    def _note_revealed(self, xy_m: tuple[float, float]) -> bool:
+        """Count a reached goal whose frontier remains with its cells revealed; True when
+        its area reached ``revealed_arrivals_max`` (its goal points are then
+        blacklisted)."""
+        return self._note_area(self._revealed, xy_m, self.params.revealed_arrivals_max)
+
+    def _note_area(self, areas: list[tuple[list[int], list[tuple[float, float]]]],
+                   xy_m: tuple[float, float], limit: int) -> bool:
+        """Count an event at ``xy_m`` in the area (within ``flicker_radius_m`` of its
+        first point) it falls in; True, with the area's points blacklisted, when the
+        area's count reached ``limit`` (never when ``limit`` < 1)."""
+        if limit < 1:
             return False
         x, y = float(xy_m[0]), float(xy_m[1])
-        for count, pts in self._vanished:
-            if math.hypot(x - pts[0][0], y - pts[0][1]) <= p.flicker_radius_m:
+        for count, pts in areas:
+            if math.hypot(x - pts[0][0], y - pts[0][1]) <= self.params.flicker_radius_m:
                 count[0] += 1
                 pts.append((x, y))
                 del pts[1:-_FLICKER_POINTS]
                 break
         else:
             count, pts = [1], [(x, y)]
-            self._vanished.append((count, pts))
-            del self._vanished[:-_FLICKER_AREAS]
-        if count[0] < p.flicker_vanish_count:
+            areas.append((count, pts))
+            del areas[:-_FLICKER_AREAS]
+        if count[0] < limit:
             return False
         for pt in pts:
             self.add_to_blacklist(pt)
@@ -416,6 +431,11 @@ class GoalManager:
                 if self._still_unknown(grid) >= p.reached_unknown_fraction:
                     self.abandon_goal(blacklist=True)
                     return None, "goal reached but its frontier remains: blacklisted"
+                if self._note_revealed(self.goal.xy_m):   # blacklists the area's goals
+                    self.goal = None
+                    return None, (f"goal reached, its frontier's cells revealed "
+                                  f"{p.revealed_arrivals_max} times here and it remains: "
+                                  "area blacklisted")
                 self.goal = None
                 return None, "goal reached: its frontier's cells were revealed, the space goes on"
             self.goal = None

@@ -81,6 +81,11 @@ class SelectionParams:
         "frontier that remains is where the space goes on (a corridor longer than the "
         "sensor range) and stays selectable; 0 (default) = always blacklist",
         range=(0.0, 1.0)))
+    revealed_arrivals_max: int = field(default=2, metadata=param_meta(
+        "with reached_unknown_fraction > 0: the revealed-arrival at a goal area (within "
+        "flicker_radius_m of its first goal) that reaches this count blacklists the area "
+        "as the default does (a small leftover is otherwise re-chosen with a shrinking "
+        "gain); 0 = no limit", range=(0, INT_MAX)))
     goal_change_min_m: float = _non_negative(
         "a new goal closer than this to the current one is not sent", "m", default=0.3)
     blacklist_radius_m: float = _non_negative(
@@ -100,8 +105,8 @@ class SelectionParams:
         "flickering between occupied and free next to unknown space pulls the robot back "
         "and forth otherwise); 0 = never", range=(0, INT_MAX)))
     flicker_radius_m: float = _non_negative(
-        "goals within this distance of the first vanished goal of an area count as that "
-        "area for flicker_vanish_count", "m", default=1.0)
+        "goals within this distance of the first goal of an area count as that area for "
+        "flicker_vanish_count and revealed_arrivals_max", "m", default=1.0)
     done_confirmations: int = field(default=3, metadata=param_meta(
         "consecutive decisions without a reachable frontier before DONE",
         range=(1, INT_MAX)))
@@ -174,6 +179,9 @@ class SelectionParams:
             raise ValueError(f"unknown_path_factor must be >= 1, got {self.unknown_path_factor}")
         if self.blacklist_retries < 0:
             raise ValueError(f"blacklist_retries must be >= 0, got {self.blacklist_retries}")
+        if self.revealed_arrivals_max < 0:
+            raise ValueError(f"revealed_arrivals_max must be >= 0, got "
+                             f"{self.revealed_arrivals_max}")
         if self.flicker_vanish_count < 0:
             raise ValueError(f"flicker_vanish_count must be >= 0, got "
                              f"{self.flicker_vanish_count}")
