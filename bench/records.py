@@ -37,6 +37,12 @@ from typing import Any, Iterable
 
 import numpy as np
 
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from sim_bridge.run_result import TIMING_KEYS  # noqa: E402
+
 FULL = "runs.jsonl"
 COMPACT = "runs.jsonl.gz"
 #: Timing pooled from the full records of runs whose full records were later lost.
@@ -44,7 +50,6 @@ LEGACY_TIMING = "timing_legacy.json"
 #: Width of a timing histogram bin (ratio of its edges) and the smallest time binned (ms).
 BIN_RATIO = 1.01
 BIN_MIN_MS = 1e-3
-TIMING_KEYS = ("frontier", "selection", "segmentation", "detection", "objects", "decision")
 #: The timing keys of the report's per-module table, with their row labels.
 TIMING_ROWS = (("frontier", "frontier detect + cluster"),
                ("selection", "path lengths + select (incl. goal manager)"),
