@@ -47,7 +47,8 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.frontiers import (Frontier, FrontierParams, find_frontiers,
-                                        object_obstacles, traversable_mask)
+                                        object_obstacles, split_frontiers,
+                                        traversable_mask)
 from explore_seg.core.grid import GridMap, metres_to_cells
 from explore_seg.core.rrt import RrtFrontierDetector, RrtParams
 from explore_seg.core.selection import (RRT_STRATEGIES, Action, Goal, GoalManager, NavOutcome,
@@ -275,6 +276,9 @@ class Explorer:
         self._det = det
         self._layer_warning = det.layer_warning
         self._frontiers = det.frontiers
+        if self._router is not None:
+            self._frontiers = split_frontiers(grid, det.frontiers, self._sp.frontier_split_m,
+                                              self._fp, det.extra_obstacles, det.passable)
         self._graph = PathGraphs(grid, det.extra_obstacles, self._fp, self._sp, det.passable)
         self._key = (grid, layer)
 

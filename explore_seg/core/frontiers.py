@@ -21,7 +21,8 @@ groups, never the cells, are visited in Python.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import Sequence
 
 import cv2
 import numpy as np
@@ -370,20 +371,94 @@ def group_frontiers(grid: GridMap, frontier_mask: npt.NDArray[np.bool_],
     for gid, k in enumerate(keep):
         a, b = int(starts[k]), int(starts[k + 1])
         cells = np.stack([rr[a:b], cc[a:b]], axis=1).astype(np.int64)
-        cy, cx = float(mean_r[k]), float(mean_c[k])
-        d2 = (cells[:, 0] - cy) ** 2 + (cells[:, 1] - cx) ** 2
-        j = int(np.argmin(d2))
-        rep = (int(cells[j, 0]), int(cells[j, 1]))
-        pt = _cpoint(rep, pas, grid, extra, params.occupied_threshold, radius_cells)
-        ok = pt is not None
-        if pt is None:
-            pt = rep
-        px, py = grid.cell_to_world(pt[0], pt[1])
-        gx, gy = grid.cells_to_world(np.asarray([cy]), np.asarray([cx]))
-        out.append(Frontier(
-            id=gid, size_cells=int(b - a), length_m=float((b - a) * grid.resolution_m),
-            point_rc=pt, point_xy_m=(px, py), point_passable=ok,
-            centroid_rc=(cy, cx), centroid_xy_m=(float(gx[0]), float(gy[0])), cells=cells))
+        out.append(_group(gid, cells, (float(mean_r[k]), float(mean_c[k])), grid, pas, extra,
+                          params.occupied_threshold, radius_cells))
+    return out
+
+
+def _group(gid: int, cells: npt.NDArray[np.int64], centroid_rc: tuple[float, float],
+           grid: GridMap, passable: npt.NDArray[np.bool_], extra: npt.NDArray[np.bool_] | None,
+           occupied_threshold: int, radius_cells: int) -> Frontier:
+    """The group of ``cells``: its cPoint is the passable cell in sight nearest to the
+    cell nearest to the centroid (that cell itself, not passable, when there is none)."""
+    cy, cx = centroid_rc
+    d2 = (cells[:, 0] - cy) ** 2 + (cells[:, 1] - cx) ** 2
+    j = int(np.argmin(d2))
+    rep = (int(cells[j, 0]), int(cells[j, 1]))
+    pt = _cpoint(rep, passable, grid, extra, occupied_threshold, radius_cells)
+    ok = pt is not None
+    if pt is None:
+        pt = rep
+    px, py = grid.cell_to_world(pt[0], pt[1])
+    gx, gy = grid.cells_to_world(np.asarray([cy]), np.asarray([cx]))
+    n = int(cells.shape[0])
+    return Frontier(id=gid, size_cells=n, length_m=float(n * grid.resolution_m),
+                    point_rc=pt, point_xy_m=(px, py), point_passable=ok,
+                    centroid_rc=(cy, cx), centroid_xy_m=(float(gx[0]), float(gy[0])),
+                    cells=cells)
+
+
+def _split_cells(cells: npt.NDArray[np.int64], max_extent_cells: float
+                 ) -> list[npt.NDArray[np.int64]]:
+    """Split ``cells`` at their mean across their principal axis until no part extends
+    more than ``max_extent_cells`` along its own principal axis (in input order within a
+    part; parts ordered along the axes)."""
+    if cells.shape[0] < 2:
+        return [cells]
+    centred = cells.astype(np.float64)
+    centred -= centred.mean(axis=0)
+    cov = centred.T @ centred
+    axis = np.linalg.eigh(cov)[1][:, -1]
+    proj = centred @ axis
+    if float(proj.max() - proj.min()) <= max_extent_cells:
+        return [cells]
+    lo = proj < 0.0
+    if lo.all() or not lo.any():
+        return [cells]
+    return (_split_cells(cells[lo], max_extent_cells)
+            + _split_cells(cells[~lo], max_extent_cells))
+
+
+def split_frontiers(grid: GridMap, frontiers: Sequence[Frontier], max_extent_m: float,
+                    params: FrontierParams = FrontierParams(),
+                    extra_obstacles: npt.NDArray[np.bool_] | None = None,
+                    passable: npt.NDArray[np.bool_] | None = None) -> list[Frontier]:
+    """Frontier groups that extend more than ``max_extent_m`` along their principal axis,
+    split (recursively, at the mean) into parts that do not, each a group with its own
+    centroid and cPoint (FUEL's cluster split: a long frontier, e.g. along a corridor's
+    side, is several places to look from, not one). Shorter groups are returned as they
+    are; ids are renumbered 0..n-1 in the input order. ``max_extent_m`` <= 0: unchanged.
+
+    Examples
+    --------
+    >>> from explore_seg.core.grid import grid_from_ascii
+    >>> g, _ = grid_from_ascii('''
+    ... ????????????????????????????????????????
+    ... ........................................
+    ... ........................................
+    ... ''', resolution_m=0.1)
+    >>> fs = find_frontiers(g, params=FrontierParams(robot_radius_m=0.0))
+    >>> [f.size_cells for f in fs], [f.size_cells for f in split_frontiers(g, fs, 1.5)]
+    ([40], [10, 10, 10, 10])
+    """
+    if max_extent_m <= 0.0 or not frontiers:
+        return list(frontiers)
+    extra = _check_layer(grid, extra_obstacles, "extra_obstacles")
+    pas = _check_layer(grid, passable, "passable")
+    if pas is None:
+        pas = traversable_mask(grid, extra, params)
+    radius_cells = metres_to_cells(params.cpoint_search_radius_m, grid.resolution_m)
+    max_cells = max_extent_m / grid.resolution_m
+    out: list[Frontier] = []
+    for f in frontiers:
+        parts = _split_cells(f.cells, max_cells)
+        if len(parts) == 1:
+            out.append(replace(f, id=len(out)) if f.id != len(out) else f)
+            continue
+        for cells in parts:
+            mean = cells.astype(np.float64).mean(axis=0)
+            out.append(_group(len(out), cells, (float(mean[0]), float(mean[1])), grid, pas,
+                              extra, params.occupied_threshold, radius_cells))
     return out
 
 

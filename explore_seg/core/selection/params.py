@@ -134,6 +134,12 @@ class SelectionParams:
     viewpoint_gain_tolerance: float = field(default=0.1, metadata=param_meta(
         "routed and lookout goals: among candidates seeing at least (1 - this) of the "
         "best view, the one closest to the robot is the viewpoint", range=(0.0, 1.0)))
+    frontier_split_m: float = _non_negative(
+        "routed: a frontier group extending more than this along its main axis is split "
+        "(at its mean, recursively) into parts that do not, each with its own viewpoint "
+        "in the tour (a long frontier along a corridor is several places to look from; "
+        "one viewpoint for it jumps between its ends as the map grows); 0 = off", "m",
+        default=0.0)
     region_switch_m: float = _non_negative(
         "routed: extra tour cost of an edge between viewpoints of two different regions "
         "(finish a region unless its rest is a longer detour)", "m", default=2.0)
@@ -159,7 +165,8 @@ class SelectionParams:
                      "region_search_radius_m", "start_search_radius_m", "hysteresis_margin",
                      "progress_min_m", "goal_reached_tolerance_m", "frontier_match_radius_m",
                      "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
-                     "flicker_radius_m", "viewpoint_radius_m", "region_switch_m",
+                     "flicker_radius_m", "viewpoint_radius_m", "frontier_split_m",
+                     "region_switch_m",
                      "gain_weight_m_per_m2", "min_gain_m2", "handover_m"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
