@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from explore_seg.core.frontiers import (FrontierParams, detect_frontier_cells, find_frontiers,
-                                        group_frontiers, obstacle_mask, traversable_mask)
+                                        group_frontiers, obstacle_mask, split_frontiers,
+                                        traversable_mask)
 from explore_seg.core.grid import GridMap, grid_from_ascii
 
 P1 = FrontierParams(min_group_size_cells=1, robot_radius_m=0.0)
@@ -261,3 +262,58 @@ def test_random_grid_invariants(seed):
 def test_params_validation(kwargs, match):
     with pytest.raises(ValueError, match=match):
         FrontierParams(**kwargs)
+
+
+# ------------------------------------------------------------------------- split
+
+
+def _extent_m(cells: np.ndarray, res: float) -> float:
+    """Extent of cells along their principal axis (m)."""
+    c = cells.astype(float) - cells.mean(axis=0)
+    if len(c) < 2:
+        return 0.0
+    axis = np.linalg.eigh(c.T @ c)[1][:, -1]
+    p = c @ axis
+    return float(p.max() - p.min()) * res
+
+
+@pytest.mark.parametrize("max_m", [1.0, 3.0, 4.9])
+def test_split_long_groups_into_parts_with_their_own_cpoints(max_m):
+    # A 10 m corridor side (unknown above row 10) and an L-shaped 2 x 2 m corner of
+    # unknown space in the corridor's far side: every part is at most max_m long, the
+    # parts partition the group's cells, each has a passable cPoint next to its cells.
+    res = 0.05
+    data = np.zeros((60, 200), dtype=np.int8)
+    data[:10] = -1
+    data[40:, 160:] = -1
+    g = GridMap(data, res, (0.0, 0.0))
+    p = FrontierParams(robot_radius_m=0.1)
+    fs = find_frontiers(g, params=p)
+    assert [f.size_cells for f in fs] == [200, 59]
+    parts = split_frontiers(g, fs, max_m, p)
+    assert [f.id for f in parts] == list(range(len(parts)))
+    assert len(parts) > len(fs)
+    assert sum(f.size_cells for f in parts) == sum(f.size_cells for f in fs)
+    every = np.concatenate([f.cells for f in parts])
+    assert len({tuple(c) for c in every}) == len(every)
+    assert {tuple(c) for c in every} == {tuple(c) for f in fs for c in f.cells}
+    for f in parts:
+        assert _extent_m(f.cells, res) <= max_m
+        assert f.point_passable and traversable_mask(g, None, p)[f.point_rc]
+        d = np.hypot(*(f.cells - np.asarray(f.point_rc)).T).min() * res
+        assert d <= p.cpoint_search_radius_m
+        assert f.length_m == pytest.approx(f.size_cells * res)
+
+
+def test_split_keeps_short_groups_and_is_off_at_zero():
+    g, _ = grid_from_ascii("""
+    ??????
+    ......
+    ......
+    """, resolution_m=0.1)
+    fs = find_frontiers(g, params=P1)
+    assert split_frontiers(g, fs, 1.0, P1)[0] is fs[0]        # 0.5 m long: kept
+    assert split_frontiers(g, fs, 0.0, P1) == fs
+    fine = split_frontiers(g, fs, 0.2, P1)                    # 0.5 m: 2 parts of 0.2 m
+    assert [f.size_cells for f in fine] == [3, 3]
+    assert all(_extent_m(f.cells, 0.1) <= 0.2 for f in fine)

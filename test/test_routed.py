@@ -235,3 +235,25 @@ def test_a_frontier_that_reveals_nothing_is_not_chased():
     outs = [ex.step(float(k), g, (x, y, 0.0)) for k in range(3)]
     assert outs[0].tour is not None and outs[0].tour.gain_m2.max() < 0.25
     assert [o.action for o in outs[:2]] == [Action.WAIT, Action.DONE]
+
+
+def test_routed_splits_a_long_frontier_into_tour_stops():
+    # A 10 m corridor whose whole north side is unknown: one frontier group. With
+    # frontier_split_m its parts are separate viewpoints, toured from the robot's end;
+    # the other strategies (paper's Alg. 1) keep the group whole.
+    data = np.zeros((40, 200), dtype=np.int8)
+    data[:10] = -1
+    data[-2:] = 100
+    g = _grid(data)
+    x, y = g.cell_to_world(30, 10)
+    fp = FrontierParams(robot_radius_m=0.1)
+    whole = Explorer(fp, SelectionParams(strategy="routed")).step(0.0, g, (x, y, 0.0))
+    assert len(whole.frontiers) == 1
+    ex = Explorer(fp, SelectionParams(strategy="routed", frontier_split_m=3.0))
+    out = ex.step(0.0, g, (x, y, 0.0))
+    assert len(out.frontiers) == 4 and len(out.tour.order) == 4
+    cols = [float(out.frontiers[i].centroid_rc[1]) for i in out.tour.order]
+    assert cols == sorted(cols)                   # west to east, from the robot's end
+    assert out.goal.xy_m == out.frontiers[out.tour.order[0]].point_xy_m
+    paper = Explorer(fp, SelectionParams(strategy="paper", frontier_split_m=3.0))
+    assert len(paper.step(0.0, g, (x, y, 0.0)).frontiers) == 1
