@@ -3,8 +3,9 @@
 :class:`ScanMapper` integrates scans taken at known poses into a log-odds grid and
 publishes it as a trinary :class:`~explore_seg.core.grid.GridMap` (``-1`` unknown,
 ``0`` free, ``100`` occupied), the way slam_toolbox publishes ``map``. Like a SLAM map
-it starts small around the robot and grows in whole chunks when a scan reaches past its
-border; the origin then moves by a whole number of cells, so a wall's world position
+it starts small around the robot and grows in whole chunks when a scan reaches past (or
+into the last cell of) its border, so free space always has unknown cells beyond it (a
+frontier); the origin then moves by a whole number of cells, so a wall's world position
 never changes.
 
 Ray carving is vectorised: every beam is sampled at ``ray_step_cells`` cell steps up to
@@ -247,8 +248,10 @@ class ScanMapper:
         ecx = np.floor(ex / res).astype(np.int64)
         ecy = np.floor(ey / res).astype(np.int64)
         scx, scy = int(math.floor(x0 / res)), int(math.floor(y0 / res))
-        self._ensure_contains(min(int(ecx.min()), scx), min(int(ecy.min()), scy),
-                              max(int(ecx.max()), scx), max(int(ecy.max()), scy))
+        # One cell beyond every end: a beam's last free sample may fall in its end cell,
+        # and free space must never reach the border (no unknown cell there: no frontier).
+        self._ensure_contains(min(int(ecx.min()), scx) - 1, min(int(ecy.min()), scy) - 1,
+                              max(int(ecx.max()), scx) + 1, max(int(ecy.max()), scy) + 1)
         ox, oy = self._origin_cells
 
         # Free samples along every beam, ragged: beam b gets n_b samples strictly before

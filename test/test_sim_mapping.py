@@ -47,7 +47,7 @@ def test_map_grows_in_chunks_and_a_wall_keeps_its_world_position():
     assert len(wall) == 1
     wall_xy = g0.cell_to_world(*wall[0])
     # A long beam to -x and one to +y make the map grow on those sides.
-    m.integrate_scan((0.0, 0.0, math.pi), np.array([3.0], np.float32), 0.0, 0.1, 5.0)
+    m.integrate_scan((0.0, 0.0, math.pi), np.array([2.75], np.float32), 0.0, 0.1, 5.0)
     m.integrate_scan((0.0, 0.0, math.pi / 2), np.array([2.4], np.float32), 0.0, 0.1, 5.0)
     g1 = m.grid()
     assert g0.origin_xy_m == pytest.approx((-1.0, -1.0))
@@ -55,8 +55,26 @@ def test_map_grows_in_chunks_and_a_wall_keeps_its_world_position():
     assert g1.shape == (g0.height + 40, g0.width + 40)
     assert g1.data[g1.world_to_cell(*wall_xy)] == 100
     assert int((g1.data == 100).sum()) == 3
-    assert g1.data[g1.world_to_cell(-3.0 + 0.01, 0.01)] == 100
+    assert g1.data[g1.world_to_cell(-2.75 + 0.01, 0.01)] == 100
     assert g1.data[g1.world_to_cell(0.01, 2.4 + 0.01)] == 100
+
+
+@pytest.mark.parametrize("range_max", [0.91, 0.94])
+def test_free_space_never_reaches_the_border(range_max):
+    # A beam without return whose end (and so its last free sample) lies in the map's
+    # last cell: the map grows, so an unknown cell lies beyond and a frontier is there.
+    from explore_seg.core.frontiers import FrontierParams, detect_frontier_cells
+    m = ScanMapper((0.0, 0.0), MappingParams(resolution_m=0.1, initial_size_m=2.0,
+                                             grow_chunk_m=1.0))
+    m.integrate_scan((0.05, 0.05, 0.0), np.array([np.inf], np.float32), 0.0, 0.1, range_max)
+    g = m.grid()
+    edge = np.concatenate([g.data[0], g.data[-1], g.data[:, 0], g.data[:, -1]])
+    assert not (edge == 0).any()
+    r, c = g.world_to_cell(0.05, 0.05)
+    last = int(np.flatnonzero(g.data[r] == 0).max())
+    assert g.data[r, last + 1] == -1
+    front = detect_frontier_cells(g, params=FrontierParams(min_group_size_cells=1))
+    assert front[r, last + 1]
 
 
 def _scripted_tour(eng: SimEngine, legs: list[tuple[float, float, float]]) -> None:
