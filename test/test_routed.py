@@ -239,18 +239,18 @@ def test_a_frontier_that_reveals_nothing_is_not_chased():
 
 def test_routed_splits_a_long_frontier_into_tour_stops():
     # A 10 m corridor whose whole north side is unknown: one frontier group. With
-    # frontier_split_m its parts are separate viewpoints, toured from the robot's end;
-    # the other strategies (paper's Alg. 1) keep the group whole.
+    # frontier_split_m (default 3 m) its parts are separate viewpoints, toured from the
+    # robot's end; the other strategies (paper's Alg. 1) keep the group whole.
     data = np.zeros((40, 200), dtype=np.int8)
     data[:10] = -1
     data[-2:] = 100
     g = _grid(data)
     x, y = g.cell_to_world(30, 10)
     fp = FrontierParams(robot_radius_m=0.1)
-    whole = Explorer(fp, SelectionParams(strategy="routed")).step(0.0, g, (x, y, 0.0))
-    assert len(whole.frontiers) == 1
-    ex = Explorer(fp, SelectionParams(strategy="routed", frontier_split_m=3.0))
-    out = ex.step(0.0, g, (x, y, 0.0))
+    whole = Explorer(fp, SelectionParams(strategy="routed", frontier_split_m=0.0))
+    assert len(whole.step(0.0, g, (x, y, 0.0)).frontiers) == 1
+    out = Explorer(fp, SelectionParams(strategy="routed")).step(0.0, g, (x, y, 0.0))
+    assert SelectionParams().frontier_split_m == 3.0
     assert len(out.frontiers) == 4 and len(out.tour.order) == 4
     cols = [float(out.frontiers[i].centroid_rc[1]) for i in out.tour.order]
     assert cols == sorted(cols)                   # west to east, from the robot's end

@@ -87,8 +87,8 @@ class GoalManager:
        ``progress_min_m``; none for ``progress_timeout_s`` blacklists the goal. Reaching
        it (``goal_reached_tolerance_m``) while its frontier (a frontier with a cell
        within ``frontier_match_radius_m`` + the goal's gap to its frontier) is still
-       there after a newer map (or ``arrival_wait_s``) blacklists it too (with
-       ``reached_unknown_fraction`` > 0: unless the visit revealed the frontier's
+       there after a newer map (or ``arrival_wait_s``) blacklists it too (``routed``
+       with ``reached_unknown_fraction`` > 0: unless the visit revealed the frontier's
        cells, at most ``revealed_arrivals_max`` - 1 times per area); reaching a
        return-to-start goal ends exploration (DONE). A ``routed`` goal counts as reached
        within ``handover_m`` already (the robot drives on while it is judged).
@@ -428,7 +428,8 @@ class GoalManager:
                                   "goal reached: waiting for the map to update"), ""
             self._arrived_s = None
             if self._matching(grid, frontiers) is not None:
-                if self._still_unknown(grid) >= p.reached_unknown_fraction:
+                if (p.strategy != "routed"
+                        or self._still_unknown(grid) >= p.reached_unknown_fraction):
                     self.abandon_goal(blacklist=True)
                     return None, "goal reached but its frontier remains: blacklisted"
                 if self._note_revealed(self.goal.xy_m):   # blacklists the area's goals

@@ -74,18 +74,18 @@ class SelectionParams:
     arrival_wait_s: float = _non_negative(
         "after reaching a goal, wait this long (or for a newer map) before judging whether "
         "its frontier was cleared", "s", default=2.0)
-    reached_unknown_fraction: float = field(default=0.0, metadata=param_meta(
-        "experimental: a reached goal whose frontier remains is blacklisted only when at "
-        "least this share of its frontier's cells (as last matched before arrival) are "
-        "still unknown (the visit revealed little); when the visit revealed them, the "
-        "frontier that remains is where the space goes on (a corridor longer than the "
-        "sensor range) and stays selectable; 0 (default) = always blacklist",
-        range=(0.0, 1.0)))
+    reached_unknown_fraction: float = field(default=0.5, metadata=param_meta(
+        "routed: a reached goal whose frontier remains is blacklisted only when at least "
+        "this share of its frontier's cells (as last matched before arrival) are still "
+        "unknown (the visit revealed little); when the visit revealed them, the frontier "
+        "that remains is where the space goes on (a corridor longer than the sensor "
+        "range) and stays selectable; 0 = always blacklist, as the other strategies "
+        "(explore_lite's and the paper's rule) do", range=(0.0, 1.0)))
     revealed_arrivals_max: int = field(default=2, metadata=param_meta(
-        "with reached_unknown_fraction > 0: the revealed-arrival at a goal area (within "
-        "flicker_radius_m of its first goal) that reaches this count blacklists the area "
-        "as the default does (a small leftover is otherwise re-chosen with a shrinking "
-        "gain); 0 = no limit", range=(0, INT_MAX)))
+        "routed, with reached_unknown_fraction > 0: the revealed arrival at a goal area "
+        "(within flicker_radius_m of its first goal) that reaches this count blacklists "
+        "the area's goals (a small leftover is otherwise re-chosen with a shrinking gain); "
+        "0 = no limit", range=(0, INT_MAX)))
     goal_change_min_m: float = _non_negative(
         "a new goal closer than this to the current one is not sent", "m", default=0.3)
     blacklist_radius_m: float = _non_negative(
@@ -139,7 +139,7 @@ class SelectionParams:
         "(at its mean, recursively) into parts that do not, each with its own viewpoint "
         "in the tour (a long frontier along a corridor is several places to look from; "
         "one viewpoint for it jumps between its ends as the map grows); 0 = off", "m",
-        default=0.0)
+        default=3.0)
     region_switch_m: float = _non_negative(
         "routed: extra tour cost of an edge between viewpoints of two different regions "
         "(finish a region unless its rest is a longer detour)", "m", default=2.0)
