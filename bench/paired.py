@@ -243,6 +243,53 @@ def report(rows: list[dict[str, Any]], arms: list[str]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def against_report(rows: list[dict[str, Any]], arm: str, new: str) -> str:
+    """Markdown: strategy ``new`` against every other strategy of the same arm, paired
+    per seed: per world its median T95 and, per other strategy, the median per-seed T95
+    ratio ``new`` / other with wins (< 0.99) / losses (> 1.01); whether ``new``'s median
+    T95 is within 5 % of the best other strategy's median (issue #20's per-world rule);
+    then the median over all pairs per other strategy. A seed whose run of either never
+    reached 95 % counts in no ratio (its completion shows in the first table)."""
+    mine = [r for r in rows if r["arm"] == arm]
+    by = {(r["world"], r["strategy"], int(r["seed"])): r for r in mine}
+    others = [s for s in dict.fromkeys(r["strategy"] for r in mine) if s != new]
+    worlds = list(dict.fromkeys(r["world"] for r in mine))
+    head = " | ".join(f"/ {s} (w/l)" for s in others)
+    lines = [f"`{new}` against the other strategies of arm `{arm}`: T95 ratio = `{new}` / "
+             "other, per seed (median; wins < 0.99, losses > 1.01); 'best +5 %' = "
+             f"`{new}`'s median T95 <= 1.05 x the best other median.", "",
+             f"| world | `{new}` median T95 [s] | {head} | best +5 % |",
+             "|---|---|" + "---|" * len(others) + "---|"]
+    pooled: dict[str, list[float]] = {s: [] for s in others}
+    for w in worlds:
+        rs = [r for r in mine if r["world"] == w and r["strategy"] == new]
+        if not rs:
+            continue
+        fin = [_t95(r) for r in rs if math.isfinite(_t95(r))]
+        cells, best = [], math.inf
+        for s in others:
+            ratios = []
+            fo = [_t95(r) for r in mine if r["world"] == w and r["strategy"] == s
+                  and math.isfinite(_t95(r))]
+            if fo:
+                best = min(best, float(np.median(fo)))
+            for r in rs:
+                b = by.get((w, s, int(r["seed"])))
+                if b is not None and math.isfinite(_t95(r)) and math.isfinite(_t95(b)):
+                    ratios.append(_t95(r) / _t95(b))
+            pooled[s] += ratios
+            cells.append(f"{np.median(ratios):.3f} ({sum(x < 0.99 for x in ratios)}/"
+                         f"{sum(x > 1.01 for x in ratios)})" if ratios else "-")
+        med = float(np.median(fin)) if fin else math.nan
+        ok = ("-" if not (math.isfinite(med) and math.isfinite(best))
+              else ("yes" if med <= 1.05 * best else f"no ({med / best:.2f}x)"))
+        lines.append(f"| {w} | {med:.1f} | " + " | ".join(cells) + f" | {ok} |")
+    lines.append("| (all pairs) | | " + " | ".join(
+        f"{np.median(v):.3f} ({sum(x < 0.99 for x in v)}/{sum(x > 1.01 for x in v)})"
+        if v else "-" for v in pooled.values()) + " | |")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -261,6 +308,9 @@ def main(argv: list[str] | None = None) -> int:
                     "--title, the command and the code version); BENCHMARKS.md includes "
                     "bench/results/paired/*.md")
     ap.add_argument("--title", default="", help="heading of the --md report")
+    ap.add_argument("--against", default="", metavar="STRATEGY",
+                    help="also compare this strategy with the others of each arm, paired "
+                         "per seed (e.g. routed against explore_lite and nearest)")
     ap.add_argument("--no-runs", action="store_true",
                     help="run nothing: report the runs kept in --out that the other options "
                          "select (e.g. worlds compared on different seed ranges)")
@@ -274,6 +324,8 @@ def main(argv: list[str] | None = None) -> int:
         if bad:
             raise ValueError(f"unknown strategies {bad} (have {', '.join(STRATEGIES)})")
         seeds = parse_seeds(a.seeds)
+        if a.against and a.against not in strategies:
+            raise ValueError(f"--against {a.against} is not one of --strategies")
         base = (load_explorer_params(), sim_params_for(PAPER_CAMERA_MOUNT), LockstepParams())
         for arm in arms:
             _ARMS[arm.name] = build_params(arm, *base)
@@ -326,6 +378,9 @@ def main(argv: list[str] | None = None) -> int:
     sel = [r for r in rows if r["arm"] in wanted and r["world"] in worlds
            and r["strategy"] in strategies and int(r["seed"]) in seeds]
     text = report(sel, [x.name for x in arms])
+    if a.against:
+        for x in arms:
+            text += "\n" + against_report(sel, x.name, a.against)
     print(text)
     if a.md:
         head = f"### {a.title}\n\n" if a.title else ""
