@@ -2,6 +2,9 @@
 
 Per decision (:class:`Router`, driven by :class:`~explore_seg.core.explorer.Explorer`):
 
+0. The explorer splits every frontier group longer than ``frontier_split_m`` along its
+   main axis into parts (:func:`~explore_seg.core.frontiers.split_frontiers`, FUEL's
+   cluster split), once per map version.
 1. :meth:`Router.viewpoints`: every frontier group gets a viewpoint
    (:mod:`.viewpoints`: the reachable pose from which a 360-degree sensor of
    ``sensor_range_m`` sees the most unknown area on the current map). The groups are
@@ -72,6 +75,21 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   strategy, 20 seeds) has a median T95 ratio of 0.70 on shared/house, 0.84 on house, 0.95
   on house_cluttered and 1.00 in all 12 eb worlds (no objects there), so the 0.67 / 0.77
   above are not the routing's alone; the eb worlds compare the routing.
+- **One viewpoint per long frontier jumps.** A corridor's unknown side is one connected
+  frontier group (Alg. 1); its single viewpoint is where the best view of the whole
+  group is, and that place jumps from one end to the other as the map grows. In
+  eb/corridor_sym seed 0 (``bench/trace_decisions.py``-style decision logs) the goal of
+  the one group of the corridor's south side went west, then east (32 s), west (35 s),
+  east (42 s), west (34 s): T95 277 s against ``explore_lite``'s 185 s. Split into parts
+  of at most 3 m (``frontier_split_m``), each part is a tour stop and the tour sweeps the
+  corridor once: 186 s. Paired, seeds 0-2 of the 18 lock-step worlds, split 3 m vs none
+  (``bench/results/paired/frontier_split_routed_seeds0-2.md``): median per-seed T95 ratio
+  0.991, 26 wins / 20 losses; eb/corridor_sym 0.72, eb/loop 0.76, eb/loop_with_corridor
+  0.88, eb/room 0.90, eb/corner 0.94; losses in eb/room_3 (1.18) and
+  shared/house_cluttered (1.54: a reached part's neighbour "remained", was blacklisted and
+  retried from across the house; with ``reached_unknown_fraction`` 0.5 seed 0 took 122 s
+  instead of 187 s, unsplit 120 s). 2 m and 4.5 m on eb/room_2 and eb/corridor_sym seed 0:
+  282 / 264 s and 186 / 186 s (3 m: 294 / 186 s).
 - **Decision time** (CPU ms of the decision core per decision: frontier detection +
   viewpoints + tour + goal; process time, seed 0, load average 8-10 on 2 cores): p50 37,
   p95 52 on the generated house (whole run; ``explore_lite`` 13 / 26); p50 105, p95 201 on
