@@ -63,7 +63,7 @@ from bench.crosscheck import compare_with_ros, time_yolo  # noqa: E402
 from bench.progress import Progress, hms  # noqa: E402
 from bench.rows import runs_csv_rows  # noqa: E402
 from bench.tasks import catch_stop_signals, explorer_params, fix_explorer_params, \
-    restore_signals, run_drainable, tour_task  # noqa: E402
+    restore_signals, run_drainable, stop_signals_deferred, tour_task  # noqa: E402
 from bench.worlds import MAX_SIM_TIME_S, MIN_SIM_TIME_S, PAPER_CAMERA_MOUNT, \
     TIME_PER_AREA_S, default_worlds, load, sim_params_for, sim_time_limit, \
     world_path  # noqa: E402
@@ -357,15 +357,12 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
         jl.flush()
         for d in run_drainable(pool, a.jobs, tasks, failed):
             # an interrupt waits until the run is in both files and counted
-            mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
-            try:
+            with stop_signals_deferred():
                 jl.write(json.dumps(d) + "\n")
                 jl.flush()
                 records.append_compact(out, d)
                 results.append(d)
                 counter[0] += 1
-            finally:
-                signal.pthread_sigmask(signal.SIG_SETMASK, mask)
             prog.update(f"{d['world']}/{d['strategy']}/{d['seed']}: "
                         f"{d['coverage_pct'] or 0:.1f} % {d['stop_reason']} "
                         f"({d['wall_time_s']:.0f} s)")

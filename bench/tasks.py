@@ -9,13 +9,14 @@ cache) and the explorer parameters (:func:`fix_explorer_params`).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import multiprocessing as mp
 import queue
 import signal
 import sys
 import time
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 
@@ -120,6 +121,28 @@ def catch_stop_signals() -> tuple[Any, Any]:
     _DRAIN[0] = False
     old_usr1 = signal.signal(signal.SIGUSR1, _request_drain)
     return old_term, old_usr1
+
+
+@contextlib.contextmanager
+def stop_signals_deferred() -> Iterator[None]:
+    """SIGINT / SIGTERM arriving inside the block stop the process only after it (raised
+    on exit as ``KeyboardInterrupt(signum)``), so a run is written to both files and
+    counted, or to neither. ``pthread_sigmask`` would block them in this thread only: the
+    pool's helper threads would still take them, and Python would run the handler inside
+    the block."""
+    pending: list[int] = []
+
+    def hold(signum: int, frame: Any) -> None:
+        pending.append(signum)
+
+    old = {s: signal.signal(s, hold) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+    if pending:
+        raise KeyboardInterrupt(pending[0])
 
 
 def restore_signals(old: tuple[Any, Any]) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import time
 import sys
 from pathlib import Path
 
@@ -292,3 +293,22 @@ def test_navigation_safety_setting_is_recorded_and_folders_that_did_not_record_i
     (res / "meta.json").write_text(json.dumps(meta))
     assert run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
                                   "--no-runs"]) == 2
+
+
+def test_stop_signals_wait_for_the_end_of_a_deferred_block():
+    import os
+    import signal
+
+    from bench.tasks import stop_signals_deferred
+    before = signal.getsignal(signal.SIGTERM)
+    done = []
+    with pytest.raises(KeyboardInterrupt) as err:
+        with stop_signals_deferred():
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.05)                       # the handler ran: the block goes on
+            done.append(1)
+    assert done == [1] and err.value.args == (signal.SIGTERM,)
+    assert signal.getsignal(signal.SIGTERM) is before           # handler restored
+    with stop_signals_deferred():                  # no signal: nothing raised
+        done.append(2)
+    assert done == [1, 2]
