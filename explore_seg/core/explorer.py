@@ -275,10 +275,9 @@ class Explorer:
                                groups=self._sp.strategy not in RRT_STRATEGIES)
         self._det = det
         self._layer_warning = det.layer_warning
-        self._frontiers = det.frontiers
-        if self._router is not None:
-            self._frontiers = split_frontiers(grid, det.frontiers, self._sp.frontier_split_m,
-                                              self._fp, det.extra_obstacles, det.passable)
+        self._frontiers = (det.frontiers if self._router is None else split_frontiers(
+            grid, det.frontiers, self._sp.frontier_split_m, self._fp, det.extra_obstacles,
+            det.passable))
         self._graph = PathGraphs(grid, det.extra_obstacles, self._fp, self._sp, det.passable)
         self._key = (grid, layer)
 

@@ -20,9 +20,10 @@ from explore_seg.core.grid import GridMap
 from explore_seg.core.selection.costs import Selection, select_goal
 from explore_seg.core.selection.params import SelectionParams
 
-#: Goal points kept per vanished-frontier area, and areas kept (oldest dropped).
-_FLICKER_POINTS = 20
-_FLICKER_AREAS = 100
+#: Goal points kept per counted area (vanished frontiers, revealed arrivals), and areas
+#: kept per kind (oldest dropped).
+_AREA_POINTS = 20
+_AREAS_KEPT = 100
 
 
 class NavOutcome(enum.Enum):
@@ -250,12 +251,12 @@ class GoalManager:
             if math.hypot(x - pts[0][0], y - pts[0][1]) <= self.params.flicker_radius_m:
                 count[0] += 1
                 pts.append((x, y))
-                del pts[1:-_FLICKER_POINTS]
+                del pts[1:-_AREA_POINTS]
                 break
         else:
             count, pts = [1], [(x, y)]
             areas.append((count, pts))
-            del areas[:-_FLICKER_AREAS]
+            del areas[:-_AREAS_KEPT]
         if count[0] < limit:
             return False
         for pt in pts:
