@@ -15,8 +15,9 @@ from explore_seg.core.grid import GridMap
 from explore_seg.core.selection import STRATEGIES, Action, SelectionParams, compute_costs
 from explore_seg.core.selection.tour import (front_costs, greedy_order, improve, solve_tour,
                                              tour_length)
-from explore_seg.core.selection.viewpoints import (candidate_cells, pick_viewpoint,
-                                                   view_gain)
+from explore_seg.core.selection.pair_paths import PairPaths
+from explore_seg.core.selection.viewpoints import (GainCache, candidate_cells,
+                                                   pick_viewpoint, view_gain)
 from selection_cases import two_frontiers
 
 RES = 0.05
@@ -51,6 +52,56 @@ def test_walls_block_the_view():
     gain = view_gain(g, np.array([[50, 95], [50, 110]]), range_m=3.0, rays=48)
     assert gain[0] == 0.0
     assert gain[1] > 1.0
+
+
+def _exploring_maps(shifts):
+    """A map that is revealed disc by disc around a moving robot and grows towards negative
+    x / y by ``shifts`` cells (row, col) per step: the sequence a mapper publishes."""
+    rng = np.random.default_rng(7)
+    world = np.where(rng.random((140, 160)) < 0.03, 100, 0).astype(np.int8)
+    world[70, 20:140] = 100                                  # a wall with a gap
+    world[70, 80:90] = 0
+    known = np.zeros(world.shape, dtype=bool)
+    rr, cc = np.mgrid[0:140, 0:160]
+    off = np.array([20, 20])                                 # world cell of the map's (0, 0)
+    grids = []
+    for k, (sr, sc) in enumerate(shifts):
+        centre = (50 + 7 * k, 40 + 11 * k)
+        known |= (rr - centre[0]) ** 2 + (cc - centre[1]) ** 2 < 25 ** 2
+        off = off - (sr, sc)
+        data = np.where(known, world, -1)[off[0]:, off[1]:]
+        origin = (float(off[1]) * RES, float(off[0]) * RES)
+        grids.append((GridMap(np.ascontiguousarray(data), RES, origin), off.copy()))
+    return grids
+
+
+@pytest.mark.parametrize("shifts", [[(0, 0)] * 8, [(0, 0), (4, 2), (0, 6), (2, 2), (0, 0),
+                                                    (8, 0), (2, 4), (0, 0)],
+                                    [(0, 0), (3, 0), (1, 1), (0, 0), (5, 3), (0, 0), (1, 0),
+                                     (0, 0)]])
+def test_kept_gains_equal_a_full_cast_as_the_map_grows(shifts):
+    # Even shifts keep the coarse lattice (gains kept), odd ones do not (cast again):
+    # either way every gain equals view_gain's on the same map, and a map that changed
+    # near the robot only is cast again near the robot only.
+    cache = GainCache(range_m=1.5, rays=24)
+    rng = np.random.default_rng(1)
+    casts = []
+    maps = _exploring_maps(shifts)
+    g0, off0 = maps[0]
+    first = np.argwhere(g0.data == 0)
+    fixed = first[rng.choice(len(first), 150, replace=False)] + off0    # world cells
+    for g, off in maps:
+        free = np.argwhere(g.data == 0)
+        cells = np.vstack([fixed - off, free[rng.choice(len(free), 150, replace=False)]])
+        got = cache.gains(g, cells)
+        np.testing.assert_array_equal(got, view_gain(g, cells, 1.5, 24))
+        casts.append(cache.cast)
+        again = cache.gains(g, cells)                        # same map: nothing cast
+        assert cache.cast == 0
+        np.testing.assert_array_equal(again, got)
+    if all(r % 2 == 0 and c % 2 == 0 for r, c in shifts):
+        # The first disc lies far behind the robot at the end: its gains are kept.
+        assert casts[-1] <= 150
 
 
 def test_view_gain_rejects_bad_arguments():
@@ -150,6 +201,76 @@ def test_distance_matrix_matches_single_sweeps(k):
         d = g.distances(tuple(c), cells)
         d[i] = 0.0
         np.testing.assert_allclose(m[i], d)
+
+
+def test_distance_rows_are_the_matrix_rows():
+    rng = np.random.default_rng(5)
+    pas = rng.random((40, 60)) > 0.25
+    for k in (1, 3):
+        g = BlockGraph(pas, RES, k)
+        cells = np.argwhere(pas)[rng.choice(int(pas.sum()), 10, replace=False)]
+        m = g.distance_matrix(cells)
+        rows = g.distance_rows(cells[[7, 2]], cells)
+        np.fill_diagonal(m, np.inf)                          # rows keep i -> i as swept
+        for r, i in enumerate((7, 2)):
+            np.testing.assert_array_equal(np.delete(rows[r], i), np.delete(m[i], i))
+        assert g.distance_rows(np.zeros((0, 2)), cells).shape == (0, 10)
+
+
+def _grid_graph(pas: np.ndarray) -> tuple[GridMap, BlockGraph]:
+    data = np.where(pas, 0, 100).astype(np.int8)
+    return GridMap(data, RES, (1.0, -2.0)), BlockGraph(pas, RES, 4)
+
+
+def test_pair_paths_sweep_new_viewpoints_and_refresh_the_oldest():
+    rng = np.random.default_rng(2)
+    pas = rng.random((60, 80)) > 0.2
+    grid, graph = _grid_graph(pas)
+    cells = np.argwhere(pas)[rng.choice(int(pas.sum()), 12, replace=False)]
+    exact = graph.distance_matrix(cells)
+    cache = PairPaths(refresh_rows=2)
+    np.testing.assert_array_equal(cache.matrix(graph, grid, cells), exact)
+    assert cache.swept == 12
+    # The next decision: 3 viewpoints gone, 2 new, the rest kept (2 of them refreshed).
+    new = np.argwhere(pas)[rng.choice(int(pas.sum()), 2, replace=False)]
+    now = np.vstack([cells[3:][::-1], new])
+    m = cache.matrix(graph, grid, now)
+    assert cache.swept == 2 + 2
+    np.testing.assert_allclose(m, graph.distance_matrix(now), rtol=1e-12)
+    # A wall across the map: kept lengths stay as they were until refreshed, every
+    # length is the new map's within ceil(n / refresh_rows) decisions.
+    walled = pas.copy()
+    walled[:, 40] = False
+    walled[30, 40] = True
+    grid2, graph2 = _grid_graph(walled)
+    target = graph2.distance_matrix(now)
+    first = cache.matrix(graph2, grid2, now)
+    assert not np.allclose(first, target)
+    for _ in range(int(np.ceil(len(now) / 2)) - 1):
+        last = cache.matrix(graph2, grid2, now)
+    np.testing.assert_allclose(last, target, rtol=1e-12)
+
+
+def test_pair_paths_with_enough_refresh_rows_are_exact_every_time():
+    rng = np.random.default_rng(4)
+    pas = rng.random((50, 50)) > 0.2
+    grid, graph = _grid_graph(pas)
+    cache = PairPaths(refresh_rows=1000)
+    for _ in range(3):
+        cells = np.argwhere(pas)[rng.choice(int(pas.sum()), 9, replace=False)]
+        np.testing.assert_array_equal(cache.matrix(graph, grid, cells),
+                                      graph.distance_matrix(cells))
+    # Keys are world positions: a grown map (new origin) keeps them; a new frame does not.
+    grown = GridMap(np.pad(grid.data, ((4, 0), (8, 0))), RES,
+                    (grid.origin_xy_m[0] - 8 * RES, grid.origin_xy_m[1] - 4 * RES))
+    cache = PairPaths(refresh_rows=0)
+    cache.matrix(graph, grid, cells)
+    cache.matrix(BlockGraph(np.pad(pas, ((4, 0), (8, 0))), RES, 4), grown, cells + [4, 8])
+    assert cache.swept == 0
+    cache.matrix(graph, GridMap(grid.data, RES, grid.origin_xy_m, frame_id="odom"), cells)
+    assert cache.swept == 9
+    with pytest.raises(ValueError, match="refresh_rows"):
+        PairPaths(-1)
 
 
 # ------------------------------------------------------- the strategy in the decision core

@@ -323,27 +323,49 @@ class BlockGraph:
         ndarray of float64, shape (N, N)
         """
         rc = np.asarray(cells_rc, dtype=np.int64).reshape(-1, 2)
-        n = rc.shape[0]
-        out = np.full((n, n), np.inf)
-        if n == 0:
-            return out
-        node = self._nodes(rc)
-        has = np.flatnonzero(node >= 0)
-        if has.size:
-            nd = node[has]
-            uniq, inv = np.unique(nd, return_inverse=True)
-            d = dijkstra(self._graph, directed=True, indices=uniq)[:, uniq]   # (U, U)
-            sub = d[inv][:, inv]
-            if self.block_cells > 1:
-                off = np.hypot(rc[has, 0] - self._r0 - self._pos_r[nd],
-                               rc[has, 1] - self._c0 - self._pos_c[nd]) * self.resolution_m
-                sub = sub + off[:, None] + off[None, :]
-                same = nd[:, None] == nd[None, :]
-                straight = np.hypot(rc[has, 0][:, None] - rc[has, 0][None, :],
-                                    rc[has, 1][:, None] - rc[has, 1][None, :]) * self.resolution_m
-                sub = np.where(same, straight, sub)
-            out[np.ix_(has, has)] = sub
+        out = self.distance_rows(rc, rc)
         np.fill_diagonal(out, 0.0)
+        return out
+
+    def distance_rows(self, sources_rc: npt.ArrayLike, targets_rc: npt.ArrayLike
+                      ) -> npt.NDArray[np.float64]:
+        """Path lengths (m) from each source cell to each target cell, one Dijkstra sweep
+        per distinct source node: entry ``[i, j]`` is :meth:`distances` from source ``i``
+        to target ``j`` (inf when either is not passable or they are not connected).
+
+        Parameters
+        ----------
+        sources_rc : array_like of int, shape (S, 2)
+        targets_rc : array_like of int, shape (T, 2)
+
+        Returns
+        -------
+        ndarray of float64, shape (S, T)
+        """
+        src = np.asarray(sources_rc, dtype=np.int64).reshape(-1, 2)
+        tgt = np.asarray(targets_rc, dtype=np.int64).reshape(-1, 2)
+        out = np.full((src.shape[0], tgt.shape[0]), np.inf)
+        if src.shape[0] == 0 or tgt.shape[0] == 0:
+            return out
+        s_node, t_node = self._nodes(src), self._nodes(tgt)
+        s_has, t_has = np.flatnonzero(s_node >= 0), np.flatnonzero(t_node >= 0)
+        if s_has.size == 0 or t_has.size == 0:
+            return out
+        sn, tn = s_node[s_has], t_node[t_has]
+        uniq, inv = np.unique(sn, return_inverse=True)
+        sub = dijkstra(self._graph, directed=True, indices=uniq)[inv][:, tn]     # (S', T')
+        if self.block_cells > 1:
+            s_off = np.hypot(src[s_has, 0] - self._r0 - self._pos_r[sn],
+                             src[s_has, 1] - self._c0 - self._pos_c[sn]) * self.resolution_m
+            t_off = np.hypot(tgt[t_has, 0] - self._r0 - self._pos_r[tn],
+                             tgt[t_has, 1] - self._c0 - self._pos_c[tn]) * self.resolution_m
+            sub = sub + s_off[:, None] + t_off[None, :]
+            same = sn[:, None] == tn[None, :]
+            straight = np.hypot(src[s_has, 0][:, None] - tgt[t_has, 0][None, :],
+                                src[s_has, 1][:, None] - tgt[t_has, 1][None, :]
+                                ) * self.resolution_m
+            sub = np.where(same, straight, sub)
+        out[np.ix_(s_has, t_has)] = sub
         return out
 
 

@@ -236,8 +236,11 @@ class Explorer:
         self._key = None
 
     def reset(self, clear_blacklist: bool = False) -> None:
-        """Forget the goal and DONE (and the blacklist when asked), as on a (re)start."""
+        """Forget the goal and DONE (and the blacklist when asked), as on a (re)start; the
+        ``routed`` tour forgets its kept gains and path lengths."""
         self.manager.reset(clear_blacklist=clear_blacklist)
+        if self._router is not None:
+            self._router.reset()
 
     def report_navigation(self, outcome: NavOutcome,
                           goal: Goal | tuple[float, float] | None = None) -> bool:

@@ -151,6 +151,12 @@ class SelectionParams:
     gain_weight_m_per_m2: float = _non_negative(
         "routed: a group's cost is its tour length minus this times the unknown area its "
         "viewpoint sees (big views first when the detour is small)", "m/m^2", default=0.1)
+    tour_refresh_rows: int = field(default=8, metadata=param_meta(
+        "routed: path lengths between viewpoints are kept between decisions; each "
+        "decision sweeps from the new viewpoints and from this many kept ones, the oldest "
+        "first (a kept length is recomputed within viewpoints / this decisions); at or "
+        "above the number of viewpoints every length is recomputed every decision "
+        "(exact, slower on large maps)", range=(0, INT_MAX)))
     handover_m: float = _non_negative(
         "routed: a goal this close to the robot counts as reached (its frontier is judged "
         "and the next goal sent while the robot still drives: no final turn and no stop "
@@ -189,6 +195,8 @@ class SelectionParams:
         if self.revealed_arrivals_max < 0:
             raise ValueError(f"revealed_arrivals_max must be >= 0, got "
                              f"{self.revealed_arrivals_max}")
+        if self.tour_refresh_rows < 0:
+            raise ValueError(f"tour_refresh_rows must be >= 0, got {self.tour_refresh_rows}")
         if self.flicker_vanish_count < 0:
             raise ValueError(f"flicker_vanish_count must be >= 0, got "
                              f"{self.flicker_vanish_count}")

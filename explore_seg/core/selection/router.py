@@ -110,11 +110,11 @@ import numpy.typing as npt
 from explore_seg.core.frontiers import Frontier, FrontierParams
 from explore_seg.core.grid import GridMap, metres_to_cells
 from explore_seg.core.selection.distances import PathGraphs
+from explore_seg.core.selection.pair_paths import PairPaths
 from explore_seg.core.selection.params import SelectionParams
 from explore_seg.core.selection.regions import frontier_regions, region_at
 from explore_seg.core.selection.tour import front_costs, solve_tour
-from explore_seg.core.selection.viewpoints import (candidate_cells, coarse_codes,
-                                                   pick_viewpoint, view_gain)
+from explore_seg.core.selection.viewpoints import GainCache, candidate_cells, pick_viewpoint
 
 
 @dataclass(frozen=True)
@@ -161,17 +161,20 @@ class Router:
     def __init__(self, frontier_params: FrontierParams, params: SelectionParams) -> None:
         self._fp = frontier_params
         self._p = params
-        self._codes: tuple[GridMap, npt.NDArray[np.uint8]] | None = None
+        self._gains_kept = GainCache(params.sensor_range_m, params.gain_rays,
+                                     frontier_params.occupied_threshold)
+        self._pairs = PairPaths(params.tour_refresh_rows)
         #: Gain (m^2) of each group's viewpoint in the last :meth:`viewpoints` call.
         self.gain_m2: npt.NDArray[np.float64] = np.zeros(0)
         #: Wall seconds of the last :meth:`viewpoints` and :meth:`tour_costs` calls.
         self.viewpoint_s = 0.0
         self.tour_s = 0.0
 
-    def _coarse(self, grid: GridMap) -> npt.NDArray[np.uint8]:
-        if self._codes is None or self._codes[0] is not grid:
-            self._codes = (grid, coarse_codes(grid, self._fp.occupied_threshold))
-        return self._codes[1]
+    def reset(self) -> None:
+        """Forget the kept gains and path lengths (a new map)."""
+        self._gains_kept = GainCache(self._p.sensor_range_m, self._p.gain_rays,
+                                     self._fp.occupied_threshold)
+        self._pairs.reset()
 
     def viewpoints(self, grid: GridMap, frontiers: Sequence[Frontier],
                    graphs: PathGraphs, start_rc: tuple[int, int] | None,
@@ -211,8 +214,7 @@ class Router:
         counts = np.asarray([len(c) for c in cands])
         allc = np.concatenate(cands)
         dist = graphs.graph.distances(start_rc, allc)
-        gain = view_gain(grid, allc, p.sensor_range_m, p.gain_rays,
-                         self._fp.occupied_threshold, self._coarse(grid))
+        gain = self._gains_kept.gains(grid, allc)
         out: list[Frontier] = []
         bounds = np.concatenate([[0], np.cumsum(counts)])
         for i, f in enumerate(frontiers):
@@ -289,7 +291,7 @@ class Router:
         m = idx.size + 1
         cost = np.zeros((m, m))
         cost[0, 1:] = np.asarray(dist_m, dtype=np.float64)[idx]
-        pair = graphs.graph.distance_matrix(pts)
+        pair = self._pairs.matrix(graphs.graph, grid, pts)
         bad = ~np.isfinite(pair)
         if bad.any():
             # Reachable from the robot only through unknown space (fallback distances):

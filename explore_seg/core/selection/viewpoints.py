@@ -11,6 +11,11 @@ its area element ``r * dtheta * dr``, so the sum estimates the visible unknown a
 rather than the number of ray hits. All candidates of all groups are cast at once
 (numpy fancy indexing over a ``(candidates, rays, steps)`` array).
 
+:class:`GainCache` keeps the gains between map versions: a gain depends only on the coarse
+map within ``range_m`` of its coarse cell, so after a map update only the gains of coarse
+cells with a changed coarse cell within that window are cast again (exactly the values a
+full cast gives; the map may grow, its origin moving by whole coarse cells).
+
 The viewpoint of a group is its reachable candidate of highest gain; among candidates
 within ``1 - viewpoint_gain_tolerance`` of that gain, the one with the shortest path from
 the robot (seeing nearly as much from closer saves driving). A group without a
@@ -121,6 +126,131 @@ def view_gain(grid: GridMap, cells_rc: npt.ArrayLike, range_m: float = 5.0,
     return ((visible & (code == _UNKNOWN)) * weight[None, None, :]).sum(axis=(1, 2))
 
 
+def _window_any(mask: npt.NDArray[np.bool_], radius: int) -> npt.NDArray[np.bool_]:
+    """True where ``mask`` has a True cell within Chebyshev distance ``radius``
+    (integral image: O(H W) whatever the radius)."""
+    h, w = mask.shape
+    s = np.zeros((h + 1, w + 1), dtype=np.int64)
+    s[1:, 1:] = np.cumsum(np.cumsum(mask, axis=0, dtype=np.int64), axis=1)
+    r0 = np.clip(np.arange(h) - radius, 0, h)
+    r1 = np.clip(np.arange(h) + radius + 1, 0, h)
+    c0 = np.clip(np.arange(w) - radius, 0, w)
+    c1 = np.clip(np.arange(w) + radius + 1, 0, w)
+    box = (s[r1][:, c1] - s[r0][:, c1] - s[r1][:, c0] + s[r0][:, c0])
+    return box > 0
+
+
+class GainCache:
+    """:func:`view_gain` kept across map versions (module docstring).
+
+    Parameters
+    ----------
+    range_m, rays, occupied_threshold : see :func:`view_gain`
+
+    Attributes
+    ----------
+    cast : int
+        Coarse cells cast in the last :meth:`gains` call (the rest came from the cache).
+
+    Examples
+    --------
+    >>> data = np.full((40, 100), -1, dtype=np.int8)
+    >>> data[:, :50] = 0
+    >>> cache = GainCache(1.0, 16)
+    >>> cells = np.array([[20, 5], [20, 48]])
+    >>> g1 = cache.gains(GridMap(data, 0.05, (0.0, 0.0)), cells)
+    >>> data2 = data.copy(); data2[:, 50:60] = 0          # the map grows on the right
+    >>> g2 = cache.gains(GridMap(data2, 0.05, (0.0, 0.0)), cells)
+    >>> bool(g2[0] == g1[0] and g2[1] < g1[1]), cache.cast   # only the near one is cast
+    (True, 1)
+    """
+
+    def __init__(self, range_m: float = 5.0, rays: int = 24, occupied_threshold: int = 65
+                 ) -> None:
+        self._range, self._rays, self._thr = float(range_m), int(rays), int(occupied_threshold)
+        self._grid: GridMap | None = None
+        self._codes: npt.NDArray[np.uint8] | None = None
+        self._gain: npt.NDArray[np.float64] | None = None       # per coarse cell, NaN: none
+        self.cast = 0
+
+    def codes(self, grid: GridMap) -> npt.NDArray[np.uint8]:
+        """:func:`coarse_codes` of ``grid`` (brings the cache to ``grid``)."""
+        self._update(grid)
+        assert self._codes is not None
+        return self._codes
+
+    def _steps(self, resolution_m: float) -> int:
+        return max(1, int(math.ceil(self._range / (resolution_m * COARSEN))))
+
+    def _update(self, grid: GridMap) -> None:
+        if grid is self._grid:
+            return
+        codes = coarse_codes(grid, self._thr)
+        gain = np.full(codes.shape, np.nan)
+        old, old_codes, old_gain = self._grid, self._codes, self._gain
+        shift = None if old is None else _coarse_shift(old, grid)
+        if shift is not None and old_codes is not None and old_gain is not None:
+            dr, dc = shift
+            oh, ow = old_codes.shape
+            h, w = codes.shape
+            if 0 <= dr and 0 <= dc and dr + oh <= h and dc + ow <= w:
+                # Old map in the new frame; outside it the old cast saw blocking cells.
+                prev = np.full(codes.shape, _BLOCKED, dtype=np.uint8)
+                prev[dr:dr + oh, dc:dc + ow] = old_codes
+                gain[dr:dr + oh, dc:dc + ow] = old_gain
+                stale = _window_any(prev != codes, self._steps(grid.resolution_m))
+                gain[stale] = np.nan
+        self._grid, self._codes, self._gain = grid, codes, gain
+
+    def gains(self, grid: GridMap, cells_rc: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """:func:`view_gain` of ``cells_rc`` on ``grid`` (cast only where the cache has no
+        valid value).
+
+        Returns
+        -------
+        ndarray of float64, shape (C,)
+        """
+        rc = np.asarray(cells_rc, dtype=np.int64).reshape(-1, 2)
+        self._update(grid)
+        assert self._codes is not None and self._gain is not None
+        self.cast = 0
+        if rc.shape[0] == 0:
+            return np.zeros(0)
+        h, w = self._codes.shape
+        cr = np.clip(rc[:, 0] // COARSEN, 0, h - 1)
+        cc = np.clip(rc[:, 1] // COARSEN, 0, w - 1)
+        inside = (rc[:, 0] >= 0) & (rc[:, 1] >= 0) & (rc[:, 0] < grid.shape[0]) & (
+            rc[:, 1] < grid.shape[1])
+        if not inside.all():
+            # Off-map cells are not cached (the caller's candidates are on the map).
+            return view_gain(grid, rc, self._range, self._rays, self._thr, self._codes)
+        flat = cr * w + cc
+        todo = np.unique(flat[np.isnan(self._gain.ravel()[flat])])
+        if todo.size:
+            ur, uc = np.divmod(todo, w)
+            self._gain.ravel()[todo] = view_gain(
+                grid, np.stack([ur * COARSEN, uc * COARSEN], axis=1), self._range,
+                self._rays, self._thr, self._codes)
+            self.cast = int(todo.size)
+        return self._gain.ravel()[flat].copy()
+
+
+def _coarse_shift(old: GridMap, new: GridMap) -> tuple[int, int] | None:
+    """Offset (rows, cols) of ``old``'s coarse cell (0, 0) in ``new``'s coarse grid; None
+    when the grids do not share the coarse lattice (resolution, rotation, frame, an origin
+    moved by a fraction of a coarse cell)."""
+    if (old.resolution_m != new.resolution_m or old.origin_yaw_rad != new.origin_yaw_rad
+            or old.frame_id != new.frame_id):
+        return None
+    step = new.resolution_m * COARSEN
+    fr = (old.origin_xy_m[1] - new.origin_xy_m[1]) / step
+    fc = (old.origin_xy_m[0] - new.origin_xy_m[0]) / step
+    dr, dc = round(fr), round(fc)
+    if abs(fr - dr) > 1e-6 or abs(fc - dc) > 1e-6:
+        return None
+    return int(dr), int(dc)
+
+
 def candidate_cells(frontier_cells: npt.NDArray[np.int64], cpoint_rc: tuple[int, int],
                     passable: npt.NDArray[np.bool_], radius_cells: int, step_cells: int,
                     max_frontier_cells: int = 64) -> npt.NDArray[np.int64]:
@@ -177,4 +307,4 @@ def pick_viewpoint(gain_m2: npt.NDArray[np.float64], dist_m: npt.NDArray[np.floa
     return int(np.argmin(np.where(good, dist_m, np.inf)))
 
 
-__all__ = ["COARSEN", "candidate_cells", "coarse_codes", "pick_viewpoint", "view_gain"]
+__all__ = ["COARSEN", "GainCache", "candidate_cells", "coarse_codes", "pick_viewpoint", "view_gain"]
