@@ -78,9 +78,18 @@ def greedy_order(cost: npt.NDArray[np.float64], first: int | None = None
     return np.asarray(order, dtype=np.int64)
 
 
-def _two_opt_pass(cost: npt.NDArray[np.float64], path: npt.NDArray[np.int64], lo: int
+def _pairs(m: int, lo: int) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """All index pairs ``lo <= i < j < m`` (row-major), the 2-opt moves of a path of
+    ``m`` nodes."""
+    ii, jj = np.triu_indices(m - lo, k=1)
+    return ii.astype(np.int64) + lo, jj.astype(np.int64) + lo
+
+
+def _two_opt_pass(cost: npt.NDArray[np.float64], path: npt.NDArray[np.int64], lo: int,
+                  pairs: tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]] | None = None
                   ) -> bool:
-    """Apply the best segment reversal of ``path[i..j]`` (``lo <= i < j``); True if any."""
+    """Apply the best segment reversal of ``path[i..j]`` (``lo <= i < j``); True if any.
+    ``pairs``: :func:`_pairs` of ``(len(path), lo)`` when the caller keeps them."""
     m = len(path)
     if m - lo < 2:
         return False
@@ -89,19 +98,17 @@ def _two_opt_pass(cost: npt.NDArray[np.float64], path: npt.NDArray[np.int64], lo
     bwd = cost[path[1:], path[:-1]]
     cf = np.concatenate([[0.0], np.cumsum(fwd)])
     cb = np.concatenate([[0.0], np.cumsum(bwd)])
-    i = np.arange(lo, m)[:, None]
-    j = np.arange(lo, m)[None, :]
-    valid = j > i
-    ii, jj = np.broadcast_arrays(i, j)
-    ii, jj = ii[valid], jj[valid]
+    ii, jj = pairs if pairs is not None else _pairs(m, lo)
     inner_old = cf[jj] - cf[ii]                    # edges i..j forward
     inner_new = cb[jj] - cb[ii]                    # the same edges driven backwards
-    before_old = cost[path[ii - 1], path[ii]]
-    before_new = cost[path[ii - 1], path[jj]]
+    pi, pj = path[ii], path[jj]
+    before = path[ii - 1]
+    before_old = cost[before, pi]
+    before_new = cost[before, pj]
     has_after = jj < m - 1
-    jn = np.minimum(jj + 1, m - 1)
-    after_old = np.where(has_after, cost[path[jj], path[jn]], 0.0)
-    after_new = np.where(has_after, cost[path[ii], path[jn]], 0.0)
+    after = path[np.minimum(jj + 1, m - 1)]
+    after_old = np.where(has_after, cost[pj, after], 0.0)
+    after_new = np.where(has_after, cost[pi, after], 0.0)
     delta = (before_new + inner_new + after_new) - (before_old + inner_old + after_old)
     k = int(np.argmin(delta))
     if not delta[k] < -_EPS:
@@ -128,8 +135,13 @@ def _or_opt_pass(cost: npt.NDArray[np.float64], path: npt.NDArray[np.int64], lo:
         nxt = path[np.minimum(ends + 1, m - 1)]
         removed = (cost[prev, first] + np.where(has_next, cost[last, nxt], 0.0)
                    - np.where(has_next, cost[prev, nxt], 0.0))
-        inner_f = np.array([tour_length_inner(cost, path[a:a + s]) for a in starts])
-        inner_b = np.array([tour_length_inner(cost, path[a:a + s][::-1]) for a in starts])
+        # Cost along each segment, forwards and backwards (edges summed in path order).
+        inner_f = np.zeros(len(starts))
+        inner_b = np.zeros(len(starts))
+        for t in range(s - 1):
+            inner_f = inner_f + cost[path[starts + t], path[starts + t + 1]]
+        for t in range(s - 1, 0, -1):
+            inner_b = inner_b + cost[path[starts + t], path[starts + t - 1]]
         # Insert between path[p] and path[p+1] (p == m - 1: at the end), p outside the
         # segment and not its old place.
         p = np.arange(lo - 1, m)[None, :]
@@ -159,11 +171,6 @@ def _or_opt_pass(cost: npt.NDArray[np.float64], path: npt.NDArray[np.int64], lo:
     return np.concatenate([rest[:q], seg, rest[q:]]).astype(np.int64)
 
 
-def tour_length_inner(cost: npt.NDArray[np.float64], seg: npt.NDArray[np.int64]) -> float:
-    """Cost along a node sequence (no start edge)."""
-    return float(cost[seg[:-1], seg[1:]].sum()) if len(seg) > 1 else 0.0
-
-
 def improve(cost: npt.NDArray[np.float64], order: npt.ArrayLike, fixed_first: bool = False
             ) -> npt.NDArray[np.int64]:
     """2-opt and Or-opt on an open tour from node 0 until no move shortens it.
@@ -182,8 +189,9 @@ def improve(cost: npt.NDArray[np.float64], order: npt.ArrayLike, fixed_first: bo
     """
     path = np.concatenate([[0], np.asarray(order, dtype=np.int64)])
     lo = 2 if fixed_first else 1
+    pairs = _pairs(len(path), lo) if len(path) - lo >= 2 else None
     for _ in range(MAX_PASSES):
-        if _two_opt_pass(cost, path, lo):
+        if _two_opt_pass(cost, path, lo, pairs):
             continue
         moved = _or_opt_pass(cost, path, lo)
         if moved is None:
