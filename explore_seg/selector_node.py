@@ -223,7 +223,7 @@ class TargetSelectorNode(Node):
     # --------------------------------------------------------------- services
     def _srv_start(self, request: Trigger.Request, response: Trigger.Response
                    ) -> Trigger.Response:
-        self.manager.reset(clear_blacklist=True)
+        self._explorer.reset(clear_blacklist=True)
         self._state = State.WAITING_FOR_MAP
         self._publish_done(False)
         response.success, response.message = True, "exploration (re)started"
@@ -271,7 +271,7 @@ class TargetSelectorNode(Node):
                     ) -> Trigger.Response:
         if self._state is State.DONE or self.manager.done:
             goal_kept = False
-            self.manager.reset(clear_blacklist=False)
+            self._explorer.reset(clear_blacklist=False)
             self._publish_done(False)
         else:
             goal_kept = self.manager.goal is not None

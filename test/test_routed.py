@@ -338,6 +338,23 @@ def test_no_goal_flip_on_a_tiny_map_change():
         assert out.goal == first.goal
 
 
+def test_kept_path_lengths_are_forgotten_on_reset_and_clock_jumps():
+    g, pose = _two_rooms()
+    ex = Explorer(FrontierParams(robot_radius_m=0.1),
+                  SelectionParams(strategy="routed", tour_refresh_rows=0))
+    n = len(ex.step(0.0, g, pose).tour.order)
+    assert n == 3
+    data = g.data.copy()
+    data[40, 200] = 100                          # a new map version, same viewpoints
+    g = g.with_data(data)
+    assert ex.step(1.0, g, pose).tour.swept == 0
+    ex.clock_jumped(0.0)
+    assert ex.step(0.5, g, pose).tour.swept == n
+    assert ex.step(1.5, g.with_data(g.data.copy()), pose).tour.swept == 0
+    ex.reset()
+    assert ex.step(2.0, g, pose).tour.swept == n
+
+
 def test_a_frontier_that_reveals_nothing_is_not_chased():
     # A room fully known but for a speck of unknown cells walled off except one free
     # neighbour: nearest sends a goal there, routed finishes (its view gains < min_gain).

@@ -269,8 +269,11 @@ class Explorer:
     def clock_jumped(self, now_s: float) -> None:
         """The clock jumped (sim reset, ``/clock`` leap): the current goal's progress and
         arrival timers restart at ``now_s`` instead of timing out (or never) on a stale
-        reference."""
+        reference; the ``routed`` tour forgets its kept path lengths and gains (a sim
+        reset comes with a new map)."""
         self.manager.restart_timers(now_s)
+        if self._router is not None:
+            self._router.reset()
 
     # ------------------------------------------------------------------- step
     def _detect(self, grid: GridMap, layer: GridMap | None) -> None:

@@ -149,6 +149,9 @@ class TourPlan:
     robot_region : int
     gain_m2 : ndarray of float64, shape (N,)
         Unknown area seen from each viewpoint (zeros where none was computed).
+    swept : int
+        Viewpoints whose path lengths to the others were swept in this decision (the rest
+        were kept: :class:`~.pair_paths.PairPaths`).
     """
 
     tour_cost_m: npt.NDArray[np.float64] = field(repr=False)
@@ -157,6 +160,7 @@ class TourPlan:
     regions: npt.NDArray[np.int64] = field(repr=False)
     robot_region: int
     gain_m2: npt.NDArray[np.float64] = field(repr=False, default_factory=lambda: np.zeros(0))
+    swept: int = 0
 
 
 class Router:
@@ -185,8 +189,7 @@ class Router:
 
     def reset(self) -> None:
         """Forget the kept gains and path lengths (a new map)."""
-        self._gains_kept = GainCache(self._p.sensor_range_m, self._p.gain_rays,
-                                     self._fp.occupied_threshold)
+        self._gains_kept.reset()
         self._pairs.reset()
 
     def viewpoints(self, grid: GridMap, frontiers: Sequence[Frontier],
@@ -332,7 +335,7 @@ class Router:
         cost_out[idx] = front[1:] - p.gain_weight_m_per_m2 * gains[idx]
         self.tour_s = time.perf_counter() - t0
         return TourPlan(cost_out, idx[order - 1].astype(np.int64), float(best_len), regions,
-                        robot_region, self._gains(n))
+                        robot_region, self._gains(n), self._pairs.swept)
 
     def _gains(self, n: int) -> npt.NDArray[np.float64]:
         """The last viewpoints' gains when they belong to these ``n`` groups."""

@@ -168,6 +168,10 @@ class GainCache:
     def __init__(self, range_m: float = 5.0, rays: int = 24, occupied_threshold: int = 65
                  ) -> None:
         self._range, self._rays, self._thr = float(range_m), int(rays), int(occupied_threshold)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every kept gain."""
         self._grid: GridMap | None = None
         self._codes: npt.NDArray[np.uint8] | None = None
         self._gain: npt.NDArray[np.float64] | None = None       # per coarse cell, NaN: none
