@@ -177,12 +177,6 @@ class GainCache:
         self._gain: npt.NDArray[np.float64] | None = None       # per coarse cell, NaN: none
         self.cast = 0
 
-    def codes(self, grid: GridMap) -> npt.NDArray[np.uint8]:
-        """:func:`coarse_codes` of ``grid`` (brings the cache to ``grid``)."""
-        self._update(grid)
-        assert self._codes is not None
-        return self._codes
-
     def _steps(self, resolution_m: float) -> int:
         return max(1, int(math.ceil(self._range / (resolution_m * COARSEN))))
 
@@ -311,4 +305,5 @@ def pick_viewpoint(gain_m2: npt.NDArray[np.float64], dist_m: npt.NDArray[np.floa
     return int(np.argmin(np.where(good, dist_m, np.inf)))
 
 
-__all__ = ["COARSEN", "GainCache", "candidate_cells", "coarse_codes", "pick_viewpoint", "view_gain"]
+__all__ = ["COARSEN", "GainCache", "candidate_cells", "coarse_codes", "pick_viewpoint",
+           "view_gain"]
