@@ -55,7 +55,13 @@ def coarse_codes(grid: GridMap, occupied_threshold: int = 65, factor: int = COAR
     -------
     ndarray of uint8, shape (ceil(H / factor), ceil(W / factor))
     """
-    d = grid.data
+    return _coarse_block(grid.data, occupied_threshold, factor)
+
+
+def _coarse_block(d: npt.NDArray[np.int8], occupied_threshold: int, factor: int = COARSEN
+                  ) -> npt.NDArray[np.uint8]:
+    """:func:`coarse_codes` of a block of map cells (a partial last block counts its
+    missing cells as unknown)."""
     h, w = d.shape
     hc, wc = -(-h // factor), -(-w // factor)
     pad = np.full((hc * factor, wc * factor), -1, dtype=np.int16)
@@ -183,9 +189,14 @@ class GainCache:
     def _update(self, grid: GridMap) -> None:
         if grid is self._grid:
             return
+        old, old_codes, old_gain = self._grid, self._codes, self._gain
+        if (old is not None and old_codes is not None and old_gain is not None
+                and old.shape == grid.shape and old.origin_xy_m == grid.origin_xy_m
+                and _coarse_shift(old, grid) == (0, 0)):
+            self._update_in_place(grid, old, old_codes, old_gain)
+            return
         codes = coarse_codes(grid, self._thr)
         gain = np.full(codes.shape, np.nan)
-        old, old_codes, old_gain = self._grid, self._codes, self._gain
         shift = None if old is None else _coarse_shift(old, grid)
         if shift is not None and old_codes is not None and old_gain is not None:
             dr, dc = shift
@@ -199,6 +210,31 @@ class GainCache:
                 stale = _window_any(prev != codes, self._steps(grid.resolution_m))
                 gain[stale] = np.nan
         self._grid, self._codes, self._gain = grid, codes, gain
+
+    def _update_in_place(self, grid: GridMap, old: GridMap, codes: npt.NDArray[np.uint8],
+                         gain: npt.NDArray[np.float64]) -> None:
+        """Same geometry: coarse codes and gains change only around the changed cells
+        (their bounding box, plus the sensor range for the gains)."""
+        diff = grid.data != old.data
+        rows, cols = np.flatnonzero(diff.any(axis=1)), np.flatnonzero(diff.any(axis=0))
+        self._grid = grid
+        if rows.size == 0:
+            return
+        f = COARSEN
+        r0, r1 = int(rows[0]) // f, int(rows[-1]) // f + 1          # coarse, exclusive end
+        c0, c1 = int(cols[0]) // f, int(cols[-1]) // f + 1
+        block = _coarse_block(grid.data[r0 * f:r1 * f, c0 * f:c1 * f], self._thr, f)
+        changed = block != codes[r0:r1, c0:c1]
+        codes[r0:r1, c0:c1] = block                 # the cache's own arrays
+        if not changed.any():
+            return
+        rad = self._steps(grid.resolution_m)
+        h, w = codes.shape
+        a0, a1 = max(0, r0 - rad), min(h, r1 + rad)
+        b0, b1 = max(0, c0 - rad), min(w, c1 + rad)
+        mask = np.zeros((a1 - a0, b1 - b0), dtype=bool)
+        mask[r0 - a0:r1 - a0, c0 - b0:c1 - b0] = changed
+        gain[a0:a1, b0:b1][_window_any(mask, rad)] = np.nan
 
     def gains(self, grid: GridMap, cells_rc: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """:func:`view_gain` of ``cells_rc`` on ``grid`` (cast only where the cache has no
