@@ -44,4 +44,27 @@ def chair(x: float, y: float) -> list[Primitive]:
                    box("chair_1", "chair", "back", x + 0.23, y, 0.04, 0.5, 0.47, 0.9)]
 
 
+def narrowing_corridor_world() -> World:
+    """An 8 x 4 m room whose east wall opens (0.6 m) into a 1 m corridor that narrows to
+    0.34 m (narrower than the 0.44 m robot) for 6 m: the narrow part's far end is seen
+    only from the corridor's passable mouth, more than a frontier search radius away."""
+    t = WALL_T
+    L, W, X1, X2 = 8.0, 4.0, 9.0, 15.0
+    yl, yh, nl, nh = 1.7, 2.3, 1.83, 2.17
+    prims = [box("wall_s", "wall", "wall", L / 2, -t / 2, L + 2 * t, t, 0, WALL_H),
+             box("wall_n", "wall", "wall", L / 2, W + t / 2, L + 2 * t, t, 0, WALL_H),
+             box("wall_w", "wall", "wall", -t / 2, W / 2, t, W, 0, WALL_H),
+             box("wall_e1", "wall", "wall", L + t / 2, yl / 2, t, yl, 0, WALL_H),
+             box("wall_e2", "wall", "wall", L + t / 2, (yh + W) / 2, t, W - yh, 0, WALL_H),
+             box("cor_s", "wall", "wall", (L + X1) / 2, yl - t / 2, X1 - L, t, 0, WALL_H),
+             box("cor_n", "wall", "wall", (L + X1) / 2, yh + t / 2, X1 - L, t, 0, WALL_H),
+             box("step_s", "wall", "wall", X1 + t / 2, (yl + nl) / 2, t, nl - yl, 0, WALL_H),
+             box("step_n", "wall", "wall", X1 + t / 2, (nh + yh) / 2, t, yh - nh, 0, WALL_H),
+             box("nar_s", "wall", "wall", (X1 + X2) / 2, nl - t / 2, X2 - X1, t, 0, WALL_H),
+             box("nar_n", "wall", "wall", (X1 + X2) / 2, nh + t / 2, X2 - X1, t, 0, WALL_H),
+             box("nar_e", "wall", "wall", X2 + t / 2, 2.0, t, nh - nl + 2 * t, 0, WALL_H)]
+    return World(name="narrowing_corridor", bounds=(-0.5, -0.5, X2 + 0.5, W + 0.5),
+                 start_pose=(1.0, 2.0, 0.0), primitives=prims)
+
+
 FAST = dict(compute_coverage=False, lidar_noise_std_m=0.0)

@@ -113,24 +113,36 @@ def test_sees_any_stops_at_walls_and_range():
     assert sees_any(b, o[:0], t, 20.0).shape == (0,)
 
 
-def test_lookout_completes_the_explore_bench_corridor_run(shared):
-    """eb/room_with_corridor seed 3 (paper camera mount, as the benchmark): without
-    lookouts the run ends "done" at 98.95 % (the corridor's far end has no path for the
-    robot's 0.22 m radius); with them the robot looks down the corridor and reaches 99 %."""
+@pytest.mark.parametrize("seed", [0, 3])
+def test_lookout_completes_a_run_whose_last_frontier_lies_in_a_corridor_narrower_than_the_robot(
+        seed):
+    """A corridor narrowing below the robot's width (lock step, paper camera mount, as
+    the benchmark): without lookouts the run ends "done" below 99 % (no path to the
+    narrow part's frontier; its far end is seen only from the corridor's mouth); with
+    them the robot drives to the mouth, looks, and reaches 99 %, without a contact.
+    (eb/room_with_corridor seed 3 was this case until the inflation became metric: its
+    corridor's far end is no longer counted as observable.)"""
     sys.path.insert(0, str(ROOT))
-    from bench.worlds import PAPER_CAMERA_MOUNT, load, sim_params_for
+    from bench.worlds import PAPER_CAMERA_MOUNT, sim_params_for
     from explore_seg.core.selection import SelectionParams
+    from sim_bridge import worlds as sim_worlds
+    from sim_bridge.engine import SimParams
     from sim_bridge.explorer_params import load_explorer_params
     from sim_bridge.lockstep import run_exploration
+    from sim_bridge.observable import with_observable
+    from sim_scenes import narrowing_corridor_world
     import dataclasses
 
-    world, gt = load("eb/room_with_corridor")
+    world = narrowing_corridor_world()
+    sp = SimParams()
+    gt = with_observable(world, sim_worlds.ground_truth(world), sp.lidar_params(),
+                         sp.robot_radius_m)
     base = load_explorer_params()
     rows = {}
     for on in (False, True):
         sel = dataclasses.replace(base.selection, lookout_goals=on)
         assert isinstance(sel, SelectionParams)
-        res = run_exploration(world, "paper", 3, max_sim_time_s=600.0, ground_truth=gt,
+        res = run_exploration(world, "paper", seed, max_sim_time_s=600.0, ground_truth=gt,
                               sim_params=sim_params_for(PAPER_CAMERA_MOUNT),
                               explorer_params=dataclasses.replace(base, selection=sel))
         rows[on] = res

@@ -93,8 +93,8 @@ def test_soft_margin_keeps_clear_where_it_can_and_still_passes_a_narrow_door():
 def test_edge_cost_keeps_the_disk_off_a_corner_cell_inside_the_soft_band(start):
     """A 0.45 m passage (rows 21..29) between a cabinet's top face (rows <= 20 from col 30)
     and a wall (rows >= 30): every cell of it lies in the soft band, and the cell-centre
-    lethal zone (4 cells) lets the plan cut the cabinet's corner, where a 0.22 m disk
-    overlaps the corner cell by 4 cm (house seed 17's contact with cabinet_2). The edge
+    lethal zone (4.4 cells) lets the plan cut the cabinet's corner, where a 0.22 m disk
+    overlaps the corner cell by 3 cm (house seed 17's contact with cabinet_2). The edge
     cost makes the plan keep the disk off every obstacle cell; the passage stays open."""
     blocked = np.zeros((50, 60), bool)
     blocked[:21, 30:] = True
@@ -103,4 +103,4 @@ def test_edge_cost_keeps_the_disk_off_a_corner_cell_inside_the_soft_band(start):
     cells = _plan(blocked, start, goal)
     assert (_wall_distance_m(blocked, cells[1:]) - 0.22).min() >= 0.0
     bare = _plan(blocked, start, goal, NavParams(inflation_edge_cost=0.0))
-    assert (_wall_distance_m(blocked, bare[1:]) - 0.22).min() < -0.03
+    assert (_wall_distance_m(blocked, bare[1:]) - 0.22).min() < -0.025

@@ -305,6 +305,36 @@ def test_inflate_radius_literal():
     assert inflate(m, 0.04, 0.05).sum() == 1
 
 
+@pytest.mark.parametrize("radius_m", [0.1, 0.22, 0.25, 0.3, 0.37, 1.62, 2.13])
+def test_inflate_takes_every_cell_whose_centre_is_within_the_metric_radius(radius_m,
+                                                                           monkeypatch):
+    """A cell is inflated exactly when its centre lies within ``radius_m`` of a blocked
+    cell's centre, not within the radius rounded down to whole cells (at 0.22 m and
+    0.05 m a cell 4.12 cells = 0.206 m away is inflated: the robot would touch it), and
+    the distance-transform branch of large radii gives the same cells."""
+    import explore_seg.core.paths as paths_module
+    res = 0.05
+    rng = np.random.default_rng(int(radius_m * 100))
+    blocked = rng.random((90, 90)) < 0.004
+    rr, cc = np.nonzero(blocked)
+    yy, xx = np.mgrid[0:90, 0:90]
+    d = np.min(np.hypot(yy[..., None] - rr, xx[..., None] - cc), axis=-1) * res
+    expected = d <= radius_m + 1e-9
+    assert np.array_equal(inflate(blocked, radius_m, res), expected)
+    monkeypatch.setattr(paths_module, "_MAX_KERNEL_RADIUS_CELLS", 0)
+    assert np.array_equal(inflate(blocked, radius_m, res), expected)
+
+
+def test_inflate_by_the_robot_radius_covers_the_cells_the_robot_would_touch():
+    """0.22 m at 0.05 m is 4.4 cells: the offsets (4, 1) and (3, 3), 0.206 and 0.212 m
+    away, are inflated; (4, 2), 0.224 m away, is not."""
+    one = np.zeros((11, 11), bool)
+    one[5, 5] = True
+    out = inflate(one, 0.22, 0.05)
+    assert out[5 + 4, 5 + 1] and out[5 + 3, 5 + 3] and not out[5 + 4, 5 + 2]
+    assert int(out.sum()) == 61
+
+
 def test_inflate_negative_radius_raises():
     with pytest.raises(ValueError, match="radius_m"):
         inflate(np.zeros((3, 3), bool), -1.0, 0.05)

@@ -254,3 +254,26 @@ def test_robot_passes_a_door_at_a_sharp_angle_clear_of_its_jambs(start, goal):
     d = np.hypot(xy[:, None, 0] - jambs[None, :, 0], xy[:, None, 1] - jambs[None, :, 1])
     assert eng.metrics.n_collisions == 0
     assert float(d.min()) > 0.22
+
+
+def test_pursuit_turns_in_place_when_no_arc_from_its_heading_keeps_clear():
+    """A robot 0.23 m from a wall's edge, heading 0.6 rad towards it, with its plan
+    running along the wall: every arc from that heading first closes in on the wall, so
+    the controller turns in place towards the plan (the footprint does not move) instead
+    of driving the nearest arc unchecked; once it faces along the wall it drives on."""
+    res = 0.05
+    blocked = np.zeros((60, 80), bool)
+    blocked[30:, :] = True                # a wall whose edge is the line y = 1.5
+    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
+    nav = Navigator(NavParams())
+    nav._plan_cost = cost_grid(blocked, None, res, nav.params)
+    nav._plan_grid = grid
+    xs = np.arange(1.0, 3.0, res)
+    nav._plan_xy = np.column_stack([xs, np.full(len(xs), 1.27)])
+    nav._plan_index = 0
+    pose = (1.0, 1.27, 0.6)
+    assert not any(nav._arc_clear(pose, nav._plan_xy[k]) for k in range(1, 12))
+    v, w = nav._pursue(pose, 2.0)
+    assert v == 0.0 and w < 0.0
+    v, w = nav._pursue((1.0, 1.27, 0.0), 2.0)
+    assert v > 0.0

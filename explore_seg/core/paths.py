@@ -40,13 +40,22 @@ _MOVES8: tuple[tuple[int, int, float], ...] = (
 )
 
 
-def disk_kernel(radius_cells: int) -> npt.NDArray[np.uint8]:
-    """Square uint8 kernel of side ``2r+1`` holding a filled disk of radius ``r`` cells."""
-    r = int(radius_cells)
-    if r < 0:
+def disk_kernel(radius_cells: float) -> npt.NDArray[np.uint8]:
+    """Square uint8 kernel of side ``2 floor(r) + 1`` holding the offsets whose centre is
+    within ``r`` cells of the middle one (``r`` may be fractional: 4.4 cells holds the
+    offset (4, 1), 4.12 cells away, which 4 cells does not).
+
+    Examples
+    --------
+    >>> int(disk_kernel(4).sum()), int(disk_kernel(4.4).sum())
+    (49, 61)
+    """
+    rr = float(radius_cells)
+    if not rr >= 0:
         raise ValueError(f"radius_cells must be >= 0, got {radius_cells}")
+    r = int(math.floor(rr + 1e-9))
     yy, xx = np.mgrid[-r:r + 1, -r:r + 1]
-    return ((xx * xx + yy * yy) <= r * r + 1e-9).astype(np.uint8)
+    return ((xx * xx + yy * yy) <= rr * rr + 1e-9).astype(np.uint8)
 
 
 def inflate(blocked: npt.NDArray[np.bool_], radius_m: float, resolution_m: float
@@ -78,14 +87,15 @@ def inflate(blocked: npt.NDArray[np.bool_], radius_m: float, resolution_m: float
     r = metres_to_cells(radius_m, resolution_m)
     if r == 0 or not blocked.any():
         return blocked.copy()
+    rr = radius_m / resolution_m    # the disk is metric, not rounded down to whole cells
     if r > _MAX_KERNEL_RADIUS_CELLS:
         # A disk kernel of side 2r+1 costs O(r^2) memory and O(H*W*r) time (27 s and
         # 0.7 GB for r = 2200); the exact Euclidean distance to the nearest blocked cell
         # gives the same cells in O(H*W) for any radius.
         free = np.ascontiguousarray(~blocked, dtype=np.uint8)
         dist = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
-        return dist <= r + 1e-3
-    out = cv2.dilate(blocked.astype(np.uint8), disk_kernel(r), borderType=cv2.BORDER_CONSTANT,
+        return dist <= rr + 1e-3
+    out = cv2.dilate(blocked.astype(np.uint8), disk_kernel(rr), borderType=cv2.BORDER_CONSTANT,
                      borderValue=0)
     return out.astype(bool)
 

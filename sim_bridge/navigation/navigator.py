@@ -52,10 +52,12 @@ _DISK_LOOKUP_MAX_CELLS = _MAX_KERNEL_RADIUS_CELLS
 
 
 @functools.lru_cache(maxsize=8)
-def _disk_offsets(r: int) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+def _disk_offsets(r: float) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
     """(rows, cols) offsets of the cells of :func:`disk_kernel` ``(r)`` (its centre at 0)."""
-    dr, dc = np.nonzero(disk_kernel(r))
-    return dr.astype(np.int64) - r, dc.astype(np.int64) - r
+    kernel = disk_kernel(r)
+    half = kernel.shape[0] // 2
+    dr, dc = np.nonzero(kernel)
+    return dr.astype(np.int64) - half, dc.astype(np.int64) - half
 
 
 #: Plan points measured at a time when looking for the lookahead point.
@@ -420,7 +422,7 @@ class Navigator:
         # when a blocked cell of the window lies in the disk of inflate's radius around it.
         h, w = blocked.shape
         flat = np.unique((rows - r0) * w + (cols - c0))
-        dr, dc = _disk_offsets(k)
+        dr, dc = _disk_offsets(self.params.lethal_radius_m / grid.resolution_m)
         rr = (flat // w)[:, None] + dr[None, :]
         cc = (flat % w)[:, None] + dc[None, :]
         ok = (rr >= 0) & (rr < h) & (cc >= 0) & (cc < w)
@@ -496,6 +498,15 @@ class Navigator:
         # step back along the plan to the farthest point whose arc stays clear.
         while k > 1 and not self._arc_clear(pose, rest[k]):
             k -= 1
+        if k >= 1 and not self._arc_clear(pose, rest[k]):
+            # No arc from the current heading keeps clear (the robot stands close to an
+            # obstacle, heading past it): turn in place (the footprint does not move)
+            # towards the farthest plan point reachable in a straight, clear line, as
+            # Nav2's controller fails the arc and its recovery turns, instead of driving
+            # the unchecked arc into the obstacle.
+            turn = self._clear_heading(pose, rest, k)
+            if turn is not None:
+                return 0.0, _clip(p.heading_gain * turn, p.max_angular_speed_radps)
         tx, ty = rest[k]
         alpha = wrap_angle(math.atan2(ty - y, tx - x) - yaw)
         if abs(alpha) > p.rotate_in_place_angle_rad:
@@ -509,6 +520,17 @@ class Navigator:
         w = _clip(v * curvature, p.max_angular_speed_radps)
         return v, w
 
+
+    def _clear_heading(self, pose: tuple[float, float, float],
+                       rest: npt.NDArray[np.float64], k: int) -> float | None:
+        """The turn (rad) that faces the farthest of plan points ``rest[1..k]`` whose
+        straight segment from the robot passes :meth:`_arc_clear`; None when none does."""
+        x, y, yaw = pose
+        for j in range(k, 0, -1):
+            bearing = math.atan2(rest[j, 1] - y, rest[j, 0] - x)
+            if self._arc_clear((x, y, bearing), rest[j]):
+                return wrap_angle(bearing - yaw)
+        return None
 
     def _arc_clear(self, pose: tuple[float, float, float], target: npt.NDArray[np.float64]
                    ) -> bool:
