@@ -24,7 +24,8 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from explore_seg import convert
 from explore_seg.core.explorer import detect_frontiers
-from explore_seg.core.frontiers import Frontier, FrontierNodeParams, FrontierParams
+from explore_seg.core.frontiers import (CPointCache, Frontier, FrontierNodeParams,
+                                        FrontierParams)
 from explore_seg.core.grid import GridMap
 from explore_seg.core.limits import InputLimits
 from explore_seg.frontier_msgs import FrontierPublisher
@@ -61,6 +62,7 @@ class FrontierDetectorNode(Node):
         self._layer: GridMap | None = None
         self._dirty = False
         self._state = State.WAITING_FOR_MAP
+        self._cpoints = CPointCache()    # exact: reused only where the map is unchanged
         self.frontiers: list[Frontier] = []
         self.runs = 0
         self._warn = WarnThrottle(self, _WARN_PERIOD_S)
@@ -148,7 +150,8 @@ class FrontierDetectorNode(Node):
         self._dirty = False
         grid = self._grid
         t0 = time.perf_counter()
-        det = detect_frontiers(grid, self._layer, self.params)
+        self._cpoints.start(grid)
+        det = detect_frontiers(grid, self._layer, self.params, cpoints=self._cpoints)
         if det.layer_warning:
             self._warn("layer_frame", det.layer_warning)
         skew = self._time.disagreement("map", "object_costmap") if self._layer else None

@@ -317,3 +317,81 @@ def test_split_keeps_short_groups_and_is_off_at_zero():
     fine = split_frontiers(g, fs, 0.2, P1)                    # 0.5 m: 2 parts of 0.2 m
     assert [f.size_cells for f in fine] == [3, 3]
     assert all(_extent_m(f.cells, 0.1) <= 0.2 for f in fine)
+
+
+def _same_frontiers(a, b) -> bool:
+    return len(a) == len(b) and all(
+        x.point_rc == y.point_rc and x.point_passable == y.point_passable
+        and x.size_cells == y.size_cells and np.array_equal(x.cells, y.cells)
+        and x.centroid_rc == y.centroid_rc for x, y in zip(a, b))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_cpoint_cache_gives_the_frontiers_of_a_fresh_detection_as_the_map_changes(seed):
+    """A map revealed window by window (obstacles, objects and unknown space changing
+    locally, the map growing once): find_frontiers and split_frontiers with a CPointCache
+    equal those without, map after map, and the cache is used where the map stayed."""
+    from explore_seg.core.frontiers import CPointCache, split_frontiers, traversable_mask
+    rng = np.random.default_rng(seed)
+    truth = np.where(rng.random((120, 160)) < 0.03, 100, 0).astype(np.int8)
+    truth[40:42, 10:150] = 100
+    seen = np.full(truth.shape, -1, np.int8)
+    p = FrontierParams(robot_radius_m=0.1, cpoint_search_radius_m=0.5)
+    cache = CPointCache()
+    for step in range(14):
+        r, c = rng.integers(0, 100), rng.integers(0, 140)
+        seen[r:r + 30, c:c + 30] = truth[r:r + 30, c:c + 30]
+        data = seen if step < 9 else np.pad(seen, ((0, 8), (4, 0)), constant_values=-1)
+        grid = GridMap(data.copy(), 0.1, (0.0, 0.0) if step < 9 else (-0.4, 0.0))
+        extra = np.zeros(grid.shape, bool)
+        extra[60:64, 70:75] = step % 3 == 0
+        pas = traversable_mask(grid, extra, p)
+        cache.start(grid)
+        got = find_frontiers(grid, extra, p, passable=pas, cpoints=cache)
+        want = find_frontiers(grid, extra, p, passable=pas)
+        assert _same_frontiers(got, want)
+        assert _same_frontiers(split_frontiers(grid, got, 1.0, p, extra, pas, cache),
+                               split_frontiers(grid, want, 1.0, p, extra, pas))
+    assert cache.hits > 0 and cache.misses > 0
+
+
+@pytest.mark.parametrize("change", ["passable", "extra", "occupied"])
+def test_cpoint_cache_sees_a_change_of_any_of_its_inputs_near_the_cpoint(change):
+    """The cPoint moves when, near it, only the passable mask, only the extra layer or
+    only the map's occupied cells change (the other inputs given as before): the cache
+    must give the moved cPoint, not the kept one."""
+    from explore_seg.core.frontiers import CPointCache, traversable_mask
+    g, _ = grid_from_ascii("""
+    ????????????????????
+    ????????????????????
+    ....................
+    ....................
+    ....................
+    ....................
+    ....................
+    ....................
+    """, resolution_m=0.1)
+    p = FrontierParams(robot_radius_m=0.0, cpoint_search_radius_m=0.6,
+                       min_group_size_cells=3)
+    pas = traversable_mask(g, None, p)
+    pas[4:6] = False                  # the cPoint lies 3 rows below the frontier (row 6)
+    cache = CPointCache()
+    cache.start(g)
+    (before,) = find_frontiers(g, None, p, passable=pas, cpoints=cache)
+    r, c = before.point_rc
+    assert r == 3
+    grid2, pas2, extra2 = g, pas.copy(), None
+    if change == "passable":
+        pas2[r, c] = False
+    elif change == "extra":           # on the line of sight, not next to the frontier
+        extra2 = np.zeros(g.shape, bool)
+        extra2[r + 1, c] = True
+    else:
+        data = g.data.copy()
+        data[r + 1, c] = 100
+        grid2 = GridMap(data, 0.1, (0.0, 0.0))
+    cache.start(grid2)
+    got = find_frontiers(grid2, extra2, p, passable=pas2, cpoints=cache)
+    want = find_frontiers(grid2, extra2, p, passable=pas2)
+    assert before.point_rc not in [f.point_rc for f in want]
+    assert _same_frontiers(got, want)

@@ -307,6 +307,79 @@ def _cpoint(rep_rc: tuple[int, int], passable: npt.NDArray[np.bool_], grid: Grid
     return None
 
 
+class CPointCache:
+    """cPoints kept across map versions (exact).
+
+    A cPoint depends only on its representative cell, the search radius and, inside the
+    ``(2 radius + 1)``-cell window around that cell, the passable mask, the occupied cells
+    of the map and the extra obstacle layer (the line-of-sight segments stay in the
+    window). An entry is reused while those windows are equal; a map that grew (another
+    shape or origin) clears it. Only the entries asked for by the latest detection are
+    kept (call :meth:`start` before each), so memory stays bounded by the number of
+    groups.
+
+    Examples
+    --------
+    >>> from explore_seg.core.grid import grid_from_ascii
+    >>> g, _ = grid_from_ascii('''
+    ... ??????????
+    ... ..........
+    ... ..........
+    ... ''', resolution_m=0.1)
+    >>> cache = CPointCache()
+    >>> p = FrontierParams(robot_radius_m=0.0)
+    >>> cache.start(g)
+    >>> a = find_frontiers(g, params=p, cpoints=cache)
+    >>> cache.start(g)
+    >>> b = find_frontiers(g, params=p, cpoints=cache)
+    >>> a[0].point_rc == b[0].point_rc, cache.hits, cache.misses
+    (True, 1, 1)
+    """
+
+    def __init__(self) -> None:
+        self._entries: dict[tuple, tuple] = {}
+        self._next: dict[tuple, tuple] = {}
+        self._geometry: tuple | None = None
+        self.hits = 0
+        self.misses = 0
+
+    def reset(self) -> None:
+        """Forget every entry (a new map, a clock jump)."""
+        self._entries, self._next, self._geometry = {}, {}, None
+
+    def start(self, grid: GridMap) -> None:
+        """Begin a detection on ``grid``: the entries the previous one used stay."""
+        geometry = (grid.shape, grid.origin_xy_m, grid.origin_yaw_rad, grid.resolution_m)
+        self._entries = self._next if geometry == self._geometry else {}
+        self._next = {}
+        self._geometry = geometry
+
+    def cpoint(self, rep_rc: tuple[int, int], passable: npt.NDArray[np.bool_], grid: GridMap,
+               extra: npt.NDArray[np.bool_] | None, occupied_threshold: int,
+               radius_cells: int) -> tuple[int, int] | None:
+        """:func:`passable_in_sight`, from the cache when its windows are unchanged."""
+        h, w = passable.shape
+        r, c = rep_rc
+        win = (slice(max(0, r - radius_cells), min(h, r + radius_cells + 1)),
+               slice(max(0, c - radius_cells), min(w, c + radius_cells + 1)))
+        pas = passable[win]
+        occ = grid.data[win] >= occupied_threshold
+        ext = extra[win] if extra is not None else None
+        key = (rep_rc, occupied_threshold, radius_cells)
+        hit = self._entries.get(key)
+        if (hit is not None and np.array_equal(hit[0], pas) and np.array_equal(hit[1], occ)
+                and ((ext is None and hit[2] is None)
+                     or (ext is not None and hit[2] is not None
+                         and np.array_equal(hit[2], ext)))):
+            self.hits += 1
+            self._next[key] = hit
+            return hit[3]
+        self.misses += 1
+        pt = _cpoint(rep_rc, passable, grid, extra, occupied_threshold, radius_cells)
+        self._next[key] = (pas.copy(), occ, None if ext is None else ext.copy(), pt)
+        return pt
+
+
 def passable_in_sight(rep_rc: tuple[int, int], passable: npt.NDArray[np.bool_], grid: GridMap,
                       extra_obstacles: npt.NDArray[np.bool_] | None, occupied_threshold: int,
                       radius_cells: int) -> tuple[int, int] | None:
@@ -318,7 +391,8 @@ def passable_in_sight(rep_rc: tuple[int, int], passable: npt.NDArray[np.bool_], 
 def group_frontiers(grid: GridMap, frontier_mask: npt.NDArray[np.bool_],
                     params: FrontierParams = FrontierParams(),
                     extra_obstacles: npt.NDArray[np.bool_] | None = None,
-                    passable: npt.NDArray[np.bool_] | None = None) -> list[Frontier]:
+                    passable: npt.NDArray[np.bool_] | None = None,
+                    cpoints: CPointCache | None = None) -> list[Frontier]:
     """Group frontier cells into connected components and give each its cPoint.
 
     Parameters
@@ -331,6 +405,8 @@ def group_frontiers(grid: GridMap, frontier_mask: npt.NDArray[np.bool_],
         Extra obstacle layer (also used for the cPoint's passability and line of sight).
     passable : ndarray of bool, shape (H, W), optional
         Precomputed :func:`traversable_mask` (saves one inflation).
+    cpoints : CPointCache, optional
+        cPoints kept from the previous detection (same results, less work).
 
     Returns
     -------
@@ -372,20 +448,23 @@ def group_frontiers(grid: GridMap, frontier_mask: npt.NDArray[np.bool_],
         a, b = int(starts[k]), int(starts[k + 1])
         cells = np.stack([rr[a:b], cc[a:b]], axis=1).astype(np.int64)
         out.append(_group(gid, cells, (float(mean_r[k]), float(mean_c[k])), grid, pas, extra,
-                          params.occupied_threshold, radius_cells))
+                          params.occupied_threshold, radius_cells, cpoints))
     return out
 
 
 def _group(gid: int, cells: npt.NDArray[np.int64], centroid_rc: tuple[float, float],
            grid: GridMap, passable: npt.NDArray[np.bool_], extra: npt.NDArray[np.bool_] | None,
-           occupied_threshold: int, radius_cells: int) -> Frontier:
+           occupied_threshold: int, radius_cells: int,
+           cpoints: CPointCache | None = None) -> Frontier:
     """The group of ``cells``: its cPoint is the passable cell in sight nearest to the
     cell nearest to the centroid (that cell itself, not passable, when there is none)."""
     cy, cx = centroid_rc
     d2 = (cells[:, 0] - cy) ** 2 + (cells[:, 1] - cx) ** 2
     j = int(np.argmin(d2))
     rep = (int(cells[j, 0]), int(cells[j, 1]))
-    pt = _cpoint(rep, passable, grid, extra, occupied_threshold, radius_cells)
+    pt = (_cpoint(rep, passable, grid, extra, occupied_threshold, radius_cells)
+          if cpoints is None else
+          cpoints.cpoint(rep, passable, grid, extra, occupied_threshold, radius_cells))
     ok = pt is not None
     if pt is None:
         pt = rep
@@ -422,12 +501,14 @@ def _split_cells(cells: npt.NDArray[np.int64], max_extent_cells: float
 def split_frontiers(grid: GridMap, frontiers: Sequence[Frontier], max_extent_m: float,
                     params: FrontierParams = FrontierParams(),
                     extra_obstacles: npt.NDArray[np.bool_] | None = None,
-                    passable: npt.NDArray[np.bool_] | None = None) -> list[Frontier]:
+                    passable: npt.NDArray[np.bool_] | None = None,
+                    cpoints: CPointCache | None = None) -> list[Frontier]:
     """Frontier groups that extend more than ``max_extent_m`` along their principal axis,
     split (recursively, at the mean) into parts that do not, each a group with its own
     centroid and cPoint (FUEL's cluster split: a long frontier, e.g. along a corridor's
     side, is several places to look from, not one). Shorter groups are returned as they
     are; ids are renumbered 0..n-1 in the input order. ``max_extent_m`` <= 0: unchanged.
+    ``cpoints``: as in :func:`group_frontiers`.
 
     Examples
     --------
@@ -458,13 +539,14 @@ def split_frontiers(grid: GridMap, frontiers: Sequence[Frontier], max_extent_m: 
         for cells in parts:
             mean = cells.astype(np.float64).mean(axis=0)
             out.append(_group(len(out), cells, (float(mean[0]), float(mean[1])), grid, pas,
-                              extra, params.occupied_threshold, radius_cells))
+                              extra, params.occupied_threshold, radius_cells, cpoints))
     return out
 
 
 def find_frontiers(grid: GridMap, extra_obstacles: npt.NDArray[np.bool_] | None = None,
                    params: FrontierParams = FrontierParams(),
-                   passable: npt.NDArray[np.bool_] | None = None) -> list[Frontier]:
+                   passable: npt.NDArray[np.bool_] | None = None,
+                   cpoints: CPointCache | None = None) -> list[Frontier]:
     """:func:`detect_frontier_cells` then :func:`group_frontiers`.
 
     Examples
@@ -481,7 +563,7 @@ def find_frontiers(grid: GridMap, extra_obstacles: npt.NDArray[np.bool_] | None 
     [(6, (2, 2))]
     """
     mask = detect_frontier_cells(grid, extra_obstacles, params)
-    return group_frontiers(grid, mask, params, extra_obstacles, passable)
+    return group_frontiers(grid, mask, params, extra_obstacles, passable, cpoints)
 
 
 def object_obstacles(layer: GridMap | None, grid: GridMap, threshold: int
