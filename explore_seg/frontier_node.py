@@ -24,7 +24,7 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from explore_seg import convert
 from explore_seg.core.explorer import detect_frontiers
-from explore_seg.core.frontiers import (CPointCache, Frontier, FrontierNodeParams,
+from explore_seg.core.frontiers import (Frontier, FrontierCache, FrontierNodeParams,
                                         FrontierParams)
 from explore_seg.core.grid import GridMap
 from explore_seg.core.limits import InputLimits
@@ -62,7 +62,7 @@ class FrontierDetectorNode(Node):
         self._layer: GridMap | None = None
         self._dirty = False
         self._state = State.WAITING_FOR_MAP
-        self._cpoints = CPointCache()    # exact: reused only where the map is unchanged
+        self._fcache = FrontierCache()   # exact: reused only where the map is unchanged
         self.frontiers: list[Frontier] = []
         self.runs = 0
         self._warn = WarnThrottle(self, _WARN_PERIOD_S)
@@ -150,8 +150,8 @@ class FrontierDetectorNode(Node):
         self._dirty = False
         grid = self._grid
         t0 = time.perf_counter()
-        self._cpoints.start(grid)
-        det = detect_frontiers(grid, self._layer, self.params, cpoints=self._cpoints)
+        self._fcache.start(grid)
+        det = detect_frontiers(grid, self._layer, self.params, cache=self._fcache)
         if det.layer_warning:
             self._warn("layer_frame", det.layer_warning)
         skew = self._time.disagreement("map", "object_costmap") if self._layer else None

@@ -329,15 +329,15 @@ def _same_frontiers(a, b) -> bool:
 @pytest.mark.parametrize("seed", range(4))
 def test_cpoint_cache_gives_the_frontiers_of_a_fresh_detection_as_the_map_changes(seed):
     """A map revealed window by window (obstacles, objects and unknown space changing
-    locally, the map growing once): find_frontiers and split_frontiers with a CPointCache
+    locally, the map growing once): find_frontiers and split_frontiers with a FrontierCache
     equal those without, map after map, and the cache is used where the map stayed."""
-    from explore_seg.core.frontiers import CPointCache, split_frontiers, traversable_mask
+    from explore_seg.core.frontiers import FrontierCache, split_frontiers, traversable_mask
     rng = np.random.default_rng(seed)
     truth = np.where(rng.random((120, 160)) < 0.03, 100, 0).astype(np.int8)
     truth[40:42, 10:150] = 100
     seen = np.full(truth.shape, -1, np.int8)
     p = FrontierParams(robot_radius_m=0.1, cpoint_search_radius_m=0.5)
-    cache = CPointCache()
+    cache = FrontierCache()
     for step in range(14):
         r, c = rng.integers(0, 100), rng.integers(0, 140)
         seen[r:r + 30, c:c + 30] = truth[r:r + 30, c:c + 30]
@@ -347,7 +347,7 @@ def test_cpoint_cache_gives_the_frontiers_of_a_fresh_detection_as_the_map_change
         extra[60:64, 70:75] = step % 3 == 0
         pas = traversable_mask(grid, extra, p)
         cache.start(grid)
-        got = find_frontiers(grid, extra, p, passable=pas, cpoints=cache)
+        got = find_frontiers(grid, extra, p, passable=pas, cache=cache)
         want = find_frontiers(grid, extra, p, passable=pas)
         assert _same_frontiers(got, want)
         assert _same_frontiers(split_frontiers(grid, got, 1.0, p, extra, pas, cache),
@@ -360,7 +360,7 @@ def test_cpoint_cache_sees_a_change_of_any_of_its_inputs_near_the_cpoint(change)
     """The cPoint moves when, near it, only the passable mask, only the extra layer or
     only the map's occupied cells change (the other inputs given as before): the cache
     must give the moved cPoint, not the kept one."""
-    from explore_seg.core.frontiers import CPointCache, traversable_mask
+    from explore_seg.core.frontiers import FrontierCache, traversable_mask
     g, _ = grid_from_ascii("""
     ????????????????????
     ????????????????????
@@ -375,9 +375,9 @@ def test_cpoint_cache_sees_a_change_of_any_of_its_inputs_near_the_cpoint(change)
                        min_group_size_cells=3)
     pas = traversable_mask(g, None, p)
     pas[4:6] = False                  # the cPoint lies 3 rows below the frontier (row 6)
-    cache = CPointCache()
+    cache = FrontierCache()
     cache.start(g)
-    (before,) = find_frontiers(g, None, p, passable=pas, cpoints=cache)
+    (before,) = find_frontiers(g, None, p, passable=pas, cache=cache)
     r, c = before.point_rc
     assert r == 3
     grid2, pas2, extra2 = g, pas.copy(), None
@@ -391,7 +391,7 @@ def test_cpoint_cache_sees_a_change_of_any_of_its_inputs_near_the_cpoint(change)
         data[r + 1, c] = 100
         grid2 = GridMap(data, 0.1, (0.0, 0.0))
     cache.start(grid2)
-    got = find_frontiers(grid2, extra2, p, passable=pas2, cpoints=cache)
+    got = find_frontiers(grid2, extra2, p, passable=pas2, cache=cache)
     want = find_frontiers(grid2, extra2, p, passable=pas2)
     assert before.point_rc not in [f.point_rc for f in want]
     assert _same_frontiers(got, want)

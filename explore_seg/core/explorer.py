@@ -46,7 +46,7 @@ from typing import Sequence
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.frontiers import (CPointCache, Frontier, FrontierParams, find_frontiers,
+from explore_seg.core.frontiers import (Frontier, FrontierCache, FrontierParams, find_frontiers,
                                         object_obstacles, split_frontiers,
                                         traversable_mask)
 from explore_seg.core.grid import GridMap, metres_to_cells
@@ -74,14 +74,14 @@ class Detection:
 
 
 def detect_frontiers(grid: GridMap, layer: GridMap | None, params: FrontierParams,
-                     groups: bool = True, cpoints: CPointCache | None = None) -> Detection:
+                     groups: bool = True, cache: FrontierCache | None = None) -> Detection:
     """Frontiers of ``grid`` with the object layer's occupied cells as obstacles.
 
     The layer is used when ``params.use_object_costmap`` and it is in the map's frame
     (else ignored, with ``layer_warning`` saying why); it may have any size or origin.
     ``groups=False``: only the masks (no frontier groups; the RRT strategies find their
-    candidates themselves). ``cpoints``: cPoints kept from the previous detection (see
-    :class:`~explore_seg.core.frontiers.CPointCache`; same frontiers, less work).
+    candidates themselves). ``cache``: cPoints and splits kept from the previous detection (see
+    :class:`~explore_seg.core.frontiers.FrontierCache`; same frontiers, less work).
     """
     extra = None
     warning = ""
@@ -92,7 +92,7 @@ def detect_frontiers(grid: GridMap, layer: GridMap | None, params: FrontierParam
         else:
             extra = object_obstacles(layer, grid, params.object_occupied_threshold)
     passable = traversable_mask(grid, extra, params)
-    frontiers = (find_frontiers(grid, extra, params, passable=passable, cpoints=cpoints)
+    frontiers = (find_frontiers(grid, extra, params, passable=passable, cache=cache)
                  if groups else [])
     return Detection(frontiers, extra, passable, warning)
 
@@ -180,7 +180,7 @@ class Explorer:
         self._frontiers: list[Frontier] = []
         self._graph: PathGraphs | None = None
         self._router = Router(frontier, selection) if selection.strategy == "routed" else None
-        self._cpoints = CPointCache()
+        self._fcache = FrontierCache()
         self._layer_warning = ""
         self._reported_blacklisted = 0
 
@@ -236,14 +236,14 @@ class Explorer:
             self._rrt = None
         self._router = (Router(self._fp, self._sp) if self._sp.strategy == "routed"
                         else None)
-        self._cpoints.reset()
+        self._fcache.reset()
         self._key = None
 
     def reset(self, clear_blacklist: bool = False) -> None:
         """Forget the goal and DONE (and the blacklist when asked), as on a (re)start; the
         ``routed`` tour forgets its kept gains and path lengths."""
         self.manager.reset(clear_blacklist=clear_blacklist)
-        self._cpoints.reset()
+        self._fcache.reset()
         if self._router is not None:
             self._router.reset()
 
@@ -282,15 +282,15 @@ class Explorer:
 
     # ------------------------------------------------------------------- step
     def _detect(self, grid: GridMap, layer: GridMap | None) -> None:
-        self._cpoints.start(grid)
+        self._fcache.start(grid)
         det = detect_frontiers(grid, layer, self._fp,
                                groups=self._sp.strategy not in RRT_STRATEGIES,
-                               cpoints=self._cpoints)
+                               cache=self._fcache)
         self._det = det
         self._layer_warning = det.layer_warning
         self._frontiers = (det.frontiers if self._router is None else split_frontiers(
             grid, det.frontiers, self._sp.frontier_split_m, self._fp, det.extra_obstacles,
-            det.passable, self._cpoints))
+            det.passable, self._fcache))
         self._graph = PathGraphs(grid, det.extra_obstacles, self._fp, self._sp, det.passable)
         self._key = (grid, layer)
 

@@ -307,16 +307,17 @@ def _cpoint(rep_rc: tuple[int, int], passable: npt.NDArray[np.bool_], grid: Grid
     return None
 
 
-class CPointCache:
-    """cPoints kept across map versions (exact).
+class FrontierCache:
+    """cPoints and splits of frontier groups kept across map versions (exact).
 
-    A cPoint depends only on its representative cell, the search radius and, inside the
-    ``(2 radius + 1)``-cell window around that cell, the passable mask, the occupied cells
-    of the map and the extra obstacle layer (the line-of-sight segments stay in the
-    window). An entry is reused while those windows are equal; a map that grew (another
-    shape or origin) clears it. Only the entries asked for by the latest detection are
-    kept (call :meth:`start` before each), so memory stays bounded by the number of
-    groups.
+    A group's split (:func:`split_frontiers`) depends only on its cells: it is reused for
+    a group of the same cells. A cPoint depends only on its representative cell, the
+    search radius and, inside the ``(2 radius + 1)``-cell window around that cell, the
+    passable mask, the occupied cells of the map and the extra obstacle layer (the
+    line-of-sight segments stay in the window): it is reused while those windows are
+    equal. A map that grew (another shape or origin) clears the cache. Only the entries
+    asked for by the latest detection are kept (call :meth:`start` before each), so
+    memory stays bounded by the number of groups.
 
     Examples
     --------
@@ -326,12 +327,12 @@ class CPointCache:
     ... ..........
     ... ..........
     ... ''', resolution_m=0.1)
-    >>> cache = CPointCache()
+    >>> cache = FrontierCache()
     >>> p = FrontierParams(robot_radius_m=0.0)
     >>> cache.start(g)
-    >>> a = find_frontiers(g, params=p, cpoints=cache)
+    >>> a = find_frontiers(g, params=p, cache=cache)
     >>> cache.start(g)
-    >>> b = find_frontiers(g, params=p, cpoints=cache)
+    >>> b = find_frontiers(g, params=p, cache=cache)
     >>> a[0].point_rc == b[0].point_rc, cache.hits, cache.misses
     (True, 1, 1)
     """
@@ -353,6 +354,16 @@ class CPointCache:
         self._entries = self._next if geometry == self._geometry else {}
         self._next = {}
         self._geometry = geometry
+
+    def split(self, cells: npt.NDArray[np.int64], max_extent_cells: float
+              ) -> list[npt.NDArray[np.int64]]:
+        """``_split_cells(cells, max_extent_cells)``, from the cache for the same cells."""
+        key = ("split", cells.shape[0], cells.tobytes(), max_extent_cells)
+        parts = self._entries.get(key)
+        if parts is None:
+            parts = _split_cells(cells, max_extent_cells)
+        self._next[key] = parts
+        return parts
 
     def cpoint(self, rep_rc: tuple[int, int], passable: npt.NDArray[np.bool_], grid: GridMap,
                extra: npt.NDArray[np.bool_] | None, occupied_threshold: int,
@@ -392,7 +403,7 @@ def group_frontiers(grid: GridMap, frontier_mask: npt.NDArray[np.bool_],
                     params: FrontierParams = FrontierParams(),
                     extra_obstacles: npt.NDArray[np.bool_] | None = None,
                     passable: npt.NDArray[np.bool_] | None = None,
-                    cpoints: CPointCache | None = None) -> list[Frontier]:
+                    cache: FrontierCache | None = None) -> list[Frontier]:
     """Group frontier cells into connected components and give each its cPoint.
 
     Parameters
@@ -405,7 +416,7 @@ def group_frontiers(grid: GridMap, frontier_mask: npt.NDArray[np.bool_],
         Extra obstacle layer (also used for the cPoint's passability and line of sight).
     passable : ndarray of bool, shape (H, W), optional
         Precomputed :func:`traversable_mask` (saves one inflation).
-    cpoints : CPointCache, optional
+    cache : FrontierCache, optional
         cPoints kept from the previous detection (same results, less work).
 
     Returns
@@ -448,14 +459,14 @@ def group_frontiers(grid: GridMap, frontier_mask: npt.NDArray[np.bool_],
         a, b = int(starts[k]), int(starts[k + 1])
         cells = np.stack([rr[a:b], cc[a:b]], axis=1).astype(np.int64)
         out.append(_group(gid, cells, (float(mean_r[k]), float(mean_c[k])), grid, pas, extra,
-                          params.occupied_threshold, radius_cells, cpoints))
+                          params.occupied_threshold, radius_cells, cache))
     return out
 
 
 def _group(gid: int, cells: npt.NDArray[np.int64], centroid_rc: tuple[float, float],
            grid: GridMap, passable: npt.NDArray[np.bool_], extra: npt.NDArray[np.bool_] | None,
            occupied_threshold: int, radius_cells: int,
-           cpoints: CPointCache | None = None) -> Frontier:
+           cache: FrontierCache | None = None) -> Frontier:
     """The group of ``cells``: its cPoint is the passable cell in sight nearest to the
     cell nearest to the centroid (that cell itself, not passable, when there is none)."""
     cy, cx = centroid_rc
@@ -463,8 +474,8 @@ def _group(gid: int, cells: npt.NDArray[np.int64], centroid_rc: tuple[float, flo
     j = int(np.argmin(d2))
     rep = (int(cells[j, 0]), int(cells[j, 1]))
     pt = (_cpoint(rep, passable, grid, extra, occupied_threshold, radius_cells)
-          if cpoints is None else
-          cpoints.cpoint(rep, passable, grid, extra, occupied_threshold, radius_cells))
+          if cache is None else
+          cache.cpoint(rep, passable, grid, extra, occupied_threshold, radius_cells))
     ok = pt is not None
     if pt is None:
         pt = rep
@@ -502,13 +513,13 @@ def split_frontiers(grid: GridMap, frontiers: Sequence[Frontier], max_extent_m: 
                     params: FrontierParams = FrontierParams(),
                     extra_obstacles: npt.NDArray[np.bool_] | None = None,
                     passable: npt.NDArray[np.bool_] | None = None,
-                    cpoints: CPointCache | None = None) -> list[Frontier]:
+                    cache: FrontierCache | None = None) -> list[Frontier]:
     """Frontier groups that extend more than ``max_extent_m`` along their principal axis,
     split (recursively, at the mean) into parts that do not, each a group with its own
     centroid and cPoint (FUEL's cluster split: a long frontier, e.g. along a corridor's
     side, is several places to look from, not one). Shorter groups are returned as they
     are; ids are renumbered 0..n-1 in the input order. ``max_extent_m`` <= 0: unchanged.
-    ``cpoints``: as in :func:`group_frontiers`.
+    ``cache``: as in :func:`group_frontiers`.
 
     Examples
     --------
@@ -532,21 +543,22 @@ def split_frontiers(grid: GridMap, frontiers: Sequence[Frontier], max_extent_m: 
     max_cells = max_extent_m / grid.resolution_m
     out: list[Frontier] = []
     for f in frontiers:
-        parts = _split_cells(f.cells, max_cells)
+        parts = (_split_cells(f.cells, max_cells) if cache is None
+                 else cache.split(f.cells, max_cells))
         if len(parts) == 1:
             out.append(replace(f, id=len(out)) if f.id != len(out) else f)
             continue
         for cells in parts:
             mean = cells.astype(np.float64).mean(axis=0)
             out.append(_group(len(out), cells, (float(mean[0]), float(mean[1])), grid, pas,
-                              extra, params.occupied_threshold, radius_cells, cpoints))
+                              extra, params.occupied_threshold, radius_cells, cache))
     return out
 
 
 def find_frontiers(grid: GridMap, extra_obstacles: npt.NDArray[np.bool_] | None = None,
                    params: FrontierParams = FrontierParams(),
                    passable: npt.NDArray[np.bool_] | None = None,
-                   cpoints: CPointCache | None = None) -> list[Frontier]:
+                   cache: FrontierCache | None = None) -> list[Frontier]:
     """:func:`detect_frontier_cells` then :func:`group_frontiers`.
 
     Examples
@@ -563,7 +575,7 @@ def find_frontiers(grid: GridMap, extra_obstacles: npt.NDArray[np.bool_] | None 
     [(6, (2, 2))]
     """
     mask = detect_frontier_cells(grid, extra_obstacles, params)
-    return group_frontiers(grid, mask, params, extra_obstacles, passable, cpoints)
+    return group_frontiers(grid, mask, params, extra_obstacles, passable, cache)
 
 
 def object_obstacles(layer: GridMap | None, grid: GridMap, threshold: int
