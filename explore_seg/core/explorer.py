@@ -80,8 +80,8 @@ def detect_frontiers(grid: GridMap, layer: GridMap | None, params: FrontierParam
     The layer is used when ``params.use_object_costmap`` and it is in the map's frame
     (else ignored, with ``layer_warning`` saying why); it may have any size or origin.
     ``groups=False``: only the masks (no frontier groups; the RRT strategies find their
-    candidates themselves). ``cache``: cPoints and splits kept from the previous detection (see
-    :class:`~explore_seg.core.frontiers.FrontierCache`; same frontiers, less work).
+    candidates themselves). ``cache``: cPoints and splits kept from the previous detection
+    (see :class:`~explore_seg.core.frontiers.FrontierCache`; same frontiers, less work).
     """
     extra = None
     warning = ""

@@ -345,7 +345,7 @@ class FrontierCache:
         self.misses = 0
 
     def reset(self) -> None:
-        """Forget every entry (a new map, a clock jump)."""
+        """Forget every entry (new parameters, a restart)."""
         self._entries, self._next, self._geometry = {}, {}, None
 
     def start(self, grid: GridMap) -> None:
@@ -379,9 +379,8 @@ class FrontierCache:
         key = (rep_rc, occupied_threshold, radius_cells)
         hit = self._entries.get(key)
         if (hit is not None and np.array_equal(hit[0], pas) and np.array_equal(hit[1], occ)
-                and ((ext is None and hit[2] is None)
-                     or (ext is not None and hit[2] is not None
-                         and np.array_equal(hit[2], ext)))):
+                and (hit[2] is None) == (ext is None)
+                and (ext is None or np.array_equal(hit[2], ext))):
             self.hits += 1
             self._next[key] = hit
             return hit[3]

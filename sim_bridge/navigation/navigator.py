@@ -496,16 +496,19 @@ class Navigator:
                 break
         # A lookahead point behind an obstacle corner would make the arc cut the corner:
         # step back along the plan to the farthest point whose arc stays clear.
-        while k > 1 and not self._arc_clear(pose, rest[k]):
+        clear = k < 1 or self._arc_clear(pose, rest[k])
+        while not clear and k > 1:
             k -= 1
-        if k >= 1 and not self._arc_clear(pose, rest[k]):
+            clear = self._arc_clear(pose, rest[k])
+        if not clear:
             # No arc from the current heading keeps clear (the robot stands close to an
-            # obstacle, heading past it): turn in place (the footprint does not move)
-            # towards the farthest plan point reachable in a straight, clear line, as
-            # Nav2's controller fails the arc and its recovery turns, instead of driving
-            # the unchecked arc into the obstacle.
-            turn = self._clear_heading(pose, rest, k)
-            if turn is not None:
+            # obstacle, heading past it): when the straight line to the next plan point
+            # is clear, turn in place (the footprint does not move) to face it, as Nav2's
+            # controller fails the arc and its recovery turns, instead of driving the
+            # unchecked arc into the obstacle.
+            bearing = math.atan2(rest[1, 1] - y, rest[1, 0] - x)
+            if self._arc_clear((x, y, bearing), rest[1]):
+                turn = wrap_angle(bearing - yaw)
                 return 0.0, _clip(p.heading_gain * turn, p.max_angular_speed_radps)
         tx, ty = rest[k]
         alpha = wrap_angle(math.atan2(ty - y, tx - x) - yaw)
@@ -519,18 +522,6 @@ class Navigator:
             v = min(v, p.max_angular_speed_radps / abs(curvature))
         w = _clip(v * curvature, p.max_angular_speed_radps)
         return v, w
-
-
-    def _clear_heading(self, pose: tuple[float, float, float],
-                       rest: npt.NDArray[np.float64], k: int) -> float | None:
-        """The turn (rad) that faces the farthest of plan points ``rest[1..k]`` whose
-        straight segment from the robot passes :meth:`_arc_clear`; None when none does."""
-        x, y, yaw = pose
-        for j in range(k, 0, -1):
-            bearing = math.atan2(rest[j, 1] - y, rest[j, 0] - x)
-            if self._arc_clear((x, y, bearing), rest[j]):
-                return wrap_angle(bearing - yaw)
-        return None
 
     def _arc_clear(self, pose: tuple[float, float, float], target: npt.NDArray[np.float64]
                    ) -> bool:
