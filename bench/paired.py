@@ -243,6 +243,13 @@ def report(rows: list[dict[str, Any]], arms: list[str]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _core_p95(rs: list[dict[str, Any]]) -> str:
+    """'median / max' of the runs' decision-core p95 (ms); '-' when none recorded it."""
+    v = [float(r["core_ms_p95"]) for r in rs
+         if r.get("core_ms_p95") not in (None, "") and math.isfinite(float(r["core_ms_p95"]))]
+    return f"{np.median(v):.0f} / {max(v):.0f}" if v else "-"
+
+
 def against_report(rows: list[dict[str, Any]], arm: str, new: str) -> str:
     """Markdown: strategy ``new`` against every other strategy of the same arm, paired
     per seed: per world its median T95 and, per other strategy, the median per-seed T95
@@ -257,9 +264,13 @@ def against_report(rows: list[dict[str, Any]], arm: str, new: str) -> str:
     head = " | ".join(f"/ {s} (w/l)" for s in others)
     lines = [f"`{new}` against the other strategies of arm `{arm}`: T95 ratio = `{new}` / "
              "other, per seed (median; wins < 0.99, losses > 1.01); 'best +5 %' = "
-             f"`{new}`'s median T95 <= 1.05 x the best other median.", "",
-             f"| world | `{new}` median T95 [s] | {head} | best +5 % |",
-             "|---|---|" + "---|" * len(others) + "---|"]
+             f"`{new}`'s median T95 <= 1.05 x the best other median; decision core = "
+             f"`{new}`'s per-run p95 of frontier detection + selection per decision "
+             "(median / max over its runs; wall time, so it depends on the machine's load).",
+             "",
+             f"| world | `{new}` median T95 [s] | {head} | best +5 % | decision core p95 "
+             "[ms] |",
+             "|---|---|" + "---|" * len(others) + "---|---|"]
     pooled: dict[str, list[float]] = {s: [] for s in others}
     for w in worlds:
         rs = [r for r in mine if r["world"] == w and r["strategy"] == new]
@@ -283,10 +294,11 @@ def against_report(rows: list[dict[str, Any]], arm: str, new: str) -> str:
         med = float(np.median(fin)) if fin else math.nan
         ok = ("-" if not (math.isfinite(med) and math.isfinite(best))
               else ("yes" if med <= 1.05 * best else f"no ({med / best:.2f}x)"))
-        lines.append(f"| {w} | {med:.1f} | " + " | ".join(cells) + f" | {ok} |")
+        lines.append(f"| {w} | {med:.1f} | " + " | ".join(cells) + f" | {ok} | "
+                     f"{_core_p95(rs)} |")
     lines.append("| (all pairs) | | " + " | ".join(
         f"{np.median(v):.3f} ({sum(x < 0.99 for x in v)}/{sum(x > 1.01 for x in v)})"
-        if v else "-" for v in pooled.values()) + " | |")
+        if v else "-" for v in pooled.values()) + " | | |")
     return "\n".join(lines) + "\n"
 
 

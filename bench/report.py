@@ -136,6 +136,15 @@ def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
                                   for _ in worlds) + " |")
     lines.append("| total (sum of means, oracle detection) | "
                  + " | ".join(f"{totals[w]:.1f}" for w in worlds) + " |")
+    core = []
+    for w in worlds:
+        hists = [h for r in sel if r["world"] == w
+                 for h in [records.timing_hist(r, "core")] if h is not None]
+        st = records.hist_stats(records.merge_histograms(hists)) if hists else None
+        core.append(f"{st[0]:.1f} / {st[1]:.1f} / {st[2]:.1f}" if st is not None else "-")
+    if any(c != "-" for c in core):
+        lines.append("| decision core (frontier detect + selection of one decision) | "
+                     + " | ".join(core) + " |")
     if yolo and "ms_mean" in yolo:
         lines.append("| total with the real detector | "
                      + " | ".join(f"{totals[w] + yolo['ms_mean']:.1f}" for w in worlds) + " |")

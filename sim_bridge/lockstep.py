@@ -518,6 +518,10 @@ def run_exploration(world: World, strategy: str, seed: int, *,
             if step.detected:
                 res.timings_ms["frontier"].append(step.detect_s * 1e3)
             res.timings_ms["selection"].append(step.select_s * 1e3)
+            # the decision core of the target_selector node: detection (when the map
+            # changed) + viewpoints, path lengths, tour and goal; segmentation is a node
+            # of its own, the lock step's "decision" adds it
+            res.timings_ms["core"].append((step.detect_s + step.select_s) * 1e3)
             res.goals_blacklisted += step.blacklisted
             res.goal_switches += int(step.switched)
             if step.action is Action.NEW_GOAL and step.goal is not None:

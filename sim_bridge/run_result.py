@@ -9,7 +9,8 @@ from typing import Any
 import numpy as np
 
 #: Timing keys of :attr:`RunResult.timings_ms` (one list entry per update).
-TIMING_KEYS = ("frontier", "selection", "segmentation", "detection", "objects", "decision")
+TIMING_KEYS = ("frontier", "selection", "segmentation", "detection", "objects", "decision",
+               "core")
 
 
 @dataclass

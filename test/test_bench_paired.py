@@ -83,15 +83,16 @@ def test_against_report_pairs_strategies_by_seed_and_checks_the_best_plus_5_perc
             row("w", "nearest", 0, 180.0), row("w", "nearest", 1, None),
             row("v", "routed", 0, 130.0), row("v", "explore_lite", 0, 100.0),
             row("v", "nearest", 0, 120.0), _row("other-arm", "v", 0, 1.0)]
+    rows[0]["core_ms_p95"], rows[1]["core_ms_p95"] = 40.0, 100.0    # w's routed runs
     text = paired.against_report(rows, "cur", "routed")
     cells = {ln.split("|")[1].strip(): [c.strip() for c in ln.strip("|").split("|")]
              for ln in text.splitlines() if ln.startswith("| ")}
     # w: ratios 0.9 and 1.22 against explore_lite; only seed 0 pairs with nearest (0.5)
-    assert cells["w"][1:] == ["106.0", "1.060 (1/1)", "0.500 (1/0)", "no (1.06x)"]
-    assert cells["v"][1:] == ["130.0", "1.300 (0/1)", "1.083 (0/1)", "no (1.30x)"]
+    assert cells["w"][1:] == ["106.0", "1.060 (1/1)", "0.500 (1/0)", "no (1.06x)", "70 / 100"]
+    assert cells["v"][1:] == ["130.0", "1.300 (0/1)", "1.083 (0/1)", "no (1.30x)", "-"]
     assert cells["(all pairs)"][2:4] == ["1.220 (1/2)", "0.792 (1/1)"]
     rows[0]["time_to_95_s"] = 80.0                        # w: median 101 <= 1.05 * 100
-    assert "| w | 101.0 | 1.010 (1/1) | 0.444 (1/0) | yes |" in \
+    assert "| w | 101.0 | 1.010 (1/1) | 0.444 (1/0) | yes | 70 / 100 |" in \
         paired.against_report(rows, "cur", "routed")
 
 

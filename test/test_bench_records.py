@@ -240,6 +240,22 @@ def test_timing_table_marks_worlds_pooled_over_part_of_their_runs():
     assert any(ln.startswith("‡k/n") for ln in lines) and any(ln.startswith("†") for ln in lines)
 
 
+def test_timing_table_has_the_decision_core_row_outside_the_total():
+    run = {"world": "w", "strategy": "paper", "seed": 0,
+           "timings_ms": {"frontier": [1.0, 3.0], "selection": [2.0, 4.0],
+                          "core": [3.0, 7.0]}}
+    lines = report.timing_table([run], None)
+    row = next(ln for ln in lines if ln.startswith("| decision core"))
+    p50, mean, p95 = records.hist_stats(records.histogram([3.0, 7.0]))
+    assert row.endswith(f"| {p50:.1f} / {mean:.1f} / {p95:.1f} |")
+    total = next(ln for ln in lines if ln.startswith("| total (sum of means"))
+    f_mean = records.hist_stats(records.histogram([1.0, 3.0]))[1]
+    s_mean = records.hist_stats(records.histogram([2.0, 4.0]))[1]
+    assert total.endswith(f"| {f_mean + s_mean:.1f} |")         # the core is not added again
+    old = {"world": "w", "strategy": "paper", "seed": 1, "timings_ms": {"frontier": [1.0]}}
+    assert not any(ln.startswith("| decision core") for ln in report.timing_table([old], None))
+
+
 def _run(world, strategy, seed, t95, completed=True, collisions=0, objects=0):
     return {"world": world, "strategy": strategy, "seed": seed, "completed": completed,
             "time_to_s": {"95": t95}, "collisions": collisions, "n_objects": objects}

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from explore_seg.core.frontiers import FrontierParams
@@ -43,6 +44,11 @@ def test_explores_small_house_to_completion(runs, strategy):
     assert t[-1] <= r.sim_time_s and p[-1] <= r.path_length_m + 1e-9
     assert r.goals_sent >= 1 and r.goals_sent == len(r.goals)
     assert len(r.timings_ms["frontier"]) == len(r.timings_ms["selection"]) >= 1
+    # the decision core: detection + selection of each decision, inside the lock step's
+    # decision (which adds segmentation and sending the goal)
+    core, sel, dec = (np.asarray(r.timings_ms[k]) for k in ("core", "selection", "decision"))
+    assert len(core) == len(sel) == len(dec)
+    assert (core >= sel).all() and (core <= dec).all()
 
 
 def test_paper_runs_every_module(runs):

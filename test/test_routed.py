@@ -217,6 +217,22 @@ def test_distance_rows_are_the_matrix_rows():
         assert g.distance_rows(np.zeros((0, 2)), cells).shape == (0, 10)
 
 
+def test_distances_keep_the_robot_sweep_for_the_next_call():
+    rng = np.random.default_rng(6)
+    pas = rng.random((60, 80)) > 0.25
+    g = BlockGraph(pas, RES, 4)
+    cells = np.argwhere(pas)[rng.choice(int(pas.sum()), 11, replace=False)]
+    rows = g.distance_rows(cells[:2], cells)
+    first = g.distances(tuple(cells[0]), cells)
+    np.testing.assert_allclose(np.delete(first, 0), np.delete(rows[0], 0))
+    first[:] = -1.0                              # the caller's array, not the kept sweep
+    for _ in range(2):                           # kept, then another start, then back
+        np.testing.assert_allclose(np.delete(g.distances(tuple(cells[0]), cells), 0),
+                                   np.delete(rows[0], 0))
+        np.testing.assert_allclose(np.delete(g.distances(tuple(cells[1]), cells), 1),
+                                   np.delete(rows[1], 1))
+
+
 def _grid_graph(pas: np.ndarray) -> tuple[GridMap, BlockGraph]:
     data = np.where(pas, 0, 100).astype(np.int8)
     return GridMap(data, RES, (1.0, -2.0)), BlockGraph(pas, RES, 4)
@@ -271,6 +287,7 @@ def test_pair_paths_with_enough_refresh_rows_are_exact_every_time():
     assert cache.swept == 9
     with pytest.raises(ValueError, match="refresh_rows"):
         PairPaths(-1)
+
 
 
 # ------------------------------------------------------- the strategy in the decision core

@@ -117,6 +117,9 @@ class BlockGraph:
         self.resolution_m = float(resolution_m)
         self.block_cells = k
         self._pas = pas.copy()
+        #: The last single-source sweep (start node, distances): a decision asks for the
+        #: robot's distances more than once (viewpoints, then cPoints) on one graph.
+        self._sweep: tuple[int, npt.NDArray[np.float64]] | None = None
         if not pas.any():
             self._n = 0
             return
@@ -292,7 +295,7 @@ class BlockGraph:
         has = t_node >= 0
         if not has.any():
             return out
-        d = dijkstra(self._graph, directed=True, indices=s_node)
+        d = self._sweep_from(s_node)
         tn = t_node[has]
         res_m = self.resolution_m
         if self.block_cells == 1:
@@ -308,6 +311,12 @@ class BlockGraph:
                              tg[has, 1][same] - start[0, 1]) * res_m
         out[has] = res
         return out
+
+    def _sweep_from(self, node: int) -> npt.NDArray[np.float64]:
+        """Distances (m) from ``node`` to every node (kept for the next call from it)."""
+        if self._sweep is None or self._sweep[0] != node:
+            self._sweep = (node, dijkstra(self._graph, directed=True, indices=node))
+        return self._sweep[1]
 
     def distance_matrix(self, cells_rc: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Path lengths (m) between all pairs of cells, one multi-source sweep: entry
@@ -353,7 +362,7 @@ class BlockGraph:
             return out
         sn, tn = s_node[s_has], t_node[t_has]
         uniq, inv = np.unique(sn, return_inverse=True)
-        sub = dijkstra(self._graph, directed=True, indices=uniq)[inv][:, tn]     # (S', T')
+        sub = dijkstra(self._graph, directed=True, indices=uniq)[:, tn][inv]     # (S', T')
         if self.block_cells > 1:
             s_off = np.hypot(src[s_has, 0] - self._r0 - self._pos_r[sn],
                              src[s_has, 1] - self._c0 - self._pos_c[sn]) * self.resolution_m

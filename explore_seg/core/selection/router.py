@@ -70,6 +70,22 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
 - **Region routing helps.** ``region_switch_m`` 0 instead of 2 (with the handover):
   eb/corner 406, 377 s vs 260, 312 s; eb/room_2 286, 287 s vs 284, 289 s.
   ``gain_weight_m_per_m2`` 0.3 instead of 0.1: eb/corner seed 0 424 s vs 260 s.
+- **Turning back is not what loses the room worlds.** eb/room seed 1 (T95 257 s,
+  ``explore_lite`` 196 s; per-decision log of goals and tour costs): at 20 s the current
+  goal's frontier vanished and the next goal was chosen between two tours 0.02 m apart,
+  one ahead of the robot, one behind; it took the one behind and drove back 5 m. FUEL
+  adds a motion-consistency cost to the first leg for this. Tried (not kept): the first
+  leg costing 1 m more per radian between the robot's heading and the straight line to
+  the viewpoint, 10 worlds (the six where ``routed`` is > 5 % slower than the best
+  baseline, eb/corner, eb/corridor_sym, house, shared/house), seeds 0-4, 16 pairs before
+  I stopped it: median T95 ratio to today's ``routed`` 1.004, 5 wins / 11 losses
+  (eb/corner 1.21, eb/room_3 1.18, eb/loop_with_corridor 1.10; shared/house 0.93). That
+  seed itself went the other way and took 265 s. In these worlds time is path: on
+  eb/room_1 seed 0 the mean speed to 95 % was 0.253 / 0.256 / 0.252 m/s (``routed`` /
+  ``explore_lite`` / ``nearest``; top speed 0.26 m/s, sampled once per decision: above
+  80 % of it in 98 % of the time), so only a shorter path helps; the same loop around
+  the rooms was 59.8 m for ``routed`` and 54.2 m for ``explore_lite`` (a 1.7 m spur
+  into the south-west room for a 34-cell corner that vanished before it was reached).
 - **The furnished houses' lead is the object costmap's.** ``routed`` runs with the object
   costmap, ``explore_lite`` and ``nearest`` without; ``paper`` / ``paper_noobj`` (same
   strategy, 20 seeds) has a median T95 ratio of 0.70 on shared/house, 0.84 on house, 0.95
