@@ -232,6 +232,36 @@ def test_blacklist_retried_once_before_done():
     assert actions[3].action is Action.DONE and m.done
 
 
+@pytest.mark.parametrize("revealed_cells,retried", [(0, False), (3, False), (4, True)])
+def test_a_blacklist_retry_that_revealed_space_does_not_count(revealed_cells, retried):
+    # 0.5 m cells: retry_reveal_m2 = 1 m^2 is 4 cells become known during the retry
+    g, _ = manager_world()
+    g = GridMap(g.data.copy(), 0.5)
+    g.data[:2, :10] = -1                                       # 20 unknown cells
+    unknown = np.argwhere(g.data < 0)
+    m = GoalManager(SelectionParams(strategy="nearest", done_confirmations=1,
+                                    blacklist_retries=1, retry_reveal_m2=1.0))
+    m.add_to_blacklist((9.0, 9.0))
+    first = m.step(0.0, (1.0, 1.0), g, [], [])
+    assert "blacklist cleared" in first.reason                 # the counted retry
+    r, c = unknown[:revealed_cells].T
+    g.data[r, c] = 0                                           # what the retry revealed
+    m.add_to_blacklist((9.0, 9.0))                             # its goal failed again
+    second = m.step(1.0, (1.0, 1.0), g, [], [])
+    assert ("blacklist cleared" in second.reason) is retried
+    assert (second.action is Action.DONE) is not retried
+    if retried:                  # the free retry revealed nothing: its count is spent
+        m.add_to_blacklist((9.0, 9.0))
+        assert m.step(2.0, (1.0, 1.0), g, [], []).action is Action.DONE
+    off = GoalManager(SelectionParams(strategy="nearest", done_confirmations=1,
+                                      blacklist_retries=1, retry_reveal_m2=0.0))
+    off.add_to_blacklist((9.0, 9.0))
+    off.step(0.0, (1.0, 1.0), g, [], [])
+    g.data[g.data < 0] = 0
+    off.add_to_blacklist((9.0, 9.0))
+    assert off.step(1.0, (1.0, 1.0), g, [], []).action is Action.DONE
+
+
 # The robot's room (left) has a frontier F1 at its top; a doorway (rows 3-5 of the wall at
 # col 8) is still unknown, so the pocket seen through it and its frontier F2 (col 14) are
 # reachable only across unknown cells. The doorway's own 3 frontier cells are too few for

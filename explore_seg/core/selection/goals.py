@@ -98,7 +98,8 @@ class GoalManager:
        frontier cells are still unknown (a thin frontier seen at a grazing angle comes and
        goes), the goal is kept. When no reachable frontier remains for
        ``done_confirmations`` consecutive ticks: the blacklist is cleared and its
-       frontiers retried (``blacklist_retries`` times), then DONE (or first a
+       frontiers retried (``blacklist_retries`` times, not counting a retry after which
+       ``retry_reveal_m2`` more of the map became known), then DONE (or first a
        return-to-start goal).
     3. The current goal is kept unless its frontier vanished or another frontier is
        cheaper than the current goal's frontier by ``hysteresis_margin * |cost|``; a
@@ -139,6 +140,7 @@ class GoalManager:
         self._empty_ticks = 0
         self._goal_cells_xy: npt.NDArray[np.float64] | None = None
         self._retries_left = self.params.blacklist_retries
+        self._known_at_retry: int | None = None     # known cells when the last retry began
         self.start_xy_m: tuple[float, float] | None = None
         self._start_yaw = 0.0
         if clear_blacklist:
@@ -477,10 +479,16 @@ class GoalManager:
                 self._start_progress(self.goal, robot_xy_m, now_s)
                 return StepResult(Action.NEW_GOAL, self.goal,
                                   "no reachable frontier: returning to start", sel)
+        known = int(np.count_nonzero(grid.data >= 0)) if self._blacklist else 0
+        if (self._blacklist and self._retries_left == 0 and self._known_at_retry is not None
+                and p.retry_reveal_m2 > 0 and (known - self._known_at_retry)
+                * grid.resolution_m ** 2 >= p.retry_reveal_m2):
+            self._retries_left = 1          # the last retry revealed space: it did not count
         if self._retries_left > 0 and self._blacklist:
             # The map changed since those goals failed (a doorway seen, a false
             # obstacle cleared): give the blacklisted frontiers another chance.
             self._retries_left -= 1
+            self._known_at_retry = known
             self._clear_blacklist()
             self._empty_ticks = 0
             return StepResult(Action.WAIT, None, "no reachable frontier: blacklist "

@@ -97,8 +97,14 @@ class SelectionParams:
         "when no cPoint is reachable through known free space, distances through unknown "
         "cells are used, multiplied by this factor (>= 1)", range=(1.0, _INF)))
     blacklist_retries: int = field(default=1, metadata=param_meta(
-        "times the blacklist is cleared to retry its frontiers before DONE",
+        "times the blacklist is cleared to retry its frontiers before DONE (a retry that "
+        "revealed retry_reveal_m2 does not count)",
         range=(0, INT_MAX)))
+    retry_reveal_m2: float = _non_negative(
+        "a blacklist retry after which at least this much more of the map became known "
+        "does not count against blacklist_retries: the blacklist is retried again while "
+        "its retries reveal space (a pocket whose way in opened once the map around it "
+        "was seen); 0 = every retry counts", "m^2", default=1.0)
     flicker_vanish_count: int = field(default=3, metadata=param_meta(
         "blacklist a goal area once its frontier vanished this many times before the robot "
         "got there with its cells still unknown (it came back in between: a wall edge "
@@ -173,7 +179,7 @@ class SelectionParams:
                      "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
                      "flicker_radius_m", "viewpoint_radius_m", "frontier_split_m",
                      "region_switch_m",
-                     "gain_weight_m_per_m2", "min_gain_m2", "handover_m"):
+                     "gain_weight_m_per_m2", "min_gain_m2", "handover_m", "retry_reveal_m2"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {v}")
