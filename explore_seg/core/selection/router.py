@@ -129,9 +129,11 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   detection + viewpoints + tour + goal of each decision, wall time; segmentation is a node
   of its own and not in it; one run alone on the 2 cores, seed 0, whole run, code 308b78b
   with the metric lethal disk): office_floor p50 / p95 / max 73.8 / 115.8 / 595 ms over
-  4279 decisions (detection p95 19.4, selection p95 97.8); the generated house 12.6 / 19.8
-  / 718 ms over 575 decisions (the maximum is the first decision). Both under the issue's
-  150 / 50 ms. The earlier 235-269 ms figures were the lock step's ``decision`` (with
+  4279 decisions (detection p95 19.4, selection p95 97.8), 77.5 / 119.5 / 576 ms with the
+  code that keeps the robot's sweep (:class:`~explore_seg.core.block_graph.BlockGraph`;
+  same trajectory; the difference is within run-to-run spread); the generated house 12.6
+  / 19.8 / 718 ms over 575 decisions (the maximum is the first decision). Both under the
+  issue's 150 / 50 ms. The earlier 235-269 ms figures were the lock step's ``decision`` (with
   segmentation) on a machine running other benchmark processes. Tried, not kept: the
   path sweeps from viewpoints on 2 threads: SciPy's Dijkstra holds the GIL (16 sweeps
   of a 35,470-node office graph: 79-103 ms on one thread, 85-118 ms on two), and the
