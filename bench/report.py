@@ -109,19 +109,25 @@ def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
              head, "|" + "|".join(["---"] * (len(worlds) + 1)) + "|"]
     totals = {w: 0.0 for w in worlds}
     marked = partial = False
+
+    def pooled(w: str, key: str) -> tuple[Any, int, int]:
+        """(p50, mean, p95) of ``key`` over world ``w``'s runs or None, runs with it, runs."""
+        in_w = [r for r in sel if r["world"] == w]
+        hists = [h for r in in_w for h in [records.timing_hist(r, key)] if h is not None]
+        st = records.hist_stats(records.merge_histograms(hists)) if hists else None
+        return st, len(hists), len(in_w)
+
     for key, label in TIMING_ROWS:
         cells = []
         for w in worlds:
-            in_w = [r for r in sel if r["world"] == w]
-            hists = [h for r in in_w for h in [records.timing_hist(r, key)] if h is not None]
-            st = records.hist_stats(records.merge_histograms(hists)) if hists else None
+            st, n_hist, n_runs = pooled(w, key)
             if st is not None:
-                part = len(hists) < len(in_w)
+                part = n_hist < n_runs
                 cells.append(f"{st[0]:.1f} / {st[1]:.1f} / {st[2]:.1f}"
-                             + (f" ‡{len(hists)}/{len(in_w)}" if part else ""))
+                             + (f" ‡{n_hist}/{n_runs}" if part else ""))
                 partial |= part
                 totals[w] += st[1]
-            elif not hists and key in legacy.get(w, {}):
+            elif not n_hist and key in legacy.get(w, {}):
                 p50, mean, p95 = legacy[w][key]
                 cells.append(f"{p50:.1f} / {mean:.1f} / {p95:.1f} †")
                 totals[w] += mean
@@ -138,9 +144,7 @@ def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
                  + " | ".join(f"{totals[w]:.1f}" for w in worlds) + " |")
     core = []
     for w in worlds:
-        hists = [h for r in sel if r["world"] == w
-                 for h in [records.timing_hist(r, "core")] if h is not None]
-        st = records.hist_stats(records.merge_histograms(hists)) if hists else None
+        st = pooled(w, "core")[0]
         core.append(f"{st[0]:.1f} / {st[1]:.1f} / {st[2]:.1f}" if st is not None else "-")
     if any(c != "-" for c in core):
         lines.append("| decision core (frontier detect + selection of one decision) | "

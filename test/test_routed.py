@@ -289,7 +289,6 @@ def test_pair_paths_with_enough_refresh_rows_are_exact_every_time():
         PairPaths(-1)
 
 
-
 # ------------------------------------------------------- the strategy in the decision core
 
 def test_routed_is_a_strategy_and_needs_tour_costs():

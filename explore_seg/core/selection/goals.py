@@ -480,14 +480,15 @@ class GoalManager:
                 return StepResult(Action.NEW_GOAL, self.goal,
                                   "no reachable frontier: returning to start", sel)
         known = int(np.count_nonzero(grid.data >= 0)) if self._blacklist else 0
-        if (self._blacklist and self._retries_left == 0 and self._known_at_retry is not None
-                and p.retry_reveal_m2 > 0 and (known - self._known_at_retry)
-                * grid.resolution_m ** 2 >= p.retry_reveal_m2):
-            self._retries_left = 1          # the last retry revealed space: it did not count
-        if self._retries_left > 0 and self._blacklist:
+        # the last retry revealed space: this one does not count
+        free = (self._known_at_retry is not None and p.retry_reveal_m2 > 0
+                and (known - self._known_at_retry) * grid.resolution_m ** 2
+                >= p.retry_reveal_m2)
+        if self._blacklist and (free or self._retries_left > 0):
             # The map changed since those goals failed (a doorway seen, a false
             # obstacle cleared): give the blacklisted frontiers another chance.
-            self._retries_left -= 1
+            if not free:
+                self._retries_left -= 1
             self._known_at_retry = known
             self._clear_blacklist()
             self._empty_ticks = 0
