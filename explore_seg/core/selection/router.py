@@ -86,6 +86,19 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   80 % of it in 98 % of the time), so only a shorter path helps; the same loop around
   the rooms was 59.8 m for ``routed`` and 54.2 m for ``explore_lite`` (a 1.7 m spur
   into the south-west room for a 34-cell corner that vanished before it was reached).
+- **Neither the tail of the tour nor a lost goal frontier is it either** (tried, not
+  kept; lock-step runs with the benchmark's settings, paired per seed with the ``routed``,
+  ``explore_lite`` and ``nearest`` rows of the metric-lethal-disk run, ``out/margin``).
+  (a) A group's cost as the first leg plus 0.5 x the rest of its tour (the map changes
+  the rest before it is driven): eb/room seeds 0-2 took 283, 316, 263 s instead of 245,
+  257, 218 s; leaning toward the nearest viewpoint loses. (b) eb/room_1 seed 1 lost about
+  20 s at 197-221 s when its goal's frontier receded more than ``frontier_match_radius_m``
+  from the viewpoint: the goal counted as "gone", the hysteresis no longer held, and a
+  near-tie behind the robot won. Following the receding frontier (the group with a cell
+  within 1.5 m of the goal frontier's last cells took the goal's place in the
+  hysteresis test): 16 pairs in eb/room, room_1, room_2, room_3, loop_with_corridor and
+  corridor_asym, seeds 0-2, median ratio 1.009 against today's ``routed`` (6 wins / 8
+  losses), 1.084 against ``explore_lite``; eb/room_1 0.94, eb/room_2 1.04.
 - **The furnished houses' lead is the object costmap's.** ``routed`` runs with the object
   costmap, ``explore_lite`` and ``nearest`` without; ``paper`` / ``paper_noobj`` (same
   strategy, 20 seeds) has a median T95 ratio of 0.70 on shared/house, 0.84 on house, 0.95
