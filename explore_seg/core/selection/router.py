@@ -101,7 +101,11 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   losses), 1.084 against ``explore_lite``; eb/room_1 0.94, eb/room_2 1.04. (c)
   Viewpoints nearer the robot (``viewpoint_gain_tolerance`` 0.3 instead of 0.1: any
   candidate seeing 70 % of the best view), the same 6 worlds x 3 seeds: 1.001 against
-  today's ``routed`` (7 / 7), 1.077 against ``explore_lite``.
+  today's ``routed`` (7 / 7), 1.077 against ``explore_lite``. (d) The tour over the
+  viewpoints as today, but the goal sent (and judged) at the chosen group's cPoint, on
+  the frontier as ``explore_lite``'s, where the cPoint has a path: 1.000 against today's
+  ``routed`` (8 / 6), 1.066 against ``explore_lite``. None of (a)-(d) moves the room
+  worlds' gap to ``explore_lite``.
 - **The furnished houses' lead is the object costmap's.** ``routed`` runs with the object
   costmap, ``explore_lite`` and ``nearest`` without; ``paper`` / ``paper_noobj`` (same
   strategy, 20 seeds) has a median T95 ratio of 0.70 on shared/house, 0.84 on house, 0.95
