@@ -106,6 +106,19 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   the frontier as ``explore_lite``'s, where the cPoint has a path: 1.000 against today's
   ``routed`` (8 / 6), 1.066 against ``explore_lite``. None of (a)-(d) moves the room
   worlds' gap to ``explore_lite``.
+- **What separates ``explore_lite`` from ``routed`` in the room worlds is the frontier
+  split together with the choice, not the cost alone** (diagnostic, same runs and
+  pairing as above; the experiment code was not kept). Inside ``routed``'s pipeline,
+  ``explore_lite``'s cost (3 x path length to the cPoint - frontier length) with the goal
+  at the cPoint: 1.142 against ``explore_lite`` (16 pairs of the 6 worlds; eb/room
+  1.27). The same with ``frontier_split_m``, ``handover_m`` and ``min_gain_m2`` all 0:
+  1.009 (eb/room, room_1, loop_with_corridor, seeds 0-2), with only
+  ``frontier_split_m`` 0: 1.000 (9 pairs; eb/room 1.000, room_1 1.005,
+  loop_with_corridor 1.011). So 3 m parts cost a greedy chooser about 14 % there. For
+  ``routed`` itself the split is needed: ``frontier_split_m`` 0 gives 1.034 against
+  today's ``routed`` (loop_with_corridor 1.21); ``handover_m`` 0 1.036; ``min_gain_m2`` 0
+  changes nothing in these worlds. Untried: order the tour over the parts but send, and
+  judge, the unsplit group's goal (the parts as routing structure only).
 - **The furnished houses' lead is the object costmap's.** ``routed`` runs with the object
   costmap, ``explore_lite`` and ``nearest`` without; ``paper`` / ``paper_noobj`` (same
   strategy, 20 seeds) has a median T95 ratio of 0.70 on shared/house, 0.84 on house, 0.95
