@@ -114,7 +114,8 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   1.27). The same with ``frontier_split_m``, ``handover_m`` and ``min_gain_m2`` all 0:
   1.009 (eb/room, room_1, loop_with_corridor, seeds 0-2), with only
   ``frontier_split_m`` 0: 1.000 (9 pairs; eb/room 1.000, room_1 1.005,
-  loop_with_corridor 1.011). So 3 m parts cost a greedy chooser about 14 % there. For
+  loop_with_corridor 1.011; the same 9 pairs with the 3 m split: 1.187). So 3 m parts
+  cost a greedy chooser about 16 % of its time there. For
   ``routed`` itself the split is needed: ``frontier_split_m`` 0 gives 1.034 against
   today's ``routed`` (loop_with_corridor 1.21); ``handover_m`` 0 1.036; ``min_gain_m2`` 0
   changes nothing in these worlds. Untried: order the tour over the parts but send, and
