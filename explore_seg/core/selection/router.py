@@ -118,8 +118,10 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   cost a greedy chooser about 16 % of its time there. For
   ``routed`` itself the split is needed: ``frontier_split_m`` 0 gives 1.034 against
   today's ``routed`` (loop_with_corridor 1.21); ``handover_m`` 0 1.036; ``min_gain_m2`` 0
-  changes nothing in these worlds. Untried: order the tour over the parts but send, and
-  judge, the unsplit group's goal (the parts as routing structure only).
+  changes nothing in these worlds. The parts as routing structure only, in its plainest
+  form (each unsplit group takes its best part's tour cost; goal and judging at the
+  group's cPoint) is worse: eb/room seeds 0-2 268, 270, 235 s. What a greedy chooser
+  gains from whole groups, a tour over parts has not yet been given.
 - **The furnished houses' lead is the object costmap's.** ``routed`` runs with the object
   costmap, ``explore_lite`` and ``nearest`` without; ``paper`` / ``paper_noobj`` (same
   strategy, 20 seeds) has a median T95 ratio of 0.70 on shared/house, 0.84 on house, 0.95
