@@ -312,3 +312,31 @@ def test_stop_signals_wait_for_the_end_of_a_deferred_block():
     with stop_signals_deferred():                  # no signal: nothing raised
         done.append(2)
     assert done == [1, 2]
+
+
+def _run_row(path95: float, path99: float) -> dict:
+    return {"world": "w", "strategy": "s", "seed": 0, "completed": True,
+            "stop_reason": "coverage", "collisions": 0, "goals_sent": 3, "goal_switches": 0,
+            "wall_time_s": 1.0,
+            "time_to_s": {"50": 10.0, "90": 20.0, "95": 30.0, "99": 40.0},
+            "path_to_m": {"50": 1.0, "90": 2.0, "95": path95, "99": path99}}
+
+
+def test_results_table_divides_the_path_to_95_by_the_95_tour():
+    from bench import report
+
+    runs = [_run_row(9.0, 12.0), dict(_run_row(11.0, 14.0), seed=1)]
+    head, _, row = report.results_table(runs, {"w": 10.0}, {"w": 8.0})
+    cols = [c.strip() for c in head.split("|")]
+    vals = [c.strip() for c in row.split("|")]
+    assert vals[cols.index("path / tour")] == "1.30 ± 0.14"         # (12, 14) / 10
+    assert vals[cols.index("path 95 / tour 95")] == "1.25 ± 0.18"   # (9, 11) / 8
+    # tours.csv written before the 95 % tour existed: the column says so
+    _, _, old = report.results_table(runs, {"w": 10.0})
+    assert [c.strip() for c in old.split("|")][cols.index("path 95 / tour 95")] == "-"
+
+
+def test_tour_task_gives_the_95_tour_no_longer_than_the_99_one():
+    row = tasks.tour_task("small_house")
+    assert 0.0 < row["tour95_m"] <= row["tour_m"]
+    assert 1 <= row["viewpoints95"]
