@@ -69,7 +69,13 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   (338, 407 s vs 260, 312 s with the handover alone; eb/room_2 seed 0 282 vs 284 s).
 - **Region routing helps.** ``region_switch_m`` 0 instead of 2 (with the handover):
   eb/corner 406, 377 s vs 260, 312 s; eb/room_2 286, 287 s vs 284, 289 s.
-  ``gain_weight_m_per_m2`` 0.3 instead of 0.1: eb/corner seed 0 424 s vs 260 s.
+  ``gain_weight_m_per_m2`` 0.3 instead of 0.1: eb/corner seed 0 424 s vs 260 s. Again
+  with today's code, 0.3 and 1.0 against 0.1 over seeds 0-2 of 9 worlds (the room worlds
+  and those with headroom over the 95 % tour, below;
+  ``bench/results/paired/gain_weight_routed_seeds0-2.md``): median per-seed T95 ratio
+  1.025 (10 wins / 17 losses) and 1.116 (11 / 16); bigger views first helps in some
+  worlds (0.3: eb/room_with_corner 0.76; 1.0: eb/room_3 0.92, shared/house 0.93) and
+  costs more in others (eb/corner 1.42 and 1.23, eb/loop_with_corridor 1.03 and 1.42).
 - **Turning back is not what loses the room worlds.** eb/room seed 1 (T95 257 s,
   ``explore_lite`` 196 s; per-decision log of goals and tour costs): at 20 s the current
   goal's frontier vanished and the next goal was chosen between two tours 0.02 m apart,
