@@ -277,3 +277,56 @@ def test_pursuit_turns_in_place_when_no_arc_from_its_heading_keeps_clear():
     assert v == 0.0 and w < 0.0
     v, w = nav._pursue((1.0, 1.27, 0.0), 2.0)
     assert v > 0.0
+
+
+def test_pursuit_never_drives_an_unchecked_arc_when_no_straight_line_is_clear_either():
+    """A robot 0.20 m from a wall's edge (inside the margin) whose plan runs closer to the
+    wall: no arc from its heading and no straight line to a plan point keeps its
+    clearance, so it turns in place to face the next plan point and then waits (zero
+    command); it never drives. (The old fallback drove the arc to that point: eb/corner,
+    paper_noseg seed 9 touched a wall corner so.)"""
+    res = 0.05
+    blocked = np.zeros((60, 80), bool)
+    blocked[30:, :] = True                # a wall whose edge is the line y = 1.5
+    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
+    nav = Navigator(NavParams())
+    nav._plan_cost = cost_grid(blocked, None, res, nav.params)
+    nav._plan_grid = grid
+    xs = np.arange(1.0, 3.0, res)
+    nav._plan_xy = np.column_stack([xs, np.minimum(1.30 + (xs - 1.0), 1.34)])
+    nav._plan_index = 0
+    heading = math.atan2(nav._plan_xy[1, 1] - 1.30, nav._plan_xy[1, 0] - 1.0)
+    assert not any(nav._arc_clear((1.0, 1.30, math.atan2(p[1] - 1.30, p[0] - 1.0)), p)
+                   for p in nav._plan_xy[1:12])          # no straight line keeps clear
+    for yaw in (heading - 0.3, heading):
+        assert not any(nav._arc_clear((1.0, 1.30, yaw), nav._plan_xy[k]) for k in range(1, 12))
+    v, w = nav._pursue((1.0, 1.30, heading - 0.3), 2.0)
+    assert v == 0.0 and w > 0.0                       # turns to face the plan
+    nav._plan_index = 0
+    assert nav._pursue((1.0, 1.30, heading), 2.0) == (0.0, 0.0)   # facing it: waits
+
+
+def test_a_plan_from_inside_the_margin_leads_out_of_it_not_closer():
+    """A robot 0.2 m from a wall (inside the 0.22 m lethal disk) near the wall's corner,
+    with its goal around that corner: the plan's cells never come closer to an obstacle
+    cell than the start's (it leaves the margin first, instead of cutting the corner
+    through it, as the plan that led eb/corner paper_noseg seed 9 into a wall corner did)
+    and it reaches the goal."""
+    res = 0.05
+    blocked = np.zeros((80, 80), bool)
+    blocked[40:, :40] = True              # x < 2 and y > 2: a corner at (2, 2)
+    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
+    near = cv2.distanceTransform((~blocked).astype(np.uint8), cv2.DIST_L2,
+                                 cv2.DIST_MASK_PRECISE) * res
+    nav = Navigator(NavParams())
+    nav.set_map(grid, 1)
+    pose = (1.975, 1.8, 0.0)              # 0.2 m below the wall's last cell
+    start_near = near[grid.world_to_cell(pose[0], pose[1])]
+    assert start_near < nav.params.lethal_radius_m
+    nav.set_goal(2.3, 2.6, 0.0, 0.0, pose)
+    nav.update(pose, 0.0)
+    assert nav.status.state is NavState.ACTIVE
+    plan = nav.plan_xy
+    assert np.hypot(*(plan[-1] - [2.3, 2.6])) <= 0.1
+    r, c = grid.world_to_cells(plan[1:, 0], plan[1:, 1])
+    assert (near[r, c] >= start_near - 1e-9).all()

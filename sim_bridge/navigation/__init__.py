@@ -28,7 +28,12 @@ appear piece by piece.
 Following: pure pursuit towards the plan point ``lookahead_m`` ahead, pulled back along
 the plan while the arc to it would enter the lethal zone or, with ``arc_check_edges``,
 come closer than ``robot_radius_m + arc_clearance_m`` to an obstacle cell's edge (so the
-robot does not cut obstacle corners). After a collision (the engine backs the robot off)
+robot does not cut obstacle corners). When no arc from the robot's heading keeps clear, it
+turns in place (the footprint does not move) to face the first plan point whose straight
+line is clear, or else the next plan point, and then waits for a plan or map that gives a
+clear one (or for the progress checker); it never drives an unchecked arc. A robot standing
+inside the lethal zone gets a plan through the zone's cells that are no closer to an
+obstacle than it is, so it leaves the zone before it turns along a wall. After a collision (the engine backs the robot off)
 the goal stays active and is replanned up to ``collision_retries`` times, like Nav2's recoveries, and is
 then aborted.
 

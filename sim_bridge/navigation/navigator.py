@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
+import cv2
 import numpy as np
 import numpy.typing as npt
 
@@ -349,24 +350,30 @@ class Navigator:
     def _escape_start(self, cost: npt.NDArray[np.float64], start: tuple[int, int],
                       res: float) -> None:
         """Let a robot standing in the lethal margin drive out of it: lethal cells near
-        the start that keep half a robot radius from true obstacles get a high finite
-        cost (Nav2 likewise lets a robot leave the inscribed zone)."""
+        the start that keep half a robot radius from true obstacles, and are no closer to
+        an obstacle than the start (so the plan leads out of the margin, not along or
+        into it), get a high finite cost (Nav2 likewise lets a robot leave the inscribed
+        zone)."""
         if np.isfinite(cost[start]):
             return
         p = self.params
         rad = int(math.ceil(p.lethal_radius_m / res))
         r, c = start
         h, w = cost.shape
-        r0, r1 = max(0, r - rad), min(h, r + rad + 1)
-        c0, c1 = max(0, c - rad), min(w, c + rad + 1)
+        # Obstacles up to 2 rad from the start can be a disk cell's nearest one.
+        wr0, wr1 = max(0, r - 2 * rad), min(h, r + 2 * rad + 1)
+        wc0, wc1 = max(0, c - 2 * rad), min(w, c + 2 * rad + 1)
         grid = self._map
         assert grid is not None
-        blocked, _ = self._obstacles(grid, (r0, r1, c0, c1))
+        blocked, _ = self._obstacles(grid, (wr0, wr1, wc0, wc1))
         hard = inflate(blocked, 0.5 * p.robot_radius_m, res)
-        rr, cc = np.ogrid[r0:r1, c0:c1]
+        near = cv2.distanceTransform(np.ascontiguousarray(~blocked, dtype=np.uint8),
+                                     cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+        outward = near >= near[r - wr0, c - wc0]
+        rr, cc = np.ogrid[wr0:wr1, wc0:wc1]
         disk = (rr - r) ** 2 + (cc - c) ** 2 <= rad * rad
-        sub = cost[r0:r1, c0:c1]
-        sub[disk & ~hard & ~np.isfinite(sub)] = 1.0 + p.inflation_cost_weight
+        sub = cost[wr0:wr1, wc0:wc1]
+        sub[disk & ~hard & outward & ~np.isfinite(sub)] = 1.0 + p.inflation_cost_weight
 
     def _reachable_goal(self, cost: npt.NDArray[np.float64], goal_rc: tuple[int, int],
                         res: float, known: npt.NDArray[np.bool_]) -> tuple[int, int] | None:
@@ -496,20 +503,13 @@ class Navigator:
                 break
         # A lookahead point behind an obstacle corner would make the arc cut the corner:
         # step back along the plan to the farthest point whose arc stays clear.
+        k_look = k
         clear = k < 1 or self._arc_clear(pose, rest[k])
         while not clear and k > 1:
             k -= 1
             clear = self._arc_clear(pose, rest[k])
         if not clear:
-            # No arc from the current heading keeps clear (the robot stands close to an
-            # obstacle, heading past it): when the straight line to the next plan point
-            # is clear, turn in place (the footprint does not move) to face it, as Nav2's
-            # controller fails the arc and its recovery turns, instead of driving the
-            # unchecked arc into the obstacle.
-            bearing = math.atan2(rest[1, 1] - y, rest[1, 0] - x)
-            if self._arc_clear((x, y, bearing), rest[1]):
-                turn = wrap_angle(bearing - yaw)
-                return 0.0, _clip(p.heading_gain * turn, p.max_angular_speed_radps)
+            return self._turn_or_wait(pose, rest, k_look)
         tx, ty = rest[k]
         alpha = wrap_angle(math.atan2(ty - y, tx - x) - yaw)
         if abs(alpha) > p.rotate_in_place_angle_rad:
@@ -522,6 +522,28 @@ class Navigator:
             v = min(v, p.max_angular_speed_radps / abs(curvature))
         w = _clip(v * curvature, p.max_angular_speed_radps)
         return v, w
+
+    def _turn_or_wait(self, pose: tuple[float, float, float], rest: npt.NDArray[np.float64],
+                      k_look: int) -> tuple[float, float]:
+        """The command when no arc from the robot's heading keeps clear (it stands close to
+        an obstacle, heading past it). Turning in place never moves the footprint: turn to
+        face the first plan point up to the lookahead whose straight line is clear, as
+        Nav2's controller fails the arc and its recovery turns; when no straight line is
+        clear either, face the next plan point and then wait (zero command) for a plan or
+        map that gives a clear one, or for the progress checker to abort the goal. An
+        unchecked arc is never driven (it drove into a wall corner the map showed:
+        eb/corner, ``paper_noseg`` seed 9, issue #21)."""
+        p = self.params
+        x, y, yaw = pose
+        for j in range(1, max(k_look, 1) + 1):
+            bearing = math.atan2(rest[j, 1] - y, rest[j, 0] - x)
+            if self._arc_clear((x, y, bearing), rest[j]):
+                turn = wrap_angle(bearing - yaw)
+                return 0.0, _clip(p.heading_gain * turn, p.max_angular_speed_radps)
+        turn = wrap_angle(math.atan2(rest[1, 1] - y, rest[1, 0] - x) - yaw)
+        if abs(turn) > p.goal_tolerance_yaw_rad:
+            return 0.0, _clip(p.heading_gain * turn, p.max_angular_speed_radps)
+        return 0.0, 0.0
 
     def _arc_clear(self, pose: tuple[float, float, float], target: npt.NDArray[np.float64]
                    ) -> bool:
