@@ -165,7 +165,10 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   shared/house_cluttered (1.54: a reached part's neighbour "remained", was blacklisted and
   retried from across the house; with ``reached_unknown_fraction`` 0.5 seed 0 took 122 s
   instead of 187 s, unsplit 120 s). 2 m and 4.5 m on eb/room_2 and eb/corridor_sym seed 0:
-  282 / 264 s and 186 / 186 s (3 m: 294 / 186 s).
+  282 / 264 s and 186 / 186 s (3 m: 294 / 186 s). Longer parts over seeds 0-2 of 9
+  worlds (``bench/results/paired/frontier_split_longer_routed_seeds0-2.md``, against 3 m):
+  4.5 m 1.007 (8 wins / 12 losses), 6 m 1.041 (6 / 19); eb/room 1.000 and 1.014,
+  eb/room_1 1.055 and 1.059, eb/loop_with_corridor 1.117 both, eb/corner 1.16 and 1.27.
 - **Decision time** (CPU ms of the decision core per decision: frontier detection +
   viewpoints + tour + goal; process time, seed 0, load average 8-10 on 2 cores): p50 37,
   p95 52 on the generated house (whole run; ``explore_lite`` 13 / 26); p50 105, p95 201 on
