@@ -330,3 +330,27 @@ def test_a_plan_from_inside_the_margin_leads_out_of_it_not_closer():
     assert np.hypot(*(plan[-1] - [2.3, 2.6])) <= 0.1
     r, c = grid.world_to_cells(plan[1:, 0], plan[1:, 1])
     assert (near[r, c] >= start_near - 1e-9).all()
+
+
+def test_pursuit_drives_through_a_passage_only_a_little_wider_than_the_robot():
+    """A passage whose free cells keep 0.225 m from both walls' cell edges (the robot
+    radius is 0.22, the arc check wants 0.02 more) that narrows just ahead of the robot:
+    no arc keeps 0.24 m (nor the robot's 0.23 m now), so the controller drives the arc
+    that keeps the robot radius instead of waiting in front of the passage (the map's
+    obstacle cells hold the true walls, so the robot cannot touch them)."""
+    res = 0.05
+    blocked = np.zeros((60, 80), bool)
+    blocked[30:, :] = True                # upper wall: edge at y = 1.5
+    blocked[:21, 22:] = True              # lower wall from x = 1.1: edge at y = 1.05
+    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
+    nav = Navigator(NavParams())
+    nav._plan_cost = cost_grid(blocked, None, res, nav.params)
+    nav._plan_grid = grid
+    xs = np.arange(1.0, 3.5, res)
+    nav._plan_xy = np.column_stack([xs, np.full(len(xs), 1.275)])
+    pose = (1.0, 1.27, 0.0)
+    assert np.isfinite(nav._plan_cost[grid.world_to_cells(xs, np.full(len(xs), 1.275))]).all()
+    assert not any(nav._arc_clear(pose, nav._plan_xy[k]) for k in range(1, 12))
+    nav._plan_index = 0
+    v, w = nav._pursue(pose, 2.0)
+    assert v > 0.0

@@ -29,8 +29,10 @@ Following: pure pursuit towards the plan point ``lookahead_m`` ahead, pulled bac
 the plan while the arc to it would enter the lethal zone or, with ``arc_check_edges``,
 come closer than ``robot_radius_m + arc_clearance_m`` to an obstacle cell's edge (so the
 robot does not cut obstacle corners). When no arc from the robot's heading keeps clear, it
-turns in place (the footprint does not move) to face the first plan point whose straight
-line is clear, or else the next plan point, and then waits for a plan or map that gives a
+turns in place (the footprint does not move) to face the next plan point if the straight
+line to it is clear; else it drives the farthest arc that keeps the robot radius itself
+from the cells' edges (a passage only millimetres wider than the robot); else it turns to
+face the first plan point whose straight line is clear, or the next plan point, and waits for a plan or map that gives a
 clear one (or for the progress checker); it never drives an unchecked arc. A robot standing
 inside the lethal zone gets a plan through the zone's cells that are no closer to an
 obstacle than it is, so it leaves the zone before it turns along a wall. After a collision (the engine backs the robot off)

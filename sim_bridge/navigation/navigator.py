@@ -509,7 +509,9 @@ class Navigator:
             k -= 1
             clear = self._arc_clear(pose, rest[k])
         if not clear:
-            return self._turn_or_wait(pose, rest, k_look)
+            k = self._fallback_target(pose, rest, k_look)
+            if k is None:
+                return self._turn_or_wait(pose, rest, k_look)
         tx, ty = rest[k]
         alpha = wrap_angle(math.atan2(ty - y, tx - x) - yaw)
         if abs(alpha) > p.rotate_in_place_angle_rad:
@@ -523,16 +525,36 @@ class Navigator:
         w = _clip(v * curvature, p.max_angular_speed_radps)
         return v, w
 
+    def _fallback_target(self, pose: tuple[float, float, float],
+                         rest: npt.NDArray[np.float64], k_look: int) -> int | None:
+        """When no arc from the heading keeps ``arc_clearance_m`` beyond the robot radius:
+        None when the straight line to the next plan point is clear (the robot turns to
+        face it, :meth:`_turn_or_wait`), else the farthest plan point up to the lookahead
+        whose arc keeps the robot radius itself from every obstacle cell's edge (or,
+        starting closer, gets no closer): a passage whose free cells lie only a few
+        millimetres beyond the radius is driven through, not waited at (the map's
+        obstacle cells hold the true surfaces, so their edges are never farther than
+        those). None when there is none."""
+        x, y, _ = pose
+        bearing = math.atan2(rest[1, 1] - y, rest[1, 0] - x)
+        if self._arc_clear((x, y, bearing), rest[1]):
+            return None
+        for k in range(k_look, 0, -1):
+            if self._arc_clear(pose, rest[k], extra_m=0.0):
+                return k
+        return None
+
     def _turn_or_wait(self, pose: tuple[float, float, float], rest: npt.NDArray[np.float64],
                       k_look: int) -> tuple[float, float]:
         """The command when no arc from the robot's heading keeps clear (it stands close to
-        an obstacle, heading past it). Turning in place never moves the footprint: turn to
-        face the first plan point up to the lookahead whose straight line is clear, as
-        Nav2's controller fails the arc and its recovery turns; when no straight line is
-        clear either, face the next plan point and then wait (zero command) for a plan or
-        map that gives a clear one, or for the progress checker to abort the goal. An
-        unchecked arc is never driven (it drove into a wall corner the map showed:
-        eb/corner, ``paper_noseg`` seed 9, issue #21)."""
+        an obstacle, heading past it) and :meth:`_fallback_target` found none to drive.
+        Turning in place never moves the footprint: turn to face the first plan point up
+        to the lookahead whose straight line is clear, as Nav2's controller fails the arc
+        and its recovery turns; when no straight line is clear either, face the next plan
+        point and then wait (zero command) for a plan or map that gives a clear one, or
+        for the progress checker to abort the goal. An unchecked arc is never driven (it
+        drove into a wall corner the map showed: eb/corner, ``paper_noseg`` seed 9,
+        issue #21)."""
         p = self.params
         x, y, yaw = pose
         for j in range(1, max(k_look, 1) + 1):
@@ -545,13 +567,14 @@ class Navigator:
             return 0.0, _clip(p.heading_gain * turn, p.max_angular_speed_radps)
         return 0.0, 0.0
 
-    def _arc_clear(self, pose: tuple[float, float, float], target: npt.NDArray[np.float64]
-                   ) -> bool:
+    def _arc_clear(self, pose: tuple[float, float, float], target: npt.NDArray[np.float64],
+                   extra_m: float | None = None) -> bool:
         """True when the pure-pursuit arc from ``pose`` to ``target`` keeps out of the
         lethal zone of the cost grid of the current plan (its first ``ARC_FREE_START_M``
         are not checked: the robot may stand in the margin after a back-up) and, with
-        ``arc_check_edges``, keeps ``robot_radius_m + arc_clearance_m`` from the edges of
-        the obstacle cells all along (or, starting closer, gets no closer)."""
+        ``arc_check_edges``, keeps ``robot_radius_m + extra_m`` (default
+        ``arc_clearance_m``) from the edges of the obstacle cells all along (or, starting
+        closer, gets no closer)."""
         cost, grid = self._plan_cost, self._plan_grid
         if cost is None or grid is None:
             return True
@@ -586,7 +609,8 @@ class Navigator:
             if inside and (cost[rq, cq] <= safe).all() and (cost[r, c] <= safe).all():
                 return True    # every sample's cell is far enough by its inflation cost
         clear = self._edge_clearance(grid, np.concatenate([qx, px]), np.concatenate([qy, py]))
-        need = min(self.params.robot_radius_m + self.params.arc_clearance_m, float(clear[0]))
+        extra = self.params.arc_clearance_m if extra_m is None else extra_m
+        need = min(self.params.robot_radius_m + extra, float(clear[0]))
         return bool(clear[1:].min(initial=math.inf) >= need - 1e-9)
 
     def _edge_clearance(self, grid: GridMap, px: npt.NDArray[np.float64],
