@@ -256,6 +256,15 @@ def test_robot_passes_a_door_at_a_sharp_angle_clear_of_its_jambs(start, goal):
     assert float(d.min()) > 0.22
 
 
+def _navigator_on(blocked: np.ndarray, res: float = 0.05) -> tuple[Navigator, GridMap]:
+    """A navigator whose current plan was made on a map of these obstacle cells."""
+    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
+    nav = Navigator(NavParams())
+    nav._plan_cost = cost_grid(blocked, None, res, nav.params)
+    nav._plan_grid = grid
+    return nav, grid
+
+
 def test_pursuit_turns_in_place_when_no_arc_from_its_heading_keeps_clear():
     """A robot 0.23 m from a wall's edge, heading 0.6 rad towards it, with its plan
     running along the wall: every arc from that heading first closes in on the wall, so
@@ -264,10 +273,7 @@ def test_pursuit_turns_in_place_when_no_arc_from_its_heading_keeps_clear():
     res = 0.05
     blocked = np.zeros((60, 80), bool)
     blocked[30:, :] = True                # a wall whose edge is the line y = 1.5
-    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
-    nav = Navigator(NavParams())
-    nav._plan_cost = cost_grid(blocked, None, res, nav.params)
-    nav._plan_grid = grid
+    nav, grid = _navigator_on(blocked, res)
     xs = np.arange(1.0, 3.0, res)
     nav._plan_xy = np.column_stack([xs, np.full(len(xs), 1.27)])
     nav._plan_index = 0
@@ -288,10 +294,7 @@ def test_pursuit_never_drives_an_unchecked_arc_when_no_straight_line_is_clear_ei
     res = 0.05
     blocked = np.zeros((60, 80), bool)
     blocked[30:, :] = True                # a wall whose edge is the line y = 1.5
-    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
-    nav = Navigator(NavParams())
-    nav._plan_cost = cost_grid(blocked, None, res, nav.params)
-    nav._plan_grid = grid
+    nav, grid = _navigator_on(blocked, res)
     xs = np.arange(1.0, 3.0, res)
     nav._plan_xy = np.column_stack([xs, np.minimum(1.30 + (xs - 1.0), 1.34)])
     nav._plan_index = 0
@@ -342,10 +345,7 @@ def test_pursuit_drives_through_a_passage_only_a_little_wider_than_the_robot():
     blocked = np.zeros((60, 80), bool)
     blocked[30:, :] = True                # upper wall: edge at y = 1.5
     blocked[:21, 22:] = True              # lower wall from x = 1.1: edge at y = 1.05
-    grid = GridMap(np.where(blocked, 100, 0).astype(np.int8), res, (0.0, 0.0))
-    nav = Navigator(NavParams())
-    nav._plan_cost = cost_grid(blocked, None, res, nav.params)
-    nav._plan_grid = grid
+    nav, grid = _navigator_on(blocked, res)
     xs = np.arange(1.0, 3.5, res)
     nav._plan_xy = np.column_stack([xs, np.full(len(xs), 1.275)])
     pose = (1.0, 1.27, 0.0)
