@@ -11,7 +11,7 @@ import pytest
 from explore_seg.core.grid import GridMap, grid_from_ascii
 from sim_bridge import worlds
 from sim_bridge.engine import SimEngine, SimParams
-from sim_bridge.navigation import navigator as navigator_module
+from sim_bridge.navigation import pursuit as pursuit_module
 from sim_bridge.navigation import (NavParams, NavState, Navigator, cost_distance_field,
                                    cost_grid, plan_path)
 from sim_bridge.world import World
@@ -224,7 +224,7 @@ def test_arc_edge_check_shortcut_by_inflation_cost_agrees_with_the_exact_check(s
                                    rng.uniform(-np.pi, np.pi, 400),
                                    rng.uniform(-0.7, 0.7, 400))]
     fast = [nav._arc_clear(pose, tgt) for pose, tgt in cases]
-    monkeypatch.setattr(navigator_module, "edge_safe_cost", lambda params, res: None)
+    monkeypatch.setattr(pursuit_module, "edge_safe_cost", lambda params, res: None)
     exact = [nav._arc_clear(pose, tgt) for pose, tgt in cases]
     assert fast == exact
     assert 0 < sum(exact) < len(exact)

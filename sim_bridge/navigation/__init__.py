@@ -43,7 +43,9 @@ Modules: :mod:`~sim_bridge.navigation.params` (:class:`NavParams`),
 :mod:`~sim_bridge.navigation.goal_status` (goal ids and statuses as Nav2's action reports
 them, :class:`GoalBook`; outcomes for the lock step, :class:`OutcomeFollower`),
 :mod:`~sim_bridge.navigation.planner` (costmap and windowed Dijkstra),
-:mod:`~sim_bridge.navigation.navigator` (goal state machine and pure-pursuit following),
+:mod:`~sim_bridge.navigation.navigator` (goal state machine, planning calls),
+:mod:`~sim_bridge.navigation.pursuit` (pure-pursuit following, the arc check and its
+fallbacks),
 :mod:`~sim_bridge.navigation.clearance` (the arc check's exact distances to obstacle cells'
 edges).
 This package re-exports their public names.
@@ -52,8 +54,8 @@ This package re-exports their public names.
 from explore_seg.core.paths import cost_distance_field
 from sim_bridge.navigation.goal_status import (OUTCOME_OF_STATE, STATUS_OF_STATE, GoalBook,
                                               OutcomeFollower)
-from sim_bridge.navigation.navigator import (ARC_FREE_START_M, NavState, NavStatus, Navigator,
-                                            wrap_angle)
+from sim_bridge.navigation.navigator import NavState, NavStatus, Navigator
+from sim_bridge.navigation.pursuit import ARC_FREE_START_M, wrap_angle
 from sim_bridge.navigation.params import NavParams
 from sim_bridge.navigation.planner import coarsen, cost_grid, path_cost, plan_path
 
