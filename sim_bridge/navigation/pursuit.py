@@ -77,9 +77,20 @@ class Pursuit:
             k -= 1
             clear = self._arc_clear(pose, rest[k])
         if not clear:
-            k = self._fallback_target(pose, rest, k_look)
+            # No arc from the heading keeps clear (the robot stands close to an obstacle,
+            # heading past it). An unchecked arc is never driven (one drove into a wall
+            # corner the map showed: eb/corner, paper_noseg seed 9, issue #21). In order:
+            # face the next plan point when the straight line to it is clear (turning in
+            # place never moves the footprint, as Nav2's recovery turns); drive an arc that
+            # keeps the robot radius itself; face a farther point whose line is clear;
+            # face the next point and wait.
+            turn = self._turn_to_clear_line(pose, rest, 1, 1)
+            if turn is not None:
+                return turn
+            k = self._relaxed_target(pose, rest, k_look)
             if k is None:
-                return self._turn_or_wait(pose, rest, k_look)
+                turn = self._turn_to_clear_line(pose, rest, 2, k_look)
+                return turn if turn is not None else self._face_and_wait(pose, rest)
         tx, ty = rest[k]
         alpha = wrap_angle(math.atan2(ty - y, tx - x) - yaw)
         if abs(alpha) > p.rotate_in_place_angle_rad:
@@ -93,44 +104,38 @@ class Pursuit:
         w = clip_magnitude(v * curvature, p.max_angular_speed_radps)
         return v, w
 
-    def _fallback_target(self, pose: tuple[float, float, float],
-                         rest: npt.NDArray[np.float64], k_look: int) -> int | None:
-        """When no arc from the heading keeps ``arc_clearance_m`` beyond the robot radius:
-        None when the straight line to the next plan point is clear (the robot turns to
-        face it, :meth:`_turn_or_wait`), else the farthest plan point up to the lookahead
-        whose arc keeps the robot radius itself from every obstacle cell's edge (or,
-        starting closer, gets no closer): a passage whose free cells lie only a few
-        millimetres beyond the radius is driven through, not waited at (the map's
-        obstacle cells hold the true surfaces, so their edges are never farther than
-        those). None when there is none."""
-        x, y, _ = pose
-        bearing = math.atan2(rest[1, 1] - y, rest[1, 0] - x)
-        if self._arc_clear((x, y, bearing), rest[1]):
-            return None
+    def _relaxed_target(self, pose: tuple[float, float, float],
+                        rest: npt.NDArray[np.float64], k_look: int) -> int | None:
+        """The farthest plan point up to the lookahead whose arc keeps the robot radius
+        itself (no ``arc_clearance_m``) from every obstacle cell's edge (or, starting
+        closer, gets no closer), None when there is none: a passage whose free cells lie
+        only a few millimetres beyond the radius is driven through, not waited at (the
+        map's obstacle cells hold the true surfaces, so their edges are never farther)."""
         for k in range(k_look, 0, -1):
             if self._arc_clear(pose, rest[k], extra_m=0.0):
                 return k
         return None
 
-    def _turn_or_wait(self, pose: tuple[float, float, float], rest: npt.NDArray[np.float64],
-                      k_look: int) -> tuple[float, float]:
-        """The command when no arc from the robot's heading keeps clear (it stands close to
-        an obstacle, heading past it) and :meth:`_fallback_target` found none to drive.
-        Turning in place never moves the footprint: turn to face the first plan point up
-        to the lookahead whose straight line is clear, as Nav2's controller fails the arc
-        and its recovery turns; when no straight line is clear either, face the next plan
-        point and then wait (zero command) for a plan or map that gives a clear one, or
-        for the progress checker to abort the goal. An unchecked arc is never driven (it
-        drove into a wall corner the map showed: eb/corner, ``paper_noseg`` seed 9,
-        issue #21)."""
+    def _turn_to_clear_line(self, pose: tuple[float, float, float],
+                            rest: npt.NDArray[np.float64], first: int, last: int
+                            ) -> tuple[float, float] | None:
+        """The in-place turn toward the first plan point ``rest[first..last]`` whose
+        straight line from the robot is clear, None when none is."""
         p = self.params
         x, y, yaw = pose
-        for j in range(1, max(k_look, 1) + 1):
+        for j in range(first, last + 1):
             bearing = math.atan2(rest[j, 1] - y, rest[j, 0] - x)
             if self._arc_clear((x, y, bearing), rest[j]):
                 turn = wrap_angle(bearing - yaw)
                 return 0.0, clip_magnitude(p.heading_gain * turn, p.max_angular_speed_radps)
-        turn = wrap_angle(math.atan2(rest[1, 1] - y, rest[1, 0] - x) - yaw)
+        return None
+
+    def _face_and_wait(self, pose: tuple[float, float, float],
+                       rest: npt.NDArray[np.float64]) -> tuple[float, float]:
+        """Turn to face the next plan point, then wait (zero command) for a plan or map
+        that gives a clear motion, or for the progress checker to abort the goal."""
+        p = self.params
+        turn = wrap_angle(math.atan2(rest[1, 1] - pose[1], rest[1, 0] - pose[0]) - pose[2])
         if abs(turn) > p.goal_tolerance_yaw_rad:
             return 0.0, clip_magnitude(p.heading_gain * turn, p.max_angular_speed_radps)
         return 0.0, 0.0
