@@ -21,7 +21,7 @@ from typing import Any, Iterator
 import numpy as np
 
 from bench.worlds import load, sim_params_for
-from sim_bridge.coverage_tour import TourParams, coverage_tour
+from sim_bridge.coverage_tour import TourParams, coverage_tours
 from sim_bridge.lockstep import ExplorerParams, LockstepState, load_explorer_params, \
     run_exploration
 
@@ -87,9 +87,8 @@ def tour_task(spec: str) -> dict[str, Any]:
     reference of the path to 95 %)."""
     world, gt = load(spec)
     t0 = time.perf_counter()
-    tour = coverage_tour(world, params=TourParams(), ground_truth=gt)
-    tour95 = coverage_tour(world, params=TourParams(coverage_fraction=TOUR95_FRACTION),
-                           ground_truth=gt)
+    tour, tour95 = coverage_tours(world, (TourParams().coverage_fraction, TOUR95_FRACTION),
+                                  ground_truth=gt)
     return {"world": spec, "tour_m": round(tour.length_m, 2),
             "viewpoints": int(len(tour.viewpoints_xy)),
             "coverable_fraction": round(tour.coverable_fraction, 4),

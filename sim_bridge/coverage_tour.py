@@ -211,6 +211,28 @@ def coverage_tour(world: World, start_xy: tuple[float, float] | None = None,
         When the start lies outside the world's rasters or no viewpoint is reachable.
     """
     p = params if params is not None else TourParams()
+    return coverage_tours(world, (p.coverage_fraction,), start_xy, p, ground_truth)[0]
+
+
+def coverage_tours(world: World, fractions: tuple[float, ...],
+                   start_xy: tuple[float, float] | None = None,
+                   params: TourParams | None = None,
+                   ground_truth: worlds.GroundTruth | None = None) -> list[TourResult]:
+    """:func:`coverage_tour` to each of several coverage fractions, in one go: steps 1-4
+    (candidates, visibility, set cover, distances) and the scans along the tour legs are
+    shared; only the pruning (step 5) runs per fraction. ``params.coverage_fraction`` is
+    ignored; each result equals ``coverage_tour`` with that fraction.
+
+    Raises
+    ------
+    ValueError
+        When a fraction is not in (0, 1], the start lies outside the world's rasters or no
+        viewpoint is reachable.
+    """
+    p = params if params is not None else TourParams()
+    for f in fractions:
+        if not 0.0 < f <= 1.0:
+            raise ValueError(f"coverage fractions must be in (0, 1], got {f}")
     gt = ground_truth if ground_truth is not None else worlds.ground_truth(world)
     geom = gt.lidar
     res = geom.resolution_m
@@ -265,34 +287,47 @@ def coverage_tour(world: World, start_xy: tuple[float, float] | None = None,
         ids = tid[_visible_cells(lidar, xy, geom, p)]
         return ids[ids >= 0]
 
-    walker = _PathWalker(fields_, pts_rc, geom, p, target_ids, int(coverable.sum()), passable)
+    walker = _PathWalker(fields_, pts_rc, geom, p, target_ids, passable)
+    n_coverable = int(coverable.sum())
+    results = []
+    for fraction in fractions:
+        need = int(math.ceil(fraction * n_coverable))
+        best_len, best_order = _pruned_tour(walker, dist, [len(sets[i]) for i in chosen], need, p)
+        verts = walker.vertices(best_order)
+        px, py = geom.cells_to_world(verts[:, 0], verts[:, 1])
+        vis = [pts_rc[i] for i in best_order[1:]]
+        vx, vy = geom.cells_to_world(np.asarray([v[0] for v in vis]),
+                                     np.asarray([v[1] for v in vis]))
+        results.append(TourResult(
+            length_m=float(best_len),
+            viewpoints_xy=np.column_stack([vx, vy]).reshape(-1, 2),
+            path_xy=np.column_stack([px, py]),
+            coverable_fraction=float(coverable.mean()) if coverable.size else 1.0,
+            n_candidates=int(cand_rc.shape[0]), n_targets=int(tflat.size)))
+    return results
 
-    # 5. prune viewpoints that the path to the others already brings into view
-    keep = list(range(1, n))
+
+def _pruned_tour(walker: _PathWalker, dist: npt.NDArray[np.float64], set_sizes: list[int],
+                 need: int, p: TourParams) -> tuple[float, list[int]]:
+    """Step 5: drop viewpoints (node i >= 1 of ``dist`` sees ``set_sizes[i - 1]`` targets;
+    fewest first) that the path to the others already brings into view, while the
+    re-ordered tour to ``need`` targets in view is no longer. Returns (length, order)."""
+    keep = list(range(1, dist.shape[0]))
     order = tour_order(dist[np.ix_([0] + keep, [0] + keep)], p.two_opt_max_sweeps)
-    best_len, best_order = walker.length([([0] + keep)[i] for i in order])
+    best_len, best_order = walker.length([([0] + keep)[i] for i in order], need)
     for _ in range(p.prune_passes):
         removed = False
-        for v in sorted(keep, key=lambda i: len(sets[chosen[i - 1]])):
+        for v in sorted(keep, key=lambda i: set_sizes[i - 1]):
             trial = [i for i in keep if i != v]
             sub = [0] + trial
             o = tour_order(dist[np.ix_(sub, sub)], p.two_opt_max_sweeps)
-            length, ordered = walker.length([sub[i] for i in o])
+            length, ordered = walker.length([sub[i] for i in o], need)
             if math.isfinite(length) and length <= best_len + 1e-9:
                 keep, best_len, best_order = trial, length, ordered
                 removed = True
         if not removed:
             break
-    verts = walker.vertices(best_order)
-    px, py = geom.cells_to_world(verts[:, 0], verts[:, 1])
-    vis = [pts_rc[i] for i in best_order[1:]]
-    vx, vy = geom.cells_to_world(np.asarray([v[0] for v in vis]), np.asarray([v[1] for v in vis]))
-    return TourResult(
-        length_m=float(best_len),
-        viewpoints_xy=np.column_stack([vx, vy]).reshape(-1, 2),
-        path_xy=np.column_stack([px, py]),
-        coverable_fraction=float(coverable.mean()) if coverable.size else 1.0,
-        n_candidates=int(cand_rc.shape[0]), n_targets=int(tflat.size))
+    return best_len, best_order
 
 
 def _shortcut(cells: npt.NDArray[np.int64], passable: npt.NDArray[np.bool_],
@@ -327,10 +362,11 @@ def _shortcut(cells: npt.NDArray[np.int64], passable: npt.NDArray[np.bool_],
 class _PathWalker:
     """Coverage gathered while driving a tour: the geodesic legs are smoothed
     (:func:`_shortcut`), the sensor scans every ``sample_spacing_m`` along them (cached per
-    cell), and the tour length counts until ``coverage_fraction`` is in view."""
+    cell, shared by every coverage goal), and the tour length counts until the goal's
+    number of targets was in view."""
 
     def __init__(self, fields_: list[npt.NDArray[np.float64]], pts_rc: list[tuple[int, int]],
-                 geom: GridMap, params: TourParams, visible, n_coverable: int,
+                 geom: GridMap, params: TourParams, visible,
                  passable: npt.NDArray[np.bool_]) -> None:
         self._fields = fields_
         self._pts = pts_rc
@@ -338,7 +374,6 @@ class _PathWalker:
         self._p = params
         self._visible = visible
         self._passable = passable
-        self._need = int(math.ceil(params.coverage_fraction * n_coverable))
         self._legs: dict[tuple[int, int], npt.NDArray[np.float64]] = {}
         self._seen: dict[tuple[int, int], npt.NDArray[np.int64]] = {}
 
@@ -361,8 +396,8 @@ class _PathWalker:
             self._seen[rc] = self._visible(self._geom.cell_to_world(rc[0], rc[1]))
         return self._seen[rc]
 
-    def length(self, order: list[int]) -> tuple[float, list[int]]:
-        """(length until the coverage goal is met or inf, the order)."""
+    def length(self, order: list[int], need: int) -> tuple[float, list[int]]:
+        """(length until ``need`` targets were in view or inf, the order)."""
         v = self.vertices(order)
         res = self._geom.resolution_m
         d = np.hypot(*np.diff(v, axis=0).T) * res
@@ -374,6 +409,6 @@ class _PathWalker:
         seen: set[int] = set()
         for k in range(len(s)):
             seen.update(self._scan((int(round(rows[k])), int(round(cols[k])))).tolist())
-            if len(seen) >= self._need:
+            if len(seen) >= need:
                 return float(s[k]), order
         return math.inf, order

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim_bridge.coverage_tour import TourParams, coverage_tour, greedy_cover, tour_order
+from sim_bridge.coverage_tour import (TourParams, coverage_tour, coverage_tours, greedy_cover,
+                                      tour_order)
 from sim_bridge.worlds import default_world, ground_truth
 
 
@@ -70,3 +71,17 @@ def test_coverage_tour_rejects_a_start_outside():
     w = default_world("small_house")
     with pytest.raises(ValueError, match="outside the world raster"):
         coverage_tour(w, start_xy=(100.0, 0.0))
+
+
+def test_tours_to_several_fractions_in_one_go_equal_separate_tours():
+    w = default_world("small_house")
+    gt = ground_truth(w)
+    both = coverage_tours(w, (0.99, 0.8), ground_truth=gt)
+    for got, fraction in zip(both, (0.99, 0.8)):
+        alone = coverage_tour(w, params=TourParams(coverage_fraction=fraction), ground_truth=gt)
+        assert got.length_m == alone.length_m
+        np.testing.assert_array_equal(got.viewpoints_xy, alone.viewpoints_xy)
+        np.testing.assert_array_equal(got.path_xy, alone.path_xy)
+    assert both[1].length_m < both[0].length_m
+    with pytest.raises(ValueError, match="fractions"):
+        coverage_tours(w, (0.9, 1.5), ground_truth=gt)
