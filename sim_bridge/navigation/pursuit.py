@@ -24,6 +24,9 @@ if TYPE_CHECKING:
 #: Plan points measured at a time when looking for the lookahead point.
 _LOOKAHEAD_CHUNK = 64
 
+#: Plan points ahead of the progress index searched for the one closest to the robot.
+_PROGRESS_WINDOW = 64
+
 #: The pure-pursuit arc check skips this much of the arc next to the robot (m).
 ARC_FREE_START_M = 0.1
 
@@ -56,7 +59,7 @@ class Pursuit:
         path = self._plan_xy
         # Advance the progress index to the closest point in a window ahead.
         i0 = self._plan_index
-        i1 = min(len(path), i0 + 64)
+        i1 = min(len(path), i0 + _PROGRESS_WINDOW)
         d = np.hypot(path[i0:i1, 0] - x, path[i0:i1, 1] - y)
         self._plan_index = i0 + int(np.argmin(d))
         rest = path[self._plan_index:]
