@@ -22,7 +22,8 @@ import numpy.typing as npt
 from explore_seg.core.grid import GridMap, metres_to_cells
 from explore_seg.core.paths import _MAX_KERNEL_RADIUS_CELLS, disk_kernel, inflate
 from sim_bridge.navigation.params import NavParams
-from sim_bridge.navigation.planner import coarsen, cost_grid, path_cost, plan_path
+from sim_bridge.navigation.costmap import CostGridCache
+from sim_bridge.navigation.planner import coarsen, path_cost, plan_path
 from sim_bridge.navigation.pursuit import Pursuit, clip_magnitude, wrap_angle
 
 __all__ = ["NavState", "NavStatus", "Navigator"]
@@ -100,6 +101,7 @@ class Navigator(Pursuit):
         self._goal_cost: dict[tuple[tuple[int, int], int], float] = {}
         # (key, mask, lattice-aligned) of :meth:`_layer_blocked`.
         self._layer_mask: tuple[tuple, npt.NDArray[np.bool_], bool] | None = None
+        self._costmap = CostGridCache()
 
     # ---------------------------------------------------------------- inputs
     @property
@@ -277,8 +279,9 @@ class Navigator(Pursuit):
 
     def _cost(self, grid: GridMap) -> npt.NDArray[np.float64]:
         blocked, unknown = self._obstacles(grid)
-        return cost_grid(blocked, unknown if self.params.allow_unknown else None,
-                         grid.resolution_m, self.params)
+        return self._costmap.cost(blocked, unknown if self.params.allow_unknown else None,
+                                  grid.resolution_m, self.params,
+                                  (grid.origin_xy_m, grid.origin_yaw_rad))
 
     def _plan(self, pose: tuple[float, float, float], now_s: float) -> bool:
         """Plan from the pose to the goal; False (and ABORTED) when impossible."""

@@ -39,6 +39,22 @@ def edge_overlap_kernel(radius_m: float, resolution_m: float) -> npt.NDArray[np.
     return (np.hypot(d[:, None], d[None, :]) * resolution_m < radius_m).astype(np.uint8)
 
 
+def obstacle_distance_cells(blocked: npt.NDArray[np.bool_]) -> npt.NDArray[np.float32]:
+    """Exact Euclidean distance (cells) from every cell to the nearest blocked cell: the
+    float32 square root of the exact squared distance, as OpenCV's own
+    ``DIST_MASK_PRECISE`` transform gives it. Intel IPP's version, which OpenCV uses for
+    images under 128 x 128 cells, rounds some roots differently, so it is switched off
+    for the call: a cell's value must not depend on the size of the window it was
+    computed in (:mod:`sim_bridge.navigation.costmap`)."""
+    free = np.ascontiguousarray(~blocked, dtype=np.uint8)
+    use_ipp = cv2.ipp.useIPP()
+    cv2.ipp.setUseIPP(False)
+    try:
+        return cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    finally:
+        cv2.ipp.setUseIPP(use_ipp)
+
+
 def cost_grid(blocked: npt.NDArray[np.bool_], unknown: npt.NDArray[np.bool_] | None,
               resolution_m: float, params: NavParams) -> npt.NDArray[np.float64]:
     """Per-cell traversal cost (per metre) of an inflated costmap; ``inf`` = lethal.
@@ -61,8 +77,7 @@ def cost_grid(blocked: npt.NDArray[np.bool_], unknown: npt.NDArray[np.bool_] | N
     lethal = inflate(blocked, params.lethal_radius_m, resolution_m)
     cost = np.ones(blocked.shape, dtype=np.float64)
     if blocked.any() and params.inflation_cost_weight > 0:
-        free = np.ascontiguousarray(~blocked, dtype=np.uint8)
-        d = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * resolution_m
+        d = obstacle_distance_cells(blocked) * resolution_m
         band = ~lethal & (d < params.inflation_radius_m)
         excess = np.maximum(d[band] - params.lethal_radius_m, 0.0)
         cost[band] += params.inflation_cost_weight * np.exp(-params.inflation_cost_scale * excess)
