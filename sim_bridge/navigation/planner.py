@@ -42,10 +42,10 @@ def edge_overlap_kernel(radius_m: float, resolution_m: float) -> npt.NDArray[np.
 def obstacle_distance_cells(blocked: npt.NDArray[np.bool_]) -> npt.NDArray[np.float32]:
     """Exact Euclidean distance (cells) from every cell to the nearest blocked cell: the
     float32 square root of the exact squared distance, as OpenCV's own
-    ``DIST_MASK_PRECISE`` transform gives it. Intel IPP's version, which OpenCV uses for
-    images under 128 x 128 cells, rounds some roots differently, so it is switched off
-    for the call: a cell's value must not depend on the size of the window it was
-    computed in (:mod:`sim_bridge.navigation.costmap`)."""
+    ``DIST_MASK_PRECISE`` transform gives it. Intel IPP's version, which OpenCV 4.14 uses
+    for images of fewer than 128 x 128 cells, rounds some roots differently, so it is
+    switched off for the call: a cell's value must not depend on the size of the window
+    it was computed in (:mod:`sim_bridge.navigation.costmap`)."""
     free = np.ascontiguousarray(~blocked, dtype=np.uint8)
     use_ipp = cv2.ipp.useIPP()
     cv2.ipp.setUseIPP(False)
