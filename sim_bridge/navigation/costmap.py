@@ -53,10 +53,6 @@ class CostGridCache:
         #: Cells recomputed by the last call (for tests and profiles).
         self.last_recomputed_cells = 0
 
-    def reset(self) -> None:
-        """Forget the kept costmap (the next call rebuilds the whole map)."""
-        self._key = self._blocked = self._unknown = self._cost = None
-
     def cost(self, blocked: npt.NDArray[np.bool_], unknown: npt.NDArray[np.bool_] | None,
              resolution_m: float, params: NavParams, geometry: tuple = ()
              ) -> npt.NDArray[np.float64]:
@@ -110,7 +106,7 @@ def _windows(changed: npt.NDArray[np.bool_], reach: int
         return []
     grow = -(-reach // t)
     tiles = ndimage.binary_dilation(tiles, np.ones((2 * grow + 1, 2 * grow + 1), bool))
-    labels, n = ndimage.label(tiles, np.ones((3, 3), bool))
+    labels, _ = ndimage.label(tiles, np.ones((3, 3), bool))
     boxes = []
     for sl in ndimage.find_objects(labels):
         boxes.append((sl[0].start * t, min(h, sl[0].stop * t),
