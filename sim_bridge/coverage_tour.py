@@ -289,10 +289,11 @@ def coverage_tours(world: World, fractions: tuple[float, ...],
 
     walker = _PathWalker(fields_, pts_rc, geom, p, target_ids, passable)
     n_coverable = int(coverable.sum())
+    set_sizes = [len(sets[i]) for i in chosen]
     results = []
     for fraction in fractions:
         need = int(math.ceil(fraction * n_coverable))
-        best_len, best_order = _pruned_tour(walker, dist, [len(sets[i]) for i in chosen], need, p)
+        best_len, best_order = _pruned_tour(walker, dist, set_sizes, need, p)
         verts = walker.vertices(best_order)
         px, py = geom.cells_to_world(verts[:, 0], verts[:, 1])
         vis = [pts_rc[i] for i in best_order[1:]]
