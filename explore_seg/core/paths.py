@@ -58,6 +58,22 @@ def disk_kernel(radius_cells: float) -> npt.NDArray[np.uint8]:
     return ((xx * xx + yy * yy) <= rr * rr + 1e-9).astype(np.uint8)
 
 
+def obstacle_distance_cells(blocked: npt.NDArray[np.bool_]) -> npt.NDArray[np.float32]:
+    """Exact Euclidean distance (cells) from every cell to the nearest blocked cell: the
+    float32 square root of the exact squared distance, as OpenCV's own
+    ``DIST_MASK_PRECISE`` transform gives it. Intel IPP's version, which OpenCV 4.14 uses
+    for images of fewer than 128 x 128 cells, rounds some roots differently, so it is
+    switched off for the call: a cell's value must not depend on the size of the window
+    it was computed in (the navigation stand-in's costmap is updated in windows)."""
+    free = np.ascontiguousarray(~blocked, dtype=np.uint8)
+    use_ipp = cv2.ipp.useIPP()
+    cv2.ipp.setUseIPP(False)
+    try:
+        return cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    finally:
+        cv2.ipp.setUseIPP(use_ipp)
+
+
 def inflate(blocked: npt.NDArray[np.bool_], radius_m: float, resolution_m: float
             ) -> npt.NDArray[np.bool_]:
     """Grow ``blocked`` by a disk of ``radius_m`` (cells whose centre is within the radius).
@@ -92,9 +108,7 @@ def inflate(blocked: npt.NDArray[np.bool_], radius_m: float, resolution_m: float
         # A disk kernel of side 2r+1 costs O(r^2) memory and O(H*W*r) time (27 s and
         # 0.7 GB for r = 2200); the exact Euclidean distance to the nearest blocked cell
         # gives the same cells in O(H*W) for any radius.
-        free = np.ascontiguousarray(~blocked, dtype=np.uint8)
-        dist = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
-        return dist <= rr + 1e-3
+        return obstacle_distance_cells(blocked) <= rr + 1e-3
     out = cv2.dilate(blocked.astype(np.uint8), disk_kernel(rr), borderType=cv2.BORDER_CONSTANT,
                      borderValue=0)
     return out.astype(bool)

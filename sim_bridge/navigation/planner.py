@@ -19,7 +19,8 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.paths import SQRT2, cost_distance_field, extract_path, inflate
+from explore_seg.core.paths import (SQRT2, cost_distance_field, extract_path, inflate,
+                                    obstacle_distance_cells)
 from sim_bridge.navigation.params import NavParams
 
 
@@ -37,22 +38,6 @@ def edge_overlap_kernel(radius_m: float, resolution_m: float) -> npt.NDArray[np.
     r = int(math.ceil(radius_m / resolution_m + 0.5))
     d = np.maximum(np.abs(np.arange(-r, r + 1, dtype=np.float64)) - 0.5, 0.0)
     return (np.hypot(d[:, None], d[None, :]) * resolution_m < radius_m).astype(np.uint8)
-
-
-def obstacle_distance_cells(blocked: npt.NDArray[np.bool_]) -> npt.NDArray[np.float32]:
-    """Exact Euclidean distance (cells) from every cell to the nearest blocked cell: the
-    float32 square root of the exact squared distance, as OpenCV's own
-    ``DIST_MASK_PRECISE`` transform gives it. Intel IPP's version, which OpenCV 4.14 uses
-    for images of fewer than 128 x 128 cells, rounds some roots differently, so it is
-    switched off for the call: a cell's value must not depend on the size of the window
-    it was computed in (:mod:`sim_bridge.navigation.costmap`)."""
-    free = np.ascontiguousarray(~blocked, dtype=np.uint8)
-    use_ipp = cv2.ipp.useIPP()
-    cv2.ipp.setUseIPP(False)
-    try:
-        return cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
-    finally:
-        cv2.ipp.setUseIPP(use_ipp)
 
 
 def cost_grid(blocked: npt.NDArray[np.bool_], unknown: npt.NDArray[np.bool_] | None,
