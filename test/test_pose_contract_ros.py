@@ -12,7 +12,7 @@ from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 
 from explore_seg import convert
-from explore_seg.core.pose_fusion import compose
+from explore_seg.core.pose_fusion import compose, inverse
 from explore_seg.object_costmap_node import ObjectCostmapNode
 from explore_seg.qos import RELIABLE_QOS
 from explore_seg.selector_node import TargetSelectorNode
@@ -53,9 +53,31 @@ def test_sim_publishes_drifting_odometry_and_scan_rate_slam_poses(ros, tmp_path)
     assert {m.header.frame_id for m in odom} == {"odom"}
     assert {m.header.frame_id for m in slam} == {"map"}
     o = odom[0].pose.pose.position
-    assert (o.x, o.y) == (0.0, 0.0)                   # the odom frame starts at the robot
     p = slam[0].pose.pose.position
     assert math.hypot(p.x, p.y) > 0.5                 # small_house's start is not the origin
+    # the odom frame starts on the map frame (as slam_toolbox's map starts on odom)
+    assert (o.x, o.y) == pytest.approx((p.x, p.y), abs=1e-6)
+
+
+def test_a_selector_started_after_the_first_slam_pose_still_explores(ros, tmp_path):
+    # The robot stands still until it gets a goal, so no second SLAM pose comes before
+    # one: a fused selector that missed the first must take odometry as the map pose
+    # (odom_until_first_slam), which holds only when the odom frame starts on the map
+    # frame. With the simulator's old odom frame at (0, 0, 0) its pose was the start's
+    # distance off and it sent no goal (the demo's stall).
+    sim = _sim(ros, tmp_path, enable_camera=False, odom_frame="odom", slam_pose=True,
+               slam_min_travel_m=0.5, slam_min_turn_rad=0.5)   # the demo's settings
+    probe = ros.node("late_probe")
+    slam: list[PoseWithCovarianceStamped] = []
+    probe.create_subscription(PoseWithCovarianceStamped, "pose", slam.append, RELIABLE_QOS)
+    ros.spin_until(lambda: slam and sim.engine.time_s > 2.0, what="the first SLAM pose")
+    n_slam = len(slam)
+    sel = ros.add(TargetSelectorNode(context=ros.context, parameter_overrides=[
+        SIM_TIME, Parameter("pose_topic_type", value="fused")]))
+    ros.spin_until(lambda: sel.goals_sent >= 1, timeout_s=60, what="a goal")
+    assert n_slam == 1                                   # standing still: no other pose
+    assert sel._pose is not None
+    assert _err(sel._pose, sim.engine.pose)[0] < TOL_M
 
 
 def test_fused_pose_tracks_truth_and_the_object_costmap_keeps_up(ros, tmp_path):
@@ -106,7 +128,7 @@ def test_fused_pose_tracks_truth_and_the_object_costmap_keeps_up(ros, tmp_path):
     assert _err(sel._pose, truth[sel._pose_stamp_ns][0])[0] < TOL_M
     # the odometry alone drifted far beyond that (aligned at the start)
     t0 = min(truth)
-    start = compose(truth[t0][0], truth[t0][1])
+    start = compose(truth[t0][0], inverse(truth[t0][1]))     # map <- odom at the start
     drift = max(_err(compose(start, odo), true)[0] for true, odo in truth.values())
     assert drift > 0.2, drift
     # >= 95 % of the frames received were processed (fused pose at odometry rate)
