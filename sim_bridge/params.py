@@ -117,8 +117,9 @@ class SimParams:
     # --- real-robot pose contract (sim_bridge.odometry)
     odom_frame: str = field(default="map", metadata=param_meta(
         "frame of the published odometry: 'map' (the true pose, no drift) or another name, "
-        "e.g. 'odom' (a real robot's odometry: starts at (0, 0, 0) and drifts by "
-        "odom_drift_*; pair with slam_pose and pose_topic_type 'fused')", read_only=True))
+        "e.g. 'odom' (a real robot's odometry: starts on the map frame, as slam_toolbox's "
+        "map starts on odom, and drifts by odom_drift_*; pair with slam_pose and "
+        "pose_topic_type 'fused')", read_only=True))
     odom_drift_scale: float = field(default=0.0, metadata=param_meta(
         "odometry distance error: travelled distance x (1 + this) (odom_frame != 'map')",
         range=(-0.5, 0.5)))
