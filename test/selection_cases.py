@@ -37,9 +37,10 @@ _FRONTIER_FIELDS = {f.name for f in dataclasses.fields(FrontierParams)}
 
 
 def split_params(**kw) -> tuple[FrontierParams, SelectionParams]:
-    """(FrontierParams, SelectionParams) from one set of keyword arguments."""
+    """(FrontierParams, SelectionParams) from one set of keyword arguments (the paper's
+    strategy unless ``strategy`` is given: these are the paper's cases)."""
     fkw = {k: v for k, v in kw.items() if k in _FRONTIER_FIELDS}
-    skw = {k: v for k, v in kw.items() if k not in _FRONTIER_FIELDS}
+    skw = {"strategy": "paper", **{k: v for k, v in kw.items() if k not in _FRONTIER_FIELDS}}
     return FrontierParams(**fkw), SelectionParams(**skw)
 
 

@@ -29,8 +29,11 @@ ORIGIN = (-1.0, -2.0)
 
 
 def selector_overrides(**extra):
-    values = {"rate_hz": 20.0, "done_confirmations": 2, "frontier.min_group_size_cells": 3,
-              "frontier.robot_radius_m": 0.1, "path_block_cells": 2}
+    # The paper's strategy: these tiny maps' frontiers reveal less than routed's
+    # min_gain_m2 (routed, the default, is tested on a bigger map below).
+    values = {"strategy": "paper", "rate_hz": 20.0, "done_confirmations": 2,
+              "frontier.min_group_size_cells": 3, "frontier.robot_radius_m": 0.1,
+              "path_block_cells": 2}
     values.update(extra)
     return [Parameter(k, value=v) for k, v in values.items()]
 
@@ -93,6 +96,37 @@ def test_selector_sends_goal_at_the_frontier(ros):
     assert frontier.point_rc == (3, 12)   # beside the open end, the middle row
     yaw = 2.0 * math.atan2(goal.pose.orientation.z, goal.pose.orientation.w)
     assert yaw == pytest.approx(0.0, abs=1e-6)   # facing the unknown (+x)
+    assert node.state.value == "navigating"
+
+
+HALL = "\n".join(["#" * 42] + ["#" + "." * 15 + "?" * 25 + "#"] * 4
+                 + ["#..R" + "." * 12 + "?" * 25 + "#"] + ["#" + "." * 15 + "?" * 25 + "#"] * 11
+                 + ["#" * 42])
+
+
+def test_default_routed_selector_sends_a_viewpoint_goal(ros):
+    from geometry_msgs.msg import PoseStamped
+
+    from explore_seg.core.explorer import Explorer
+    from explore_seg.core.selection import SelectionParams
+
+    assert SelectionParams().strategy == "routed"
+    node = start_selector(ros, strategy="routed")
+    goals = Inbox(ros, PoseStamped, "goal_pose")
+    grid, marks, _keep = feed(ros, HALL)
+    ros.spin_until(lambda: goals.msgs, timeout_s=15, what="a goal_pose")
+    goal = goals.msgs[0]
+    # the core's routed goal on the same map: the viewpoint, not the frontier's cPoint
+    fp = FrontierParams(min_group_size_cells=3, robot_radius_m=0.1)
+    x, y = grid.cell_to_world(*marks["R"][0])
+    core = {s: Explorer(fp, SelectionParams(strategy=s, path_block_cells=2)).step(
+        0.0, grid, (x, y, 0.0)) for s in ("routed", "paper")}
+    assert core["routed"].tour is not None and core["routed"].goal != core["paper"].goal
+    gx, gy = goal.pose.position.x, goal.pose.position.y
+    # within a cell (the node's pose comes through odometry: ties between equally good
+    # candidates may break one cell apart); the paper's cPoint is 0.9 m away
+    assert math.dist((gx, gy), core["routed"].goal.xy_m) <= 1.5 * RES
+    assert math.dist((gx, gy), core["paper"].goal.xy_m) > 0.5
     assert node.state.value == "navigating"
 
 

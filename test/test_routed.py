@@ -411,3 +411,37 @@ def test_routed_splits_a_long_frontier_into_tour_stops():
     assert out.goal.xy_m == out.frontiers[out.tour.order[0]].point_xy_m
     paper = Explorer(fp, SelectionParams(strategy="paper", frontier_split_m=3.0))
     assert len(paper.step(0.0, g, (x, y, 0.0)).frontiers) == 1
+
+
+def _niche_and_hall() -> tuple[GridMap, tuple[float, float, float]]:
+    """A known 10 x 2 m corridor; a 1 x 1 m unknown niche in its wall next to the robot
+    (a small view) and a large unknown hall behind its far end (a big view)."""
+    data = np.full((140, 260), 100, dtype=np.int8)
+    data[60:100, 10:210] = 0                      # the corridor
+    data[40:60, 40:60] = -1                       # the niche, open to the corridor
+    data[20:120, 210:255] = -1                    # the hall, open at the corridor's end
+    g = _grid(data)
+    x, y = g.cell_to_world(80, 30)
+    return g, (x, y, 0.0)
+
+
+def test_leftovers_wait_while_a_bigger_view_remains_and_are_visited_last():
+    g, pose = _niche_and_hall()
+    fp = FrontierParams(robot_radius_m=0.1, min_group_size_cells=1)
+    old = Explorer(fp, SelectionParams(strategy="routed", leftover_gain_m2=0.0)).step(
+        0.0, g, pose)
+    assert len(old.tour.order) == 2
+    small, big = sorted(old.tour.order, key=lambda i: old.tour.gain_m2[i])
+    assert old.tour.gain_m2[small] < 2.0 <= old.tour.gain_m2[big]
+    assert old.selection.index == small           # on the way: the tour takes it first
+    new = Explorer(fp, SelectionParams(strategy="routed")).step(0.0, g, pose)
+    assert SelectionParams().leftover_gain_m2 == 2.0
+    assert new.tour.order.tolist() == [big] and new.selection.index == big
+    assert not np.isfinite(new.selection.costs[small])
+    # once the hall is known, the niche is the goal: leftovers are visited, not dropped
+    data = g.data.copy()
+    data[20:120, 210:255] = 0
+    data[20:22, 210:255] = data[118:120, 210:255] = data[20:120, 253:255] = 100
+    late = Explorer(fp, SelectionParams(strategy="routed")).step(0.0, g.with_data(data), pose)
+    assert late.action is Action.NEW_GOAL
+    assert late.tour.order.tolist() == [0] and late.tour.gain_m2[0] < 2.0

@@ -28,7 +28,7 @@ def test_cost_formulas(strategy, expected):
 def test_unreachable_frontier_costs_inf_and_leaves_the_normalisation():
     g, fr, labels = two_frontiers()
     f2 = make_frontier(2, [(20, 40), (20, 41)], (21, 40), g)
-    costs = compute_costs(fr + [f2], [1.0, 3.0, np.inf], labels, 1, SelectionParams())
+    costs = compute_costs(fr + [f2], [1.0, 3.0, np.inf], labels, 1, SelectionParams(strategy="paper"))
     assert np.isinf(costs[2])
     # sizeGain counts every candidate (42 cells), distGain only the reachable ones
     assert costs[:2].tolist() == pytest.approx([0.25 + B * 42 / 10, 0.75 + B * 42 / 30 + 1])
@@ -37,20 +37,20 @@ def test_unreachable_frontier_costs_inf_and_leaves_the_normalisation():
 def test_non_passable_cpoint_costs_inf():
     g, fr, labels = two_frontiers()
     blocked = make_frontier(1, fr[1].cells, fr[1].point_rc, g, passable=False)
-    costs = compute_costs([fr[0], blocked], [1.0, 3.0], None, 0, SelectionParams())
+    costs = compute_costs([fr[0], blocked], [1.0, 3.0], None, 0, SelectionParams(strategy="paper"))
     assert np.isfinite(costs[0]) and np.isinf(costs[1])
 
 
 def test_frontier_without_region_counts_as_same_region():
     _, fr, labels = two_frontiers()
     labels[40:] = 0
-    costs = compute_costs(fr, [1.0, 3.0], labels, 1, SelectionParams())
+    costs = compute_costs(fr, [1.0, 3.0], labels, 1, SelectionParams(strategy="paper"))
     assert costs[1] == pytest.approx(0.75 + B / 0.75)
 
 
 def test_all_unreachable_selects_nothing():
     _, fr, labels = two_frontiers()
-    sel = select_goal(fr, [np.inf, np.inf], labels, (1, 1), SelectionParams())
+    sel = select_goal(fr, [np.inf, np.inf], labels, (1, 1), SelectionParams(strategy="paper"))
     assert sel.index is None and np.isinf(sel.costs).all()
 
 
@@ -67,13 +67,14 @@ def test_excluded_frontier_is_not_chosen():
 def test_bad_distances_raise(dist, match):
     _, fr, labels = two_frontiers()
     with pytest.raises(ValueError, match=match):
-        compute_costs(fr, dist, labels, 1, SelectionParams())
+        compute_costs(fr, dist, labels, 1, SelectionParams(strategy="paper"))
 
 
 def test_excluded_length_mismatch_raises():
     _, fr, _ = two_frontiers()
     with pytest.raises(ValueError, match="excluded has 1 entries"):
-        select_goal(fr, [1.0, 2.0], None, (0, 0), excluded=np.array([True]))
+        select_goal(fr, [1.0, 2.0], None, (0, 0), SelectionParams(strategy="paper"),
+                    excluded=np.array([True]))
 
 
 def test_region_at_uses_nearest_labelled_cell():

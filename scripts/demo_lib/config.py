@@ -24,7 +24,7 @@ class DemoConfig:
 
     out_dir: str
     world: str = "house_cluttered"
-    strategy: str = "paper"
+    strategy: str = "routed"
     seed: int = 0
     real_time_factor: float = 4.0
     max_sim_time_s: float = 1500.0

@@ -31,7 +31,7 @@ def _non_negative(doc: str, unit: str | None = None, default: float = 0.0) -> fl
 class SelectionParams:
     """Parameters of target selection (the strategy's cost) and of the goal manager."""
 
-    strategy: str = field(default="paper", metadata=param_meta(
+    strategy: str = field(default="routed", metadata=param_meta(
         "cost function: " + " | ".join(STRATEGIES)))
     alpha: float = _non_negative("paper: weight of distGain", default=1.0)
     beta: float = _non_negative("paper: weight of 1/sizeGain", default=0.001)
@@ -154,6 +154,11 @@ class SelectionParams:
         "area than this is not a goal (it would reveal nothing: exploration ends instead "
         "of chasing it)", "m^2",
         default=0.25)
+    leftover_gain_m2: float = _non_negative(
+        "routed: a viewpoint that sees less unknown area than this is a leftover, kept out "
+        "of the tour while a viewpoint that sees more remains (small corners that often "
+        "vanish as the robot passes do not bend the tour; they are visited last); "
+        "0 = off", "m^2", default=2.0)
     gain_weight_m_per_m2: float = _non_negative(
         "routed: a group's cost is its tour length minus this times the unknown area its "
         "viewpoint sees (big views first when the detour is small)", "m/m^2", default=0.1)
@@ -179,7 +184,8 @@ class SelectionParams:
                      "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
                      "flicker_radius_m", "viewpoint_radius_m", "frontier_split_m",
                      "region_switch_m",
-                     "gain_weight_m_per_m2", "min_gain_m2", "handover_m", "retry_reveal_m2"):
+                     "gain_weight_m_per_m2", "min_gain_m2", "leftover_gain_m2", "handover_m",
+                     "retry_reveal_m2"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {v}")
