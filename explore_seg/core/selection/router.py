@@ -71,7 +71,15 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   of the tour unless they cost at most 2 m of detour (tried, not kept) made it worse there
   (338, 407 s vs 260, 312 s with the handover alone; eb/room_2 seed 0 282 vs 284 s).
 - **Region routing helps.** ``region_switch_m`` 0 instead of 2 (with the handover):
-  eb/corner 406, 377 s vs 260, 312 s; eb/room_2 286, 287 s vs 284, 289 s.
+  eb/corner 406, 377 s vs 260, 312 s; eb/room_2 286, 287 s vs 284, 289 s. With the
+  leftovers held back (seeds 0-4 of 18 worlds,
+  ``bench/results/paired/region_switch_handover_routed_seeds0-4.md``): 0 m gives 0.992
+  (44 wins / 27 losses), faster in the Explore-Bench rooms (eb/corridor_asym 0.87,
+  eb/room_3 0.91, eb/room_2 0.92), slower in the houses and the maze (generated house
+  1.06, shared/maze 1.08) and one run stopped "done" at 95.2 %; 1 m gives 1.000 (31 / 21),
+  all complete (0.973 / ``explore_lite``, 0.907 / ``nearest``, against 0.990 and 0.936
+  with 2 m): a candidate for a 20-seed check, not yet the default. ``handover_m`` 0:
+  1.021 (7 / 31 over 9 worlds).
   ``gain_weight_m_per_m2`` 0.3 instead of 0.1: eb/corner seed 0 424 s vs 260 s. Again
   with today's code, 0.3 and 1.0 against 0.1 over seeds 0-2 of 9 worlds (the room worlds
   and those with headroom over the 95 % tour, below;
