@@ -178,7 +178,10 @@ def select_goal(frontiers: Sequence[Frontier], dist_m: npt.ArrayLike,
     excluded : ndarray of bool, shape (N,), optional
         Frontiers not to choose (blacklisted); they still count in the normalisations.
     tour_cost_m : ndarray of float64, shape (N,), optional
-        The ``routed`` strategy's tour costs (:class:`~.router.Router`).
+        The ``routed`` strategy's tour costs (:class:`~.router.Router`). ``routed`` is the
+        default strategy and raises ``ValueError`` without them: outside
+        :class:`~explore_seg.core.explorer.Explorer` (which runs the Router) pass
+        ``params`` with another strategy.
 
     Returns
     -------
