@@ -414,11 +414,12 @@ class Router:
         sel = np.isfinite(np.asarray(dist_m, dtype=np.float64))
         sel &= np.asarray([f.point_passable for f in frontiers], dtype=bool)
         gains = self._gains(n)
-        if len(self.gain_m2) == n:
+        have_gains = len(self.gain_m2) == n
+        if have_gains:
             sel &= gains >= p.min_gain_m2
         if excluded is not None:
             sel &= ~np.asarray(excluded, dtype=bool)
-        if p.leftover_gain_m2 > 0 and len(self.gain_m2) == n:
+        if have_gains:
             # Leftovers last: small views wait while a bigger one remains.
             big = sel & (gains >= p.leftover_gain_m2)
             if big.any():
@@ -426,8 +427,7 @@ class Router:
         idx = np.flatnonzero(sel)
         if idx.size == 0:
             self.tour_s = time.perf_counter() - t0
-            return TourPlan(cost_out, idx.astype(np.int64), 0.0, regions, robot_region,
-                            self._gains(n))
+            return TourPlan(cost_out, idx.astype(np.int64), 0.0, regions, robot_region, gains)
         pts = np.asarray([frontiers[i].point_rc for i in idx], dtype=np.int64)
         m = idx.size + 1
         cost = np.zeros((m, m))
@@ -460,7 +460,7 @@ class Router:
         cost_out[idx] = front[1:] - p.gain_weight_m_per_m2 * gains[idx]
         self.tour_s = time.perf_counter() - t0
         return TourPlan(cost_out, idx[order - 1].astype(np.int64), float(best_len), regions,
-                        robot_region, self._gains(n), self._pairs.swept)
+                        robot_region, gains, self._pairs.swept)
 
     def _gains(self, n: int) -> npt.NDArray[np.float64]:
         """The last viewpoints' gains when they belong to these ``n`` groups."""
