@@ -524,8 +524,14 @@ class GoalManager:
                   and self._note_vanished(self.goal.xy_m)):
                 reason = (f"goal frontier vanished {p.flicker_vanish_count} times here before "
                           "arrival (flickering): area blacklisted")
+            elif cur is None:
+                reason = reason or "goal frontier gone"
             else:
-                reason = reason or "goal frontier gone or unreachable"
+                # Still mapped, but its cost is inf: no path any more, or (routed) left out
+                # of the tour (a leftover while a bigger view remains, a gain too small).
+                reason = reason or ("goal frontier blacklisted" if excluded[cur] else
+                                    "goal frontier no longer selectable (no path, or left "
+                                    "out of the tour)")
         goal = self._new_goal(frontiers[best], best_cost, robot_xy_m, now_s)
         self._remember_cells(grid, frontiers[best])
         return StepResult(Action.NEW_GOAL, goal, reason or "new goal", sel)

@@ -156,6 +156,30 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   1.005 and house 1.004 the largest losses. 4 m^2 against 2 m^2: 1.000 (28 / 24), with
   eb/loop 1.436 (the loop's far side waited as a leftover while the robot went round);
   2 m^2 is the default (``bench/results/paired/routed_default_seeds0-4.md``).
+- **A dead-end pocket first is what loses eb/room_2, and a rate rule does not fix it**
+  (tried, not kept; the experiment code was not kept). eb/room_2 seed 0
+  (``bench/trace_decisions.py``, T95 269 s against ``explore_lite``'s 246 s): both drive
+  the loop round the rooms, in opposite directions; at 34-57 s ``routed`` toured the
+  2.5 m wide pocket in the north-west (views of 8-22 m^2, correctly estimated: coverage
+  went from 28 to 32.4 %) and came back, while ``explore_lite`` went down the middle
+  first (36 % at 50 s, 50 % at 75 s) and left the pocket for the end (its 250-275 s,
+  after 95 %). A tour over today's views visits the pocket where it is cheapest to visit,
+  which is first; the time to 95 % rewards the big openings first. Holding back views whose
+  gain per metre of detour (the gain over what the tour saves without it) is below 0.5x
+  the tour's own gain per metre, as leftovers, over seeds 0-2 of eb/room, room_1, room_2,
+  room_3, loop_with_corridor, corridor_asym, room_with_corner, corner, house and
+  shared/house (30 pairs against today's ``routed``): median per-seed T95 ratio 1.049,
+  12 wins / 17 losses (eb/room 1.18, room_2 1.12, shared/house 1.17; room_with_corner
+  0.90, corridor_asym 0.95), all complete. Single runs of these worlds swing by 10-20 %
+  with any change of an early choice (the loop's direction), so 3 seeds judge only large
+  effects.
+  The principled form of "big openings first", a tour that minimises its length plus
+  the gain-weighted mean distance at which each view is reached (the weighted latency of
+  scheduling: 2-opt and node relocations on that objective after the shortest tour;
+  weight 1), did no better on the same 30 pairs: 1.005 (14 wins / 13 losses), eb/room_3
+  0.94, room_with_corner 0.94, room 0.97, but eb/corner 1.24 (3 of 3 slower) and
+  loop_with_corridor 1.03. Both trade the houses' and corners' tour order for the rooms'
+  first minutes.
 - **Where any strategy can still gain: the 95 % tour.** The full-knowledge coverage
   tour cut where 95 % is in view (``bench/tasks.py`` ``tour_task``: ``tour95_m`` in
   ``tours.csv``; a heuristic, not a proven bound) is the path a robot that knew the map
