@@ -1,15 +1,18 @@
 """``make bench-quick``: a representative subset of the benchmark for iteration, and how
 well its ratios predicted the full run.
 
-Runs :mod:`bench.run_bench` on :data:`QUICK_WORLDS` x ``paper``, ``nearest``,
-``explore_lite`` x :data:`QUICK_RUNS` seeds (about 8 minutes of wall time on 2 cores with
-the full run's per-run times; no tours, no detector timing, BENCHMARKS.md untouched), then
-writes ``QUICK.md`` beside its results: per world the time-to-95 % ratios ``paper`` /
-``explore_lite`` and ``paper`` / ``nearest`` of the subset, of the full run in ``--full``
+Runs :mod:`bench.run_bench` on :data:`QUICK_WORLDS` x the subject strategy (``--subject``,
+by default the explorer's default strategy, ``routed``), ``nearest`` and ``explore_lite`` x
+:data:`QUICK_RUNS` seeds (about 8 minutes of wall time on 2 cores with the full run's
+per-run times; no tours, no detector timing, BENCHMARKS.md untouched), then writes
+``QUICK.md`` beside its results: per world the time-to-95 % ratios subject /
+``explore_lite`` and subject / ``nearest`` of the subset, of the full run in ``--full``
 (default ``bench/results``, all its seeds) and of the full run on the subset's seeds only
 (equal to the subset's when nothing that affects decisions changed since the full run),
 and how far the subset's ratios were from the full run's (mean absolute difference, and in
-how many worlds both say the same about ``paper`` being faster).
+how many worlds both say the same about the subject being faster). A full run without
+rows of the subject (``bench/results`` predates ``routed``) gives the subset's ratios only,
+and says so.
 
 The worlds mix the generated cluttered house, the shared houses and Explore-Bench rooms,
 corridors and loops; the maze and the large generated worlds are left out (one of their
@@ -18,7 +21,7 @@ corridors and loops; the maze and the large generated worlds are left out (one o
 Usage::
 
     .venv/bin/python bench/quick.py [--out out/bench-quick] [--full bench/results]
-        [run_bench.py options, e.g. --resume or --jobs 2]
+        [--subject paper] [run_bench.py options, e.g. --resume or --jobs 2]
 """
 
 from __future__ import annotations
@@ -33,18 +36,21 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from bench import run_bench, store  # noqa: E402
+from explore_seg.core.selection.params import SelectionParams  # noqa: E402
 
 QUICK_WORLDS = ("house_cluttered", "shared/house", "shared/house_cluttered", "eb/room_2",
                 "eb/corridor", "eb/loop", "eb/corner")
-QUICK_STRATEGIES = ("paper", "nearest", "explore_lite")
 QUICK_RUNS = 4
 BASELINES = ("explore_lite", "nearest")
+#: The strategy the subset judges unless ``--subject`` says otherwise: the default one.
+DEFAULT_SUBJECT = SelectionParams().strategy
 
 
-def t95_ratios(rows: list[dict[str, str]], seeds: set[int] | None = None
-               ) -> dict[tuple[str, str], float]:
-    """{(world, baseline): mean time to 95 % of ``paper`` / of the baseline} over the rows
-    (of ``seeds`` only when given; runs that never reached 95 % are left out of a mean)."""
+def t95_ratios(rows: list[dict[str, str]], seeds: set[int] | None = None,
+               subject: str = DEFAULT_SUBJECT) -> dict[tuple[str, str], float]:
+    """{(world, baseline): mean time to 95 % of ``subject`` / of the baseline} over the
+    rows (of ``seeds`` only when given; runs that never reached 95 % are left out of a
+    mean)."""
     acc: dict[tuple[str, str], list[float]] = {}
     for r in rows:
         if seeds is not None and int(r["seed"]) not in seeds:
@@ -56,7 +62,7 @@ def t95_ratios(rows: list[dict[str, str]], seeds: set[int] | None = None
     mean = {k: sum(v) / len(v) for k, v in acc.items()}
     out: dict[tuple[str, str], float] = {}
     for (w, s), t in mean.items():
-        if s != "paper":
+        if s != subject:
             continue
         for b in BASELINES:
             if (w, b) in mean:
@@ -64,13 +70,15 @@ def t95_ratios(rows: list[dict[str, str]], seeds: set[int] | None = None
     return out
 
 
-def comparison(quick: list[dict[str, str]], full: list[dict[str, str]]) -> list[str]:
+def comparison(quick: list[dict[str, str]], full: list[dict[str, str]],
+               subject: str = DEFAULT_SUBJECT) -> list[str]:
     """QUICK.md's lines: the ratio table and how well the subset predicted the full run."""
     seeds = {int(r["seed"]) for r in quick}
-    q, f, fs = t95_ratios(quick), t95_ratios(full), t95_ratios(full, seeds)
+    q = t95_ratios(quick, subject=subject)
+    f, fs = t95_ratios(full, subject=subject), t95_ratios(full, seeds, subject=subject)
     worlds = list(dict.fromkeys(r["world"] for r in quick))
     lines = ["# Quick benchmark against the full run", "",
-             f"Time to 95 %: ratio = mean of `paper` / mean of the baseline; quick = this "
+             f"Time to 95 %: ratio = mean of `{subject}` / mean of the baseline; quick = this "
              f"subset ({len(seeds)} seeds), full = the full run (all its seeds), full@seeds = "
              "the full run on the subset's seeds only (same as quick when nothing that "
              "affects decisions changed).", "",
@@ -93,8 +101,12 @@ def comparison(quick: list[dict[str, str]], full: list[dict[str, str]]) -> list[
         mad = sum(abs(d) for d in diffs) / len(diffs)
         lines.append(f"Prediction of the full run: mean |quick - full| = {mad:.2f} over "
                      f"{len(diffs)} world x baseline ratios (largest {max(map(abs, diffs)):.2f}); "
-                     f"both say the same about `paper` being faster (ratio < 1) in {agree} of "
-                     f"{len(diffs)}.")
+                     f"both say the same about `{subject}` being faster (ratio < 1) in {agree} "
+                     f"of {len(diffs)}.")
+    elif not any(r["strategy"] == subject for r in full):
+        lines.append(f"The full run has no `{subject}` runs: only the subset's ratios are "
+                     "shown (run the full benchmark with it to check the subset's "
+                     "predictions).")
     else:
         lines.append("No world of the subset has ratios in both runs.")
     return lines
@@ -106,15 +118,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default="out/bench-quick")
     ap.add_argument("--full", default=str(ROOT / "bench" / "results"),
                     help="output folder of the full run to compare with (its runs.csv)")
+    ap.add_argument("--subject", default=DEFAULT_SUBJECT,
+                    help="the strategy judged against the baselines (default: the "
+                         "explorer's default strategy)")
     a, rest = ap.parse_known_args(argv)
+    if a.subject in BASELINES:
+        ap.error(f"--subject must not be a baseline ({', '.join(BASELINES)})")
     out = Path(a.out)
     rc = run_bench.main(["--worlds", ",".join(QUICK_WORLDS),
-                         "--strategies", ",".join(QUICK_STRATEGIES),
+                         "--strategies", ",".join((a.subject,) + BASELINES),
                          "--runs", str(QUICK_RUNS), "--no-tour", "--yolo-frames", "0",
                          "--md", "", "--out", str(out)] + rest)
     quick = store.read_csv(out / "runs.csv")
     full = store.read_csv(Path(a.full) / "runs.csv")
-    text = "\n".join(comparison(quick, full)) + "\n"
+    text = "\n".join(comparison(quick, full, a.subject)) + "\n"
     (out / "QUICK.md").write_text(text)
     print(text)
     return rc

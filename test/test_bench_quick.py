@@ -27,16 +27,26 @@ def _full() -> list[dict[str, str]]:
 
 def test_ratios_per_seed_subset_and_runs_that_never_got_there():
     full = _full() + [_row("w", "explore_lite", 9, None)]
-    assert quick.t95_ratios(full) == {("w", "nearest"): 1.0, ("w", "explore_lite"): 2.0}
-    assert quick.t95_ratios(full, {0, 1}) == {("w", "nearest"): 0.5,
+    assert quick.t95_ratios(full, subject="paper") == {("w", "nearest"): 1.0, ("w", "explore_lite"): 2.0}
+    assert quick.t95_ratios(full, {0, 1}, subject="paper") == {("w", "nearest"): 0.5,
                                              ("w", "explore_lite"): 1.0}
 
 
 def test_comparison_states_how_far_the_subset_was_from_the_full_run():
     full = _full()
     sub = [r for r in full if int(r["seed"]) < 2]
-    text = "\n".join(quick.comparison(sub, full))
+    text = "\n".join(quick.comparison(sub, full, "paper"))
     assert "| w | nearest | 0.50 | 1.00 | 0.50 | -0.50 |" in text
     assert "| w | explore_lite | 1.00 | 2.00 | 1.00 | -1.00 |" in text
     assert "mean |quick - full| = 0.75 over 2" in text
     assert "faster (ratio < 1) in 1 of 2" in text
+
+
+def test_the_default_subject_is_the_default_strategy_and_a_full_run_without_it_says_so():
+    assert quick.DEFAULT_SUBJECT == "routed"
+    full = _full()                                      # paper and the baselines only
+    sub = [dict(r, strategy="routed") if r["strategy"] == "paper" else r
+           for r in full if int(r["seed"]) < 2]
+    text = "\n".join(quick.comparison(sub, full))
+    assert "| w | nearest | 0.50 | - | - | - |" in text
+    assert "The full run has no `routed` runs" in text
