@@ -91,6 +91,13 @@ def test_against_report_pairs_strategies_by_seed_and_checks_the_best_plus_5_perc
     assert cells["w"][1:] == ["106.0", "1.060 (1/1)", "0.500 (1/0)", "no (1.06x)", "70 / 100"]
     assert cells["v"][1:] == ["130.0", "1.300 (0/1)", "1.083 (0/1)", "no (1.30x)", "-"]
     assert cells["(all pairs)"][2:4] == ["1.220 (1/2)", "0.792 (1/1)"]
+    assert cells["(all pairs, time to 99 %)"][2:4] == ["-", "-"]    # no run has a T99
+    for r, t99 in zip(rows[:6], [100.0, 150.0, 125.0, 100.0, 200.0, None]):
+        r["time_to_99_s"] = t99                           # w: 0.8, 1.5 / lite; 0.5 / nearest
+    text = paired.against_report(rows, "cur", "routed")
+    line = next(ln for ln in text.splitlines() if ln.startswith("| (all pairs, time to 99"))
+    assert [c.strip() for c in line.strip("|").split("|")][2:4] == ["1.150 (1/1)",
+                                                                     "0.500 (1/0)"]
     rows[0]["time_to_95_s"] = 80.0                        # w: median 101 <= 1.05 * 100
     assert "| w | 101.0 | 1.010 (1/1) | 0.444 (1/0) | yes | 70 / 100 |" in \
         paired.against_report(rows, "cur", "routed")
