@@ -445,3 +445,31 @@ def test_leftovers_wait_while_a_bigger_view_remains_and_are_visited_last():
     late = Explorer(fp, SelectionParams(strategy="routed")).step(0.0, g.with_data(data), pose)
     assert late.action is Action.NEW_GOAL
     assert late.tour.order.tolist() == [0] and late.tour.gain_m2[0] < 2.0
+
+
+def test_region_switch_finishes_the_robots_region_unless_the_other_is_on_the_way():
+    # A 12 m corridor, unknown at both ends; the robot 3.5 m from the west end, whose
+    # last 2.5 m are another region. West first, then east, is the shorter tour, but it
+    # changes region twice; east first changes once. region_switch_m is added per change.
+    data = np.full((120, 300), -1, dtype=np.int8)
+    data[40:80, 30:270] = 0
+    data[38:40, 30:270] = data[80:82, 30:270] = 100
+    g = _grid(data)
+    x, y = g.cell_to_world(60, 100)
+    labels = np.zeros(data.shape, dtype=np.int32)
+    labels[38:82, 30:80], labels[38:82, 80:270] = 2, 1
+    fp = FrontierParams(robot_radius_m=0.1)
+
+    def tour(**kw):
+        out = Explorer(fp, SelectionParams(strategy="routed", **kw)).step(
+            0.0, g, (x, y, 0.0), labels=labels)
+        xs = [out.frontiers[i].point_xy_m[0] for i in out.tour.order]
+        return xs, out.tour.length_m, out.frontiers[out.selection.index].point_xy_m[0]
+
+    (w0, e0), plain, first = tour(region_switch_m=0.0)
+    assert w0 < x < e0 and first == w0                  # the shorter tour: west first
+    assert SelectionParams().region_switch_m == 1.0
+    xs, length, first = tour()                          # the default: 2 x 1 m more, still
+    assert xs == [w0, e0] and first == w0 and length == pytest.approx(plain + 2.0)
+    xs, length, first = tour(region_switch_m=8.0)       # the detour is worth less: east
+    assert xs == [e0, w0] and first == e0 and length < plain + 2 * 8.0

@@ -148,7 +148,7 @@ class SelectionParams:
         default=3.0)
     region_switch_m: float = _non_negative(
         "routed: extra tour cost of an edge between viewpoints of two different regions "
-        "(finish a region unless its rest is a longer detour)", "m", default=2.0)
+        "(finish a region unless its rest is a longer detour)", "m", default=1.0)
     min_gain_m2: float = _non_negative(
         "routed and lookout goals: a group whose viewpoint (lookout) sees less unknown "
         "area than this is not a goal (it would reveal nothing: exploration ends instead "
