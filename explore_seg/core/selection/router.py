@@ -14,7 +14,7 @@ Per decision (:class:`Router`, driven by :class:`~explore_seg.core.explorer.Expl
    selectable groups (:mod:`.tour`: greedy, 2-opt, Or-opt) on path lengths from the
    block graph the core already builds (one multi-source sweep for all pairs). DuDe
    regions are the routing structure: an edge between viewpoints of two different regions
-   (or from the robot's region into another) costs ``region_switch_m`` more, so a tour
+   (or from the robot's region into another) costs ``region_switch_m`` (1 m) more, so a tour
    finishes a region before it leaves, unless what is left there is a detour of more than
    that. The cost of each group is the length of the tour when its viewpoint is visited
    next (the tour's first: the tour's length; the current goal's group: the best tour that
@@ -78,8 +78,12 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   eb/room_3 0.91, eb/room_2 0.92), slower in the houses and the maze (generated house
   1.06, shared/maze 1.08) and one run stopped "done" at 95.2 %; 1 m gives 1.000 (31 / 21),
   all complete (0.973 / ``explore_lite``, 0.907 / ``nearest``, against 0.990 and 0.936
-  with 2 m): a candidate for a 20-seed check, not yet the default. ``handover_m`` 0:
-  1.021 (7 / 31 over 9 worlds).
+  with 2 m). Over seeds 0-14 (270 pairs, 1 m against 2 m,
+  ``bench/results/paired/region_switch_1m_routed_seeds0-14.md``): all complete, 0
+  contacts, per-seed T95 ratio median 1.000, geometric mean 0.988, 90 faster / 59 slower
+  (eb/corner 12 / 0, eb/room 10 / 1, eb/room_1 9 / 1, eb/room_2 9 / 3, shared/house 9 / 3;
+  shared/maze 4 / 10, eb/room_with_corner 5 / 8); time to 99 % 0.980 (geometric mean).
+  1 m is the default since. ``handover_m`` 0: 1.021 (7 / 31 over 9 worlds).
   ``gain_weight_m_per_m2`` 0.3 instead of 0.1: eb/corner seed 0 424 s vs 260 s. Again
   with today's code, 0.3 and 1.0 against 0.1 over seeds 0-2 of 9 worlds (the room worlds
   and those with headroom over the 95 % tour, below;
