@@ -194,7 +194,8 @@ def _key(r: dict[str, Any]) -> tuple[str, str, str, int]:
     return (r["arm"], r["world"], r["strategy"], int(r["seed"]))
 
 
-def _t95(r: dict[str, Any], key: str = "time_to_95_s") -> float:
+def _mark_s(r: dict[str, Any], key: str = "time_to_95_s") -> float:
+    """The run's time to a coverage mark (``key``), NaN when it never got there."""
     v = r.get(key)
     return float(v) if v is not None and math.isfinite(float(v)) else math.nan
 
@@ -220,12 +221,12 @@ def report(rows: list[dict[str, Any]], arms: list[str]) -> str:
                       and (w == "(all)" or r["world"] == w)]
                 if not rs:
                     continue
-                t95 = [_t95(r) for r in rs]
+                t95 = [_mark_s(r) for r in rs]
                 ratios = []
                 for r in rs:
                     b = by.get((ref, r["world"], s, int(r["seed"])))
-                    if b is not None and math.isfinite(_t95(r)) and math.isfinite(_t95(b)):
-                        ratios.append(_t95(r) / _t95(b))
+                    if b is not None and math.isfinite(_mark_s(r)) and math.isfinite(_mark_s(b)):
+                        ratios.append(_mark_s(r) / _mark_s(b))
                 fin = [t for t in t95 if math.isfinite(t)]
                 med = f"{np.median(fin):.1f}" if fin else "-"
                 if a == ref:
@@ -277,18 +278,18 @@ def against_report(rows: list[dict[str, Any]], arm: str, new: str) -> str:
         rs = [r for r in mine if r["world"] == w and r["strategy"] == new]
         if not rs:
             continue
-        fin = [_t95(r) for r in rs if math.isfinite(_t95(r))]
+        fin = [_mark_s(r) for r in rs if math.isfinite(_mark_s(r))]
         cells, best = [], math.inf
         for s in others:
             ratios = []
-            fo = [_t95(r) for r in mine if r["world"] == w and r["strategy"] == s
-                  and math.isfinite(_t95(r))]
+            fo = [_mark_s(r) for r in mine if r["world"] == w and r["strategy"] == s
+                  and math.isfinite(_mark_s(r))]
             if fo:
                 best = min(best, float(np.median(fo)))
             for r in rs:
                 b = by.get((w, s, int(r["seed"])))
-                if b is not None and math.isfinite(_t95(r)) and math.isfinite(_t95(b)):
-                    ratios.append(_t95(r) / _t95(b))
+                if b is not None and math.isfinite(_mark_s(r)) and math.isfinite(_mark_s(b)):
+                    ratios.append(_mark_s(r) / _mark_s(b))
             pooled[s] += ratios
             cells.append(f"{np.median(ratios):.3f} ({sum(x < 0.99 for x in ratios)}/"
                          f"{sum(x > 1.01 for x in ratios)})" if ratios else "-")
@@ -304,11 +305,13 @@ def against_report(rows: list[dict[str, Any]], arm: str, new: str) -> str:
     # trade the first 95 % for a shorter whole run.
     cells = []
     for s in others:
-        v = [_t95(r, "time_to_99_s") / _t95(b, "time_to_99_s")
-             for r in mine if r["strategy"] == new
-             for b in [by.get((r["world"], s, int(r["seed"])))]
-             if b is not None and math.isfinite(_t95(r, "time_to_99_s"))
-             and math.isfinite(_t95(b, "time_to_99_s"))]
+        v = []
+        for r in mine:
+            b = by.get((r["world"], s, int(r["seed"]))) if r["strategy"] == new else None
+            if b is not None:
+                t_new, t_other = _mark_s(r, "time_to_99_s"), _mark_s(b, "time_to_99_s")
+                if math.isfinite(t_new) and math.isfinite(t_other):
+                    v.append(t_new / t_other)
         cells.append(f"{np.median(v):.3f} ({sum(x < 0.99 for x in v)}/"
                      f"{sum(x > 1.01 for x in v)})" if v else "-")
     lines.append("| (all pairs, time to 99 %) | | " + " | ".join(cells) + " | | |")

@@ -27,9 +27,10 @@ def _full() -> list[dict[str, str]]:
 
 def test_ratios_per_seed_subset_and_runs_that_never_got_there():
     full = _full() + [_row("w", "explore_lite", 9, None)]
-    assert quick.t95_ratios(full, subject="paper") == {("w", "nearest"): 1.0, ("w", "explore_lite"): 2.0}
+    assert quick.t95_ratios(full, subject="paper") == {("w", "nearest"): 1.0,
+                                                      ("w", "explore_lite"): 2.0}
     assert quick.t95_ratios(full, {0, 1}, subject="paper") == {("w", "nearest"): 0.5,
-                                             ("w", "explore_lite"): 1.0}
+                                                              ("w", "explore_lite"): 1.0}
 
 
 def test_comparison_states_how_far_the_subset_was_from_the_full_run():

@@ -84,7 +84,8 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   (eb/corner 12 / 0, eb/room 10 / 1, eb/room_1 9 / 1, eb/room_2 9 / 3, shared/house 9 / 3;
   shared/maze 4 / 10, eb/room_with_corner 5 / 8); time to 99 % 0.980 (geometric mean);
   the generated maze, seeds 0-2: 1.16, 1.04, 0.83 (``maze_routed_seeds0-2.md``): the
-  region term pays in mazes, less in small rooms. 1 m is the default since. ``handover_m`` 0: 1.021 (7 / 31 over 9 worlds).
+  larger region term pays in mazes, the smaller one in small rooms. 1 m is the default
+  since. ``handover_m`` 0: 1.021 (7 / 31 over 9 worlds).
   ``gain_weight_m_per_m2`` 0.3 instead of 0.1: eb/corner seed 0 424 s vs 260 s. Again
   with today's code, 0.3 and 1.0 against 0.1 over seeds 0-2 of 9 worlds (the room worlds
   and those with headroom over the 95 % tour, below;
