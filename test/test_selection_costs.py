@@ -13,6 +13,9 @@ from explore_seg.core.selection import (COST_FUNCTIONS, STRATEGIES, SelectionPar
                                         select_goal)
 from selection_cases import B, make_frontier, two_frontiers
 
+#: The paper's cases (``routed``, the default, needs the Router's tour costs).
+PAPER = SelectionParams(strategy="paper")
+
 
 @pytest.mark.parametrize("strategy,expected", [
     ("paper", [0.25 + B / 0.25, 0.75 + B / 0.75 + 1.0]),
@@ -28,7 +31,7 @@ def test_cost_formulas(strategy, expected):
 def test_unreachable_frontier_costs_inf_and_leaves_the_normalisation():
     g, fr, labels = two_frontiers()
     f2 = make_frontier(2, [(20, 40), (20, 41)], (21, 40), g)
-    costs = compute_costs(fr + [f2], [1.0, 3.0, np.inf], labels, 1, SelectionParams(strategy="paper"))
+    costs = compute_costs(fr + [f2], [1.0, 3.0, np.inf], labels, 1, PAPER)
     assert np.isinf(costs[2])
     # sizeGain counts every candidate (42 cells), distGain only the reachable ones
     assert costs[:2].tolist() == pytest.approx([0.25 + B * 42 / 10, 0.75 + B * 42 / 30 + 1])
@@ -37,20 +40,20 @@ def test_unreachable_frontier_costs_inf_and_leaves_the_normalisation():
 def test_non_passable_cpoint_costs_inf():
     g, fr, labels = two_frontiers()
     blocked = make_frontier(1, fr[1].cells, fr[1].point_rc, g, passable=False)
-    costs = compute_costs([fr[0], blocked], [1.0, 3.0], None, 0, SelectionParams(strategy="paper"))
+    costs = compute_costs([fr[0], blocked], [1.0, 3.0], None, 0, PAPER)
     assert np.isfinite(costs[0]) and np.isinf(costs[1])
 
 
 def test_frontier_without_region_counts_as_same_region():
     _, fr, labels = two_frontiers()
     labels[40:] = 0
-    costs = compute_costs(fr, [1.0, 3.0], labels, 1, SelectionParams(strategy="paper"))
+    costs = compute_costs(fr, [1.0, 3.0], labels, 1, PAPER)
     assert costs[1] == pytest.approx(0.75 + B / 0.75)
 
 
 def test_all_unreachable_selects_nothing():
     _, fr, labels = two_frontiers()
-    sel = select_goal(fr, [np.inf, np.inf], labels, (1, 1), SelectionParams(strategy="paper"))
+    sel = select_goal(fr, [np.inf, np.inf], labels, (1, 1), PAPER)
     assert sel.index is None and np.isinf(sel.costs).all()
 
 
@@ -67,14 +70,13 @@ def test_excluded_frontier_is_not_chosen():
 def test_bad_distances_raise(dist, match):
     _, fr, labels = two_frontiers()
     with pytest.raises(ValueError, match=match):
-        compute_costs(fr, dist, labels, 1, SelectionParams(strategy="paper"))
+        compute_costs(fr, dist, labels, 1, PAPER)
 
 
 def test_excluded_length_mismatch_raises():
     _, fr, _ = two_frontiers()
     with pytest.raises(ValueError, match="excluded has 1 entries"):
-        select_goal(fr, [1.0, 2.0], None, (0, 0), SelectionParams(strategy="paper"),
-                    excluded=np.array([True]))
+        select_goal(fr, [1.0, 2.0], None, (0, 0), PAPER, excluded=np.array([True]))
 
 
 def test_region_at_uses_nearest_labelled_cell():

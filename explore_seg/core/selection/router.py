@@ -443,8 +443,9 @@ class Router:
         robot_region = region_at(use, robot_rc, rad) if use is not None else 0
         sel = np.isfinite(np.asarray(dist_m, dtype=np.float64))
         sel &= np.asarray([f.point_passable for f in frontiers], dtype=bool)
-        gains = self._gains(n)
+        # The last viewpoints' gains, when they belong to these groups.
         have_gains = len(self.gain_m2) == n
+        gains = self.gain_m2.copy() if have_gains else np.zeros(n)
         if have_gains:
             sel &= gains >= p.min_gain_m2
         if excluded is not None:
@@ -491,10 +492,6 @@ class Router:
         self.tour_s = time.perf_counter() - t0
         return TourPlan(cost_out, idx[order - 1].astype(np.int64), float(best_len), regions,
                         robot_region, gains, self._pairs.swept)
-
-    def _gains(self, n: int) -> npt.NDArray[np.float64]:
-        """The last viewpoints' gains when they belong to these ``n`` groups."""
-        return self.gain_m2.copy() if len(self.gain_m2) == n else np.zeros(n)
 
 
 __all__ = ["Router", "TourPlan"]
