@@ -39,7 +39,8 @@ def make_pool(executor: str, jobs: int, address: str = "") -> Any:
     Raises
     ------
     ValueError
-        On an unknown executor, or ``ray`` when Ray is not installed.
+        On an unknown executor, or ``ray`` when Ray is not installed or no cluster
+        answers at ``address``.
     """
     if executor == "process":
         return bench_tasks.worker_pool(jobs)
@@ -91,7 +92,14 @@ class RayPool:
             kw: dict[str, Any] = {"runtime_env": {"env_vars": env},
                                   "include_dashboard": False, "log_to_driver": True}
             if address:
-                ray.init(address=address, **kw)
+                try:
+                    ray.init(address=address, **kw)
+                except ConnectionError as err:
+                    raise ValueError(
+                        f"--address {address}: no Ray cluster answered ({err}). Is `ray start "
+                        "--head` running there, and does this machine hold the cluster's "
+                        "token (~/.ray/auth_token from the head node, or RAY_AUTH_TOKEN)? "
+                        "See README, 'Running the benchmark on a Ray cluster'") from None
             else:
                 ray.init(num_cpus=jobs, **kw)
         self._remote = ray.remote(num_cpus=1, max_retries=RAY_MAX_RETRIES,

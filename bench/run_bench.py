@@ -276,7 +276,12 @@ def main(argv: list[str] | None = None) -> int:
                       f"--worlds/--strategies: {', '.join(stray)}", file=sys.stderr)
                 return 2
         else:
-            with make_pool(a.executor, a.jobs, a.address) as pool:
+            try:
+                pool_cm = make_pool(a.executor, a.jobs, a.address)
+            except ValueError as err:
+                print(f"[bench] {err}", file=sys.stderr)
+                return 2
+            with pool_cm as pool:
                 try:
                     _run_all(a, out, specs, strategies, areas, pool, tours, results, counter,
                              failed)

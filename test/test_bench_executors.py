@@ -1,0 +1,63 @@
+"""What ``run_bench.py --executor ray`` tells a user whose Ray is missing or unreachable.
+
+Runs without Ray: the module ``ray`` is replaced (absent, or a stand-in whose
+``init`` cannot reach a cluster), as on a machine without the extra or with a cluster
+that is down or asks for a token this machine lacks.
+"""
+
+from __future__ import annotations
+
+import importlib.machinery
+import importlib.util
+import sys
+import types
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from bench import executors, run_bench  # noqa: E402
+
+ARGS = ["--worlds", "small_house", "--strategies", "nearest", "--runs", "1", "--jobs", "1",
+        "--max-sim-time", "5", "--no-tour", "--yolo-frames", "0", "--md", ""]
+
+
+def test_ray_executor_without_ray_says_how_to_install_it(tmp_path, monkeypatch, capsys):
+    find_spec = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "ray" else find_spec(name, *a))
+    with pytest.raises(SystemExit) as ex:
+        run_bench.main(ARGS + ["--out", str(tmp_path), "--executor", "ray"])
+    assert ex.value.code == 2
+    assert "requirements-ray.txt" in capsys.readouterr().err
+    assert not (tmp_path / "runs.csv").exists()
+    monkeypatch.setitem(sys.modules, "ray", None)      # import ray -> ImportError
+    with pytest.raises(ValueError, match="requirements-ray.txt"):
+        executors.make_pool("ray", 1)
+
+
+def _unreachable_ray() -> types.ModuleType:
+    ray = types.ModuleType("ray")
+    ray.__spec__ = importlib.machinery.ModuleSpec("ray", None)
+    ray.is_initialized = lambda: False
+
+    def init(address=None, **kw):
+        raise ConnectionError(f"Failed to connect to Ray cluster at {address}")
+    ray.init = init
+    return ray
+
+
+def test_unreachable_cluster_names_the_address_and_the_token(tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "ray", _unreachable_ray())
+    with pytest.raises(ValueError, match=r"10\.0\.0\.9:6379.*auth_token"):
+        executors.make_pool("ray", 2, "10.0.0.9:6379")
+    assert run_bench.main(ARGS + ["--out", str(tmp_path), "--executor", "ray",
+                                  "--address", "10.0.0.9:6379"]) == 2
+    assert "RAY_AUTH_TOKEN" in capsys.readouterr().err
+
+
+def test_unknown_executor_is_refused():
+    with pytest.raises(ValueError, match="executor must be one of"):
+        executors.make_pool("dask", 1)
