@@ -20,7 +20,10 @@ reference of the ratios; a single arm runs and reports its absolute figures (com
 contacts, median T95) only, e.g. more seeds of today's defaults. Runs are appended to
 ``OUT/runs.jsonl`` as they finish; a second call with the same ``--out`` runs only what is
 missing (same arm names must mean the same overrides: they are stored in
-``OUT/arms.json`` and checked).
+``OUT/arms.json`` and checked). A run that raises is reported and left out (exit status
+1; the same command runs it again); the others go on. ``kill -USR1 PID`` finishes the
+runs in flight and starts no new one, SIGTERM or Ctrl-C stops at once; either way the
+report covers what ran (exit status 128 + the signal) and the same command continues.
 
 Usage::
 
@@ -41,6 +44,7 @@ import fcntl
 import json
 import math
 import shlex
+import signal
 import sys
 import time
 from pathlib import Path
@@ -55,6 +59,8 @@ import numpy as np  # noqa: E402
 
 from bench.progress import Progress  # noqa: E402
 from bench.store import code_version  # noqa: E402
+from bench.tasks import catch_stop_signals, restore_signals, run_drainable, \
+    stop_signals_deferred  # noqa: E402
 from bench.worlds import PAPER_CAMERA_MOUNT, load, sim_params_for, sim_time_limit  # noqa: E402
 from sim_bridge.engine import SimParams  # noqa: E402
 from sim_bridge.lockstep import STRATEGIES, ExplorerParams, LockstepParams, \
@@ -390,18 +396,11 @@ def main(argv: list[str] | None = None) -> int:
     if a.no_runs:
         tasks = []
     print(f"[paired] {len(tasks)} runs to do, {len(rows)} kept in {runs_file}", flush=True)
+    interrupted = 0               # the signal that stopped the runs, 0 = none
+    failed: list[str] = []        # "arm/world/strategy/seed: error"
     if tasks:
-        import multiprocessing as mp
         _CODE[0] = code_version()
-        bar = Progress(len(tasks), "paired")
-        with mp.get_context("fork").Pool(max(1, a.jobs), maxtasksperchild=10) as pool, \
-                runs_file.open("a") as fh:
-            for r in pool.imap_unordered(_run, tasks):
-                fh.write(json.dumps(r) + "\n")
-                fh.flush()
-                rows.append(r)
-                bar.update(f"{r['arm']} {r['world']} {r['strategy']} {r['seed']}: "
-                           f"{r['stop_reason']} {r['coverage_pct']:.1f} %")
+        interrupted = _run_tasks(tasks, a.jobs, runs_file, rows, failed)
     wanted = {x.name for x in arms}
     sel = [r for r in rows if r["arm"] in wanted and r["world"] in worlds
            and r["strategy"] in strategies and int(r["seed"]) in seeds]
@@ -425,6 +424,42 @@ def main(argv: list[str] | None = None) -> int:
             f"{head}Runs made with code {made}; {len(sel)} runs, {cpu / 3600:.1f} CPU hours; "
             f"reported {time.strftime('%Y-%m-%d')}. Command:\n\n```sh\n.venv/bin/python "
             f"bench/paired.py {cmd}\n```\n\n" + text)
+    if failed:
+        print(f"[paired] {len(failed)} runs failed (not in runs.jsonl; the same command "
+              "runs them again): " + "; ".join(failed), file=sys.stderr)
+    return 128 + interrupted if interrupted else (1 if failed else 0)
+
+
+def _run_tasks(tasks: list[tuple[str, str, str, int, float]], jobs: int, runs_file: Path,
+               rows: list[dict[str, Any]], failed: list[str]) -> int:
+    """Run ``tasks`` on a pool of ``jobs`` processes, appending each row to
+    ``runs_file`` and ``rows`` as it finishes (a failing run is reported and added to
+    ``failed``, the others go on). SIGUSR1 finishes the runs in flight and starts no new
+    one, SIGTERM / Ctrl-C stop at once (the rows written stay; the same command runs the
+    rest). Returns the signal that stopped the runs, 0 when all ran."""
+    import multiprocessing as mp
+    bar = Progress(len(tasks), "paired")
+    old = catch_stop_signals()
+    try:
+        with mp.get_context("fork").Pool(max(1, jobs), maxtasksperchild=10) as pool, \
+                runs_file.open("a") as fh:
+            try:
+                for r in run_drainable(pool, jobs, tasks, failed, fn=_run, parts=4):
+                    with stop_signals_deferred():     # a row is written whole or not at all
+                        fh.write(json.dumps(r) + "\n")
+                        fh.flush()
+                        rows.append(r)
+                    bar.update(f"{r['arm']} {r['world']} {r['strategy']} {r['seed']}: "
+                               f"{r['stop_reason']} {r['coverage_pct']:.1f} %")
+            except KeyboardInterrupt as err:
+                pool.terminate()
+                sig = int(err.args[0]) if err.args else int(signal.SIGINT)
+                how = "stopped" if sig == signal.SIGUSR1 else "interrupted"
+                print(f"\n[paired] {how} after {bar.done} of {len(tasks)} runs: reporting "
+                      "what ran (the same command runs the rest)", file=sys.stderr)
+                return sig
+    finally:
+        restore_signals(old)
     return 0
 
 

@@ -16,7 +16,7 @@ import queue
 import signal
 import sys
 import time
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -160,12 +160,15 @@ def restore_signals(old: tuple[Any, Any]) -> None:
     signal.signal(signal.SIGUSR1, old[1])
 
 
-def run_drainable(pool: Any, jobs: int, tasks: list[tuple], failed: list[str]) -> Any:
-    """Yield the results of ``tasks`` as they finish, at most ``jobs`` in flight.
+def run_drainable(pool: Any, jobs: int, tasks: list[tuple], failed: list[str],
+                  fn: Callable[[tuple], Any] | None = None, parts: int = 3) -> Any:
+    """Yield the results of ``fn(task)`` (:func:`run_task` when None) for ``tasks`` as
+    they finish, at most ``jobs`` in flight.
 
     A run that raises is reported on stderr (with its traceback) and added to ``failed``
-    as ``"world/strategy/seed: error"``; the others go on (it is not in the output files,
-    so ``--resume`` runs it again).
+    as its first ``parts`` task fields joined by "/" (``"world/strategy/seed"``) and the
+    error; the others go on (it is not in the output files, so ``--resume`` runs it
+    again).
 
     SIGUSR1 makes it start no further task and end once the ones in flight have finished
     (raising ``KeyboardInterrupt(SIGUSR1)`` then, so the caller reports like after an
@@ -182,7 +185,8 @@ def run_drainable(pool: Any, jobs: int, tasks: list[tuple], failed: list[str]) -
         n = 0
         while todo and in_flight + n < max(1, jobs) and not _DRAIN[0]:
             task = todo.pop(0)
-            pool.apply_async(run_task, (task,), callback=lambda r: done.put((r, None, None)),
+            pool.apply_async(fn or run_task, (task,),
+                             callback=lambda r: done.put((r, None, None)),
                              error_callback=lambda e, t=task: done.put((None, e, t)))
             n += 1
         return n
@@ -202,7 +206,7 @@ def run_drainable(pool: Any, jobs: int, tasks: list[tuple], failed: list[str]) -
         if err is None:
             yield result
             continue
-        name = f"{task[0]}/{task[1]}/{task[2]}"
+        name = "/".join(str(x) for x in task[:parts])
         cause = getattr(err, "__cause__", None)     # the worker's traceback, as text
         print(f"\n[bench] run {name} failed: {type(err).__name__}: {err}"
               + (f"\n{cause}" if cause is not None else ""), file=sys.stderr)

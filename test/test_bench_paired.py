@@ -170,3 +170,58 @@ def test_benchmark_report_includes_the_kept_paired_reports_in_name_order(tmp_pat
     assert text.startswith("## Paired comparisons")
     assert text.index("### segmenter") < text.index("### soft margin")
     assert "not a report" not in text
+
+
+_SHORT = ["--worlds", "small_house", "--strategies", "nearest", "--max-sim-time", "15",
+          "--jobs", "1", "--arm", "cur"]
+
+
+def _seeds(out: Path) -> list[int]:
+    return sorted(int(json.loads(x)["seed"]) for x in (out / "runs.jsonl").read_text().splitlines())
+
+
+def test_a_failing_run_is_reported_and_the_others_go_on(tmp_path, monkeypatch, capsys):
+    real = paired.run_exploration
+
+    def flaky(world, strategy, seed, **kw):
+        if seed == 1:
+            raise ValueError("boom")
+        return real(world, strategy, seed, **kw)
+
+    monkeypatch.setattr(paired, "run_exploration", flaky)   # the fork inherits it
+    out = tmp_path / "fail"
+    args = ["--out", str(out), *_SHORT, "--seeds", "0-2"]
+    assert paired.main(args) == 1
+    assert _seeds(out) == [0, 2]
+    assert "cur/small_house/nearest/1: ValueError: boom" in capsys.readouterr().err
+    monkeypatch.setattr(paired, "run_exploration", real)
+    assert paired.main(args) == 0                            # runs only the missing one
+    assert _seeds(out) == [0, 1, 2]
+
+
+def test_sigusr1_finishes_the_run_in_flight_and_starts_no_new_one(tmp_path):
+    import signal
+    import subprocess
+    import time
+
+    out = tmp_path / "drain"
+    cmd = [sys.executable, str(ROOT / "bench" / "paired.py"), "--out", str(out), *_SHORT,
+           "--seeds", "0-4"]
+    proc = subprocess.Popen(cmd, cwd=ROOT, env=dict(os.environ, OMP_NUM_THREADS="1"),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    jl = out / "runs.jsonl"
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 120 and not (jl.is_file() and jl.read_text().count("\n")):
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGUSR1)
+    report, err = proc.communicate(timeout=120)
+    if proc.returncode == 0:
+        pytest.skip("the comparison finished before the signal")
+    assert proc.returncode == 128 + signal.SIGUSR1, err
+    assert "finishing the 1 run(s) in flight" in err and "stopped after 2 of 5 runs" in err
+    # seed 0 was written after seed 1 had been started: seed 1 finished, none after it
+    assert _seeds(out) == [0, 1], err
+    row = next(x for x in report.splitlines() if x.startswith("| small_house | nearest | cur |"))
+    assert row.split("|")[4].strip().endswith("/2")        # the report covers the 2 runs
+    assert paired.main(["--out", str(out), *_SHORT, "--seeds", "0-4"]) == 0
+    assert _seeds(out) == [0, 1, 2, 3, 4]
