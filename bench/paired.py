@@ -39,6 +39,7 @@ the same over all worlds; ``--md FILE`` also writes that report.
 from __future__ import annotations
 
 import argparse
+import csv
 import dataclasses
 import fcntl
 import json
@@ -257,14 +258,17 @@ def _core_p95(rs: list[dict[str, Any]]) -> str:
     return f"{np.median(v):.0f} / {max(v):.0f}" if v else "-"
 
 
-def against_report(rows: list[dict[str, Any]], arm: str, new: str) -> str:
+def against_report(rows: list[dict[str, Any]], arm: str, new: str,
+                   tours: dict[str, float] | None = None) -> str:
     """Markdown: strategy ``new`` against every other strategy of the same arm, paired
     per seed: per world its median T95 and, per other strategy, the median per-seed T95
     ratio ``new`` / other with wins (< 0.99) / losses (> 1.01); whether ``new``'s median
     T95 is within 5 % of the best other strategy's median (issue #20's per-world rule);
     then the median over all pairs per other strategy, and the same for the time to 99 %.
     A seed whose run of either never reached the mark counts in no ratio (its completion
-    shows in the first table)."""
+    shows in the first table). With ``tours`` (world -> full-knowledge coverage tour, m)
+    a last row gives each strategy's median over its runs of the path to 99 % divided by
+    its world's tour (issue #20's path rule), over the runs that reached 99 %."""
     mine = [r for r in rows if r["arm"] == arm]
     by = {(r["world"], r["strategy"], int(r["seed"])): r for r in mine}
     others = [s for s in dict.fromkeys(r["strategy"] for r in mine) if s != new]
@@ -321,7 +325,26 @@ def against_report(rows: list[dict[str, Any]], arm: str, new: str) -> str:
         cells.append(f"{np.median(v):.3f} ({sum(x < 0.99 for x in v)}/"
                      f"{sum(x > 1.01 for x in v)})" if v else "-")
     lines.append("| (all pairs, time to 99 %) | | " + " | ".join(cells) + " | | |")
+    if tours:
+        def path_over_tour(strategy: str) -> str:
+            v = [float(r["path_to_99_m"]) / tours[r["world"]] for r in mine
+                 if r["strategy"] == strategy and r["world"] in tours
+                 and math.isfinite(_mark_s(r, "path_to_99_m"))]
+            return f"{np.median(v):.3f} (n={len(v)})" if v else "-"
+        lines.append("| (path to 99 % / coverage tour, median) | " + path_over_tour(new)
+                     + " | " + " | ".join(path_over_tour(s) for s in others) + " | | |")
     return "\n".join(lines) + "\n"
+
+
+def load_tours(path: Path) -> dict[str, float]:
+    """World -> full-knowledge coverage tour (m) from a benchmark's ``tours.csv``
+    (empty when the file is absent)."""
+    if not path.is_file():
+        return {}
+    with path.open(newline="") as fh:
+        return {r["world"]: float(r["tour_m"]) for r in csv.DictReader(fh)
+                if r.get("tour_m") and math.isfinite(float(r["tour_m"]))
+                and float(r["tour_m"]) > 0}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -344,7 +367,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--title", default="", help="heading of the --md report")
     ap.add_argument("--against", default="", metavar="STRATEGY",
                     help="also compare this strategy with the others of each arm, paired "
-                         "per seed (e.g. routed against explore_lite and nearest)")
+                         "per seed (e.g. routed against explore_lite and nearest), and give "
+                         "each one's path to 99 %% over the coverage tour of "
+                         "bench/results/tours.csv")
     ap.add_argument("--no-runs", action="store_true",
                     help="run nothing: report the runs kept in --out that the other options "
                          "select (e.g. worlds compared on different seed ranges)")
@@ -405,9 +430,10 @@ def main(argv: list[str] | None = None) -> int:
     sel = [r for r in rows if r["arm"] in wanted and r["world"] in worlds
            and r["strategy"] in strategies and int(r["seed"]) in seeds]
     text = report(sel, [x.name for x in arms])
+    tours = load_tours(ROOT / "bench" / "results" / "tours.csv") if a.against else {}
     if a.against:
         for x in arms:
-            text += "\n" + against_report(sel, x.name, a.against)
+            text += "\n" + against_report(sel, x.name, a.against, tours)
     print(text)
     if a.md:
         head = f"### {a.title}\n\n" if a.title else ""

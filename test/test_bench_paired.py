@@ -101,6 +101,19 @@ def test_against_report_pairs_strategies_by_seed_and_checks_the_best_plus_5_perc
     rows[0]["time_to_95_s"] = 80.0                        # w: median 101 <= 1.05 * 100
     assert "| w | 101.0 | 1.010 (1/1) | 0.444 (1/0) | yes | 70 / 100 |" in \
         paired.against_report(rows, "cur", "routed")
+    assert "coverage tour" not in paired.against_report(rows, "cur", "routed")
+    for r, path in zip(rows[:6], [55.0, 60.0, 66.0, 50.0, 80.0, None]):
+        r["path_to_99_m"] = path                          # w's tour 50 m; v has none
+    line = next(ln for ln in paired.against_report(rows, "cur", "routed", {"w": 50.0})
+                .splitlines() if ln.startswith("| (path to 99 % / coverage tour"))
+    assert [c.strip() for c in line.strip("|").split("|")][1:4] == [
+        "1.150 (n=2)", "1.160 (n=2)", "1.600 (n=1)"]
+
+
+def test_load_tours_reads_the_benchmarks_tours(tmp_path):
+    (tmp_path / "tours.csv").write_text("world,tour_m,viewpoints\na,53.0,8\nb,nan,0\n")
+    assert paired.load_tours(tmp_path / "tours.csv") == {"a": 53.0}
+    assert paired.load_tours(tmp_path / "missing.csv") == {}
 
 
 def test_a_second_comparison_on_the_same_folder_is_refused_while_one_runs(tmp_path):
