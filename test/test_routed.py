@@ -447,6 +447,31 @@ def test_leftovers_wait_while_a_bigger_view_remains_and_are_visited_last():
     assert late.tour.order.tolist() == [0] and late.tour.gain_m2[0] < 2.0
 
 
+def test_a_ragged_map_edge_is_not_a_leftover():
+    # A hall whose east end is where the lidar's max-range beams ended: a ragged frontier
+    # of 100 cells at the map's edge that sees almost nothing (the map, and so the view,
+    # ends there), and a 2 x 2 m niche 7 m behind the robot. As a leftover the edge waits
+    # and the robot turns round for the niche; a frontier of 3 m or more is never one.
+    data = np.full((140, 260), 100, dtype=np.int8)
+    data[40:80, 10:259] = 0
+    data[40:80, 259] = -1
+    data[40:80:2, 255:259] = -1                   # the ragged end of the beams
+    data[80:118, 20:60] = -1                      # the niche, open to the hall
+    g = _grid(data)
+    x, y = g.cell_to_world(60, 200)
+    fp = FrontierParams(robot_radius_m=0.1, min_group_size_cells=1)
+    old = Explorer(fp, SelectionParams(strategy="routed", leftover_max_length_m=0.0)).step(
+        0.0, g, (x, y, 0.0))
+    edge = next(i for i, f in enumerate(old.frontiers) if f.point_rc[1] > 200)
+    niche = 1 - edge
+    assert old.frontiers[edge].size_cells * g.resolution_m >= 3.0
+    assert old.tour.gain_m2[edge] < 2.0 <= old.tour.gain_m2[niche]
+    assert old.tour.order.tolist() == [niche]     # the edge waits: the robot turns round
+    new = Explorer(fp, SelectionParams(strategy="routed")).step(0.0, g, (x, y, 0.0))
+    assert SelectionParams().leftover_max_length_m == 3.0
+    assert new.tour.order.tolist() == [edge, niche] and new.selection.index == edge
+
+
 def test_region_switch_finishes_the_robots_region_unless_the_other_is_on_the_way():
     # A 12 m corridor, unknown at both ends; the robot 3.5 m from the west end, whose
     # last 2.5 m are another region. West first, then east, is the shorter tour, but it

@@ -159,6 +159,11 @@ class SelectionParams:
         "of the tour while a viewpoint that sees more remains (small corners that often "
         "vanish as the robot passes do not bend the tour; they are visited last); "
         "0 = off", "m^2", default=2.0)
+    leftover_max_length_m: float = _non_negative(
+        "routed: a group with at least this much frontier (cells x cell size) is never a "
+        "leftover, whatever its viewpoint sees (the ragged end of max-range beams at the "
+        "map's edge, whose view the edge cuts short); 0 = any group can be one", "m",
+        default=3.0)
     gain_weight_m_per_m2: float = _non_negative(
         "routed: a group's cost is its tour length minus this times the unknown area its "
         "viewpoint sees (big views first when the detour is small)", "m/m^2", default=0.1)
@@ -184,7 +189,8 @@ class SelectionParams:
                      "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
                      "flicker_radius_m", "viewpoint_radius_m", "frontier_split_m",
                      "region_switch_m",
-                     "gain_weight_m_per_m2", "min_gain_m2", "leftover_gain_m2", "handover_m",
+                     "gain_weight_m_per_m2", "min_gain_m2", "leftover_gain_m2",
+                     "leftover_max_length_m", "handover_m",
                      "retry_reveal_m2"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):

@@ -26,7 +26,9 @@ Per decision (:class:`Router`, driven by :class:`~explore_seg.core.explorer.Expl
    than chasing frontier specks that reveal nothing). A viewpoint that sees less than
    ``leftover_gain_m2`` (2 m^2) is a leftover: it is left out of the tour while any
    viewpoint that sees more remains, and toured once only leftovers are left (small
-   corners often vanish as the robot passes them; they no longer bend the tour).
+   corners often vanish as the robot passes them; they no longer bend the tour); a group
+   of ``leftover_max_length_m`` (3 m) of frontier cells or more is never one (the ragged
+   end of max-range beams at the map's edge, whose view the edge cuts short).
 
 Measured (lock step, seeds 0-2 of shared/house, shared/house_cluttered_plus, eb/corridor,
 eb/loop, eb/room_2; paired with the baselines' rows of bench/results/runs.csv, median of
@@ -162,6 +164,39 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   1.005 and house 1.004 the largest losses. 4 m^2 against 2 m^2: 1.000 (28 / 24), with
   eb/loop 1.436 (the loop's far side waited as a leftover while the robot went round);
   2 m^2 is the default (``bench/results/paired/routed_default_seeds0-4.md``).
+- **...but the ragged edge of the map is not a small view** (``leftover_max_length_m``).
+  :func:`~.viewpoints.view_gain` counts outside the map as blocking, and the map grows
+  only as far as scans reached (in whole chunks), so a frontier at its edge, where
+  max-range beams ended in the open, sees little however much lies beyond. eb/loop seed 1
+  at 81 s: the loop's continuation ahead, a ragged group of 155 frontier cells (0.75 x
+  2.85 m, one cell from the map's border) 5 m away, saw 1.81 m^2, waited as a leftover,
+  and the robot turned round for a view 15 m back; eb/room_3 seed 10 at 99 s the same
+  (a 136-cell group at the edge saw 1.62 m^2; the robot drove 30 m back; T95 639 s,
+  ``explore_lite`` 417 s). A group of 3 m of frontier cells or more (cells x cell size;
+  the split parts of a clean frontier stay under it, a ragged edge does not) is never a
+  leftover now. Seeds 0-14 of the 18 lock-step worlds paired with the ``routed`` rows of
+  ``bench/results/paired/routed_default_seeds0-19.md`` (``paired.py --out out/s25_ll3 /
+  out/s25_ll3b --strategies routed --arm ll3:explorer.selection.leftover_max_length_m=3.0``,
+  270 pairs): 270/270 complete, 0 contacts; 257 runs identical (no such group came up),
+  10 faster, 1 slower, 2 within 1 %: eb/loop seeds 1, 2, 8, 13 270-272 -> 187-188 s
+  (seed 6 189 -> 187 s), eb/room_3 seeds 2, 7, 8, 10, 11 582 -> 500, 497 -> 460, 631 ->
+  504, 639 -> 419, 657 -> 499 s; shared/maze seed 5 532 -> 563 s (+5.8 %). 5 m gave the
+  same 90 runs on seeds 0-4. Seeds 15-19 (``out/s25_ll3c``): 85 of 90 identical, eb/loop
+  seed 18 268 -> 187 s, eb/room_3 seeds 17, 18 541 -> 478, 428 -> 418 s, house_cluttered
+  seed 17 494 -> 505 s (+2.2 %), eb/room_3 seed 15 the same T95. Over the 20 seeds
+  (``bench/results/paired/leftover_max_length_routed_seeds0-19.md``) 342 of 360 runs
+  identical, 13 faster and 2 slower by more than 1 %, 3 within 1 %; against the baselines eb/room_3 went from 1.11x to
+  within 5 % of the best one's median. The generated maze seeds 0-1 and the office floor
+  seed 1: identical but maze seed 1 (3218 -> 3224 s); office seed 0 2961 s
+  (``leftover_max_length_maze_office.md``). 3 m is the default.
+  Tried, not kept: (a) counting outside the map as unknown in the ray cast (the padding
+  and :class:`~.viewpoints.GainCache`'s grown-map fill): eb/room_3 seed 10 534 s, but
+  seeds 0-4 of the 18 worlds (``out/s25_edge``, 90 pairs) 1.018 median per-seed T95 ratio,
+  28 faster / 46 slower, geometric mean 1.011 (T99 0.992; eb/room 1.049, room_1 1.069,
+  room_2 1.053, shared/house 1.126): every edge view then outbids the nearby views the
+  tour finishes first; (b) exempting every group within 0.25 m of the map's border
+  (``out/s25_le``, stopped after 18 runs: 5 changed, eb/room seed 0 212 -> 244 s,
+  room_1 216 -> 236 s, eb/room_with_corner 413 -> 404 s).
 - **A dead-end pocket first is what loses eb/room_2, and a rate rule does not fix it**
   (tried, not kept; the experiment code was not kept). eb/room_2 seed 0
   (``bench/trace_decisions.py``, T95 269 s against ``explore_lite``'s 246 s): both drive
@@ -452,7 +487,11 @@ class Router:
             sel &= ~np.asarray(excluded, dtype=bool)
         if have_gains:
             # Leftovers last: small views wait while a bigger one remains.
-            big = sel & (gains >= p.leftover_gain_m2)
+            big = gains >= p.leftover_gain_m2
+            if p.leftover_max_length_m > 0:
+                length = np.asarray([f.size_cells for f in frontiers]) * grid.resolution_m
+                big |= length >= p.leftover_max_length_m
+            big &= sel
             if big.any():
                 sel = big
         idx = np.flatnonzero(sel)
