@@ -13,6 +13,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench import run_bench, tasks  # noqa: E402
+from bench_support import failing_on_seed  # noqa: E402
 
 ARGS = ["--worlds", "small_house", "--strategies", "nearest", "--jobs", "1",
         "--max-sim-time", "20", "--no-tour", "--yolo-frames", "0"]
@@ -147,13 +148,7 @@ def test_sigusr1_finishes_the_run_in_flight_and_starts_no_new_one(tmp_path):
 
 def test_a_failing_run_is_reported_and_the_others_go_on(tmp_path, monkeypatch):
     real = tasks.run_exploration
-
-    def flaky(world, strategy, seed, **kw):
-        if seed == 1:
-            raise ValueError("boom")
-        return real(world, strategy, seed, **kw)
-
-    monkeypatch.setattr(tasks, "run_exploration", flaky)   # the fork inherits it
+    monkeypatch.setattr(tasks, "run_exploration", failing_on_seed(real, 1))   # forks inherit it
     out = tmp_path / "fail"
     assert run_bench.main(ARGS + ["--runs", "3", "--out", str(out), "--md",
                                   str(out / "B.md")]) == 1

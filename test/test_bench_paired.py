@@ -14,6 +14,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench import paired  # noqa: E402
+from bench_support import failing_on_seed  # noqa: E402
 from sim_bridge.engine import SimParams  # noqa: E402
 from sim_bridge.lockstep import ExplorerParams, LockstepParams  # noqa: E402
 
@@ -195,13 +196,7 @@ def _seeds(out: Path) -> list[int]:
 
 def test_a_failing_run_is_reported_and_the_others_go_on(tmp_path, monkeypatch, capsys):
     real = paired.run_exploration
-
-    def flaky(world, strategy, seed, **kw):
-        if seed == 1:
-            raise ValueError("boom")
-        return real(world, strategy, seed, **kw)
-
-    monkeypatch.setattr(paired, "run_exploration", flaky)   # the fork inherits it
+    monkeypatch.setattr(paired, "run_exploration", failing_on_seed(real, 1))   # forks inherit it
     out = tmp_path / "fail"
     args = ["--out", str(out), *_SHORT, "--seeds", "0-2"]
     assert paired.main(args) == 1
