@@ -39,7 +39,6 @@ the same over all worlds; ``--md FILE`` also writes that report.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import fcntl
 import json
@@ -59,7 +58,7 @@ for _p in (ROOT, ROOT / "bench"):
 import numpy as np  # noqa: E402
 
 from bench.progress import Progress  # noqa: E402
-from bench.store import code_version  # noqa: E402
+from bench.store import code_version, read_csv  # noqa: E402
 from bench.tasks import catch_stop_signals, restore_signals, run_drainable, \
     stop_signals_deferred  # noqa: E402
 from bench.worlds import PAPER_CAMERA_MOUNT, load, sim_params_for, sim_time_limit  # noqa: E402
@@ -339,12 +338,8 @@ def against_report(rows: list[dict[str, Any]], arm: str, new: str,
 def load_tours(path: Path) -> dict[str, float]:
     """World -> full-knowledge coverage tour (m) from a benchmark's ``tours.csv``
     (empty when the file is absent)."""
-    if not path.is_file():
-        return {}
-    with path.open(newline="") as fh:
-        return {r["world"]: float(r["tour_m"]) for r in csv.DictReader(fh)
-                if r.get("tour_m") and math.isfinite(float(r["tour_m"]))
-                and float(r["tour_m"]) > 0}
+    tours = {r["world"]: float(r["tour_m"] or "nan") for r in read_csv(path)}
+    return {w: t for w, t in tours.items() if math.isfinite(t) and t > 0}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -430,8 +425,8 @@ def main(argv: list[str] | None = None) -> int:
     sel = [r for r in rows if r["arm"] in wanted and r["world"] in worlds
            and r["strategy"] in strategies and int(r["seed"]) in seeds]
     text = report(sel, [x.name for x in arms])
-    tours = load_tours(ROOT / "bench" / "results" / "tours.csv") if a.against else {}
     if a.against:
+        tours = load_tours(ROOT / "bench" / "results" / "tours.csv")
         for x in arms:
             text += "\n" + against_report(sel, x.name, a.against, tours)
     print(text)

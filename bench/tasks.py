@@ -193,14 +193,19 @@ def run_drainable(pool: Any, jobs: int, tasks: list[tuple], failed: list[str],
 
     in_flight += top_up()
     while in_flight:
+        try:
+            item = done.get(timeout=0.2)
+        except queue.Empty:
+            item = None
+        # Said once the signal is seen, before the result that arrived with it counts
+        # (a signal during the wait that ends with the last run in flight is said too).
         if _DRAIN[0] and not said:
             said = True
             print(f"\n[bench] SIGUSR1: finishing the {in_flight} run(s) in flight, starting "
                   "no new ones", file=sys.stderr)
-        try:
-            result, err, task = done.get(timeout=0.2)
-        except queue.Empty:
+        if item is None:
             continue
+        result, err, task = item
         in_flight -= 1
         in_flight += top_up()
         if err is None:

@@ -170,25 +170,27 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   max-range beams ended in the open, sees little however much lies beyond. eb/loop seed 1
   at 81 s: the loop's continuation ahead, a ragged group of 155 frontier cells (0.75 x
   2.85 m, one cell from the map's border) 5 m away, saw 1.81 m^2, waited as a leftover,
-  and the robot turned round for a view 15 m back; eb/room_3 seed 10 at 99 s the same
-  (a 136-cell group at the edge saw 1.62 m^2; the robot drove 30 m back; T95 639 s,
+  and the robot turned round for a view 15 m back; eb/room_3 seed 10 at 99 s the same (a
+  136-cell group at the edge saw 1.62 m^2; the robot drove 30 m back; T95 639 s,
   ``explore_lite`` 417 s). A group of 3 m of frontier cells or more (cells x cell size;
   the split parts of a clean frontier stay under it, a ragged edge does not) is never a
-  leftover now. Seeds 0-14 of the 18 lock-step worlds paired with the ``routed`` rows of
-  ``bench/results/paired/routed_default_seeds0-19.md`` (``paired.py --out out/s25_ll3 /
-  out/s25_ll3b --strategies routed --arm ll3:explorer.selection.leftover_max_length_m=3.0``,
-  270 pairs): 270/270 complete, 0 contacts; 257 runs identical (no such group came up),
-  10 faster, 1 slower, 2 within 1 %: eb/loop seeds 1, 2, 8, 13 270-272 -> 187-188 s
-  (seed 6 189 -> 187 s), eb/room_3 seeds 2, 7, 8, 10, 11 582 -> 500, 497 -> 460, 631 ->
-  504, 639 -> 419, 657 -> 499 s; shared/maze seed 5 532 -> 563 s (+5.8 %). 5 m gave the
-  same 90 runs on seeds 0-4. Seeds 15-19 (``out/s25_ll3c``): 85 of 90 identical, eb/loop
-  seed 18 268 -> 187 s, eb/room_3 seeds 17, 18 541 -> 478, 428 -> 418 s, house_cluttered
-  seed 17 494 -> 505 s (+2.2 %), eb/room_3 seed 15 the same T95. Over the 20 seeds
+  leftover now. Seeds 0-14 of the 18 lock-step worlds paired with the ``routed`` rows
+  before this rule (arm ``cur`` of
+  ``bench/results/paired/leftover_max_length_routed_seeds0-19.md``; ``paired.py --out
+  out/s25_ll3 / out/s25_ll3b --strategies routed --arm
+  ll3:explorer.selection.leftover_max_length_m=3.0``, 270 pairs): 270/270 complete, 0
+  contacts; 257 runs identical (no such group came up), 10 faster, 1 slower, 2 within 1 %:
+  eb/loop seeds 1, 2, 8, 13 270-272 -> 187-188 s (seed 6 189 -> 187 s), eb/room_3 seeds 2,
+  7, 8, 10, 11 582 -> 500, 497 -> 460, 631 -> 504, 639 -> 419, 657 -> 499 s; shared/maze
+  seed 5 532 -> 563 s (+5.8 %). 5 m gave the same 90 runs on seeds 0-4. Seeds 15-19
+  (``out/s25_ll3c``): 85 of 90 identical, eb/loop seed 18 268 -> 187 s, eb/room_3 seeds
+  17, 18 541 -> 478, 428 -> 418 s, house_cluttered seed 17 494 -> 505 s (+2.2 %),
+  eb/room_3 seed 15 the same T95. Over the 20 seeds
   (``bench/results/paired/leftover_max_length_routed_seeds0-19.md``) 342 of 360 runs
-  identical, 13 faster and 2 slower by more than 1 %, 3 within 1 %; against the baselines eb/room_3 went from 1.11x to
-  within 5 % of the best one's median. The generated maze seeds 0-1 and the office floor
-  seed 1: identical but maze seed 1 (3218 -> 3224 s); office seed 0 2961 s
-  (``leftover_max_length_maze_office.md``). 3 m is the default.
+  identical, 13 faster and 2 slower by more than 1 %, 3 within 1 %; against the baselines
+  eb/room_3 went from 1.11x to within 5 % of the best one's median. The generated maze
+  seeds 0-1 and the office floor seed 1: identical but maze seed 1 (3218 -> 3224 s);
+  office seed 0 2961 s (``leftover_max_length_maze_office.md``). 3 m is the default.
   Tried, not kept: (a) counting outside the map as unknown in the ray cast (the padding
   and :class:`~.viewpoints.GainCache`'s grown-map fill): eb/room_3 seed 10 534 s, but
   seeds 0-4 of the 18 worlds (``out/s25_edge``, 90 pairs) 1.018 median per-seed T95 ratio,
