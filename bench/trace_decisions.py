@@ -17,10 +17,18 @@ while coverage did not grow, and for runs that ended DONE how long after coverag
 its final value (within 0.05 %) DONE came (``done_lag_s``; ``--coverage-target 100`` lets
 runs go on until DONE).
 
+``--groups T0:T1`` also writes, for every decision between T0 and T1 s of sim time
+(``groups_WORLD_STRATEGY_SEED.csv``), one row per frontier group: its goal point (the
+viewpoint under ``routed``), centroid, size, selection cost, and under ``routed`` its
+viewpoint's gain, tour cost, place in the tour and DuDe region, and whether it was chosen:
+what a decision saw, for finding why a tour passed a corner and came back for it.
+
 Usage::
 
     .venv/bin/python bench/trace_decisions.py --worlds eb/room_2,house --strategies paper \\
         --seeds 0,1,2 --out out/trace
+    .venv/bin/python bench/trace_decisions.py --worlds eb/loop_with_corridor \\
+        --strategies routed --seeds 7 --groups 100:130 --out out/trace
 """
 
 from __future__ import annotations
@@ -49,6 +57,34 @@ FIELDS = ("t_s", "coverage_pct", "x_m", "y_m", "action", "reason", "goal_x_m", "
           "robot_region", "n_frontiers", "chosen_dist_m", "chosen_size_cells",
           "chosen_region", "chosen_cost", "dist_term", "size_term", "region_term",
           "dist_term_spread", "region_decided", "size_decided", "tour_m", "gain_m2")
+GROUP_FIELDS = ("t_s", "group", "point_x_m", "point_y_m", "centroid_x_m", "centroid_y_m",
+                "size_cells", "cost", "gain_m2", "tour_cost_m", "tour_position", "region",
+                "chosen")
+
+
+def group_rows(t_s: float, st: LockstepState) -> list[dict[str, Any]]:
+    """One row per frontier group of the decision in ``st`` (module docstring)."""
+    step = st.step
+    if step is None:
+        return []
+    sel, tour = step.selection, step.tour
+    place = ({int(g): k for k, g in enumerate(tour.order)} if tour is not None else {})
+    rows = []
+    for i, f in enumerate(step.frontiers):
+        row: dict[str, Any] = dict(
+            t_s=round(t_s, 2), group=i, point_x_m=round(f.point_xy_m[0], 2),
+            point_y_m=round(f.point_xy_m[1], 2), centroid_x_m=round(f.centroid_xy_m[0], 2),
+            centroid_y_m=round(f.centroid_xy_m[1], 2), size_cells=f.size_cells,
+            chosen=int(sel is not None and sel.index == i))
+        if sel is not None and i < len(sel.costs):
+            row["cost"] = round(float(sel.costs[i]), 4)
+        if tour is not None:
+            row.update(gain_m2=round(float(tour.gain_m2[i]), 2) if i < len(tour.gain_m2)
+                       else None,
+                       tour_cost_m=round(float(tour.tour_cost_m[i]), 2),
+                       tour_position=place.get(i), region=int(tour.regions[i]))
+        rows.append(row)
+    return rows
 
 
 def paper_terms(st: LockstepState, alpha: float, beta: float, gamma: float
@@ -76,12 +112,16 @@ def paper_terms(st: LockstepState, alpha: float, beta: float, gamma: float
 
 
 def trace_run(world_spec: str, strategy: str, seed: int, out_dir: Path,
-              still_m: float, coverage_target_pct: float | None = None) -> dict[str, Any]:
-    """One traced run: writes its CSV, returns its summary."""
+              still_m: float, coverage_target_pct: float | None = None,
+              groups_window: tuple[float, float] | None = None,
+              max_sim_time_s: float | None = None) -> dict[str, Any]:
+    """One traced run: writes its CSV (and with ``groups_window`` the groups' CSV),
+    returns its summary. ``max_sim_time_s`` caps the benchmark's time limit."""
     world, gt = load(world_spec)
     ep = explorer_params()
     sp = ep.selection
     rows: list[dict[str, Any]] = []
+    groups: list[dict[str, Any]] = []
     last_xy: list[tuple[float, float]] = []
 
     def observe(st: LockstepState) -> None:
@@ -114,13 +154,17 @@ def trace_run(world_spec: str, strategy: str, seed: int, out_dir: Path,
                     row["gain_m2"] = round(float(step.tour.gain_m2[sel.index]), 2)
         rows.append(row)
         last_xy.append((x, y))
+        if groups_window is not None and groups_window[0] <= eng.time_s <= groups_window[1]:
+            groups.extend(group_rows(eng.time_s, st))
 
     lp = LockstepParams()
     if coverage_target_pct is not None:
         lp = replace(lp, coverage_target_pct=coverage_target_pct)
+    limit = sim_time_limit(float(gt.explorable_area_m2), None)
+    if max_sim_time_s is not None:
+        limit = min(limit, max_sim_time_s)
     res = run_exploration(world, strategy, seed, ground_truth=gt, explorer_params=ep,
-                          params=lp,
-                          max_sim_time_s=sim_time_limit(float(gt.explorable_area_m2), None),
+                          params=lp, max_sim_time_s=limit,
                           sim_params=sim_params_for(PAPER_CAMERA_MOUNT, None),
                           observer=observe)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -129,6 +173,11 @@ def trace_run(world_spec: str, strategy: str, seed: int, out_dir: Path,
         wr = csv.DictWriter(fh, fieldnames=FIELDS)
         wr.writeheader()
         wr.writerows(rows)
+    if groups_window is not None:
+        with open(out_dir / name.replace("trace_", "groups_", 1), "w", newline="") as fh:
+            wr = csv.DictWriter(fh, fieldnames=GROUP_FIELDS)
+            wr.writeheader()
+            wr.writerows(groups)
     return summarise(rows, res, world_spec, strategy, seed, still_m)
 
 
@@ -182,13 +231,26 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--coverage-target", type=float, default=None,
                     help="stop at this coverage (default: the lock step's 99 %%; 100 lets a "
                          "run go on until DONE, to measure how late DONE comes)")
+    ap.add_argument("--groups", default=None, metavar="T0:T1",
+                    help="also write every frontier group of the decisions between T0 and "
+                         "T1 s of sim time (groups_*.csv)")
+    ap.add_argument("--max-sim-time", type=float, default=None,
+                    help="end runs at this sim time (s) if the benchmark's limit is later")
     a = ap.parse_args(argv)
     out = Path(a.out)
+    window = None
+    if a.groups is not None:
+        try:
+            t0, t1 = (float(v) for v in a.groups.split(":"))
+        except ValueError:
+            ap.error(f"--groups expects T0:T1 in seconds, got {a.groups!r}")
+        window = (t0, t1)
     summaries = []
     for w in a.worlds.split(","):
         for s in a.strategies.split(","):
             for seed in (int(x) for x in a.seeds.split(",")):
-                summ = trace_run(w, s, seed, out, a.still_m, a.coverage_target)
+                summ = trace_run(w, s, seed, out, a.still_m, a.coverage_target, window,
+                                 a.max_sim_time)
                 print(json.dumps(summ), flush=True)
                 summaries.append(summ)
     with open(out / "summary.json", "a") as fh:

@@ -199,6 +199,22 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   tour finishes first; (b) exempting every group within 0.25 m of the map's border
   (``out/s25_le``, stopped after 18 runs: 5 changed, eb/room seed 0 212 -> 244 s,
   room_1 216 -> 236 s, eb/room_with_corner 413 -> 404 s).
+- **The tour's tail pulls its head back to known routes, and routing through unknown
+  space does not fix it** (tried, not kept). eb/loop_with_corridor seed 7 (T95 222 s,
+  ``explore_lite`` 180 s; per-decision dump of every group's viewpoint, gain, tour cost
+  and order): at 121 s, in the loop's south-west corner room, the tour visited the views
+  toward the south corridor first and the corner last, because the tour then ends with
+  the long leg to a view on the loop's east side, and that leg, through known space, goes
+  back north round the loop; so the corner was passed, and at 229 s the robot drove 16 m
+  back for it (28 m^2). A real robot closes the loop through the south. Tour lengths
+  between viewpoints as the shorter of the known path and ``f`` x the path through
+  free-or-unknown space (the graph of :meth:`~.distances.PathGraphs.fallback`; code
+  489a459 on the local branch ``exp_opt``), 18 worlds x seeds 0-2 against today's rows
+  (``bench/results/paired/tour_unknown_routed_seeds0-2.md``): ``f`` 1 median per-seed T95
+  ratio 1.000, 10 faster / 24 slower, geometric mean 1.040 (eb/loop_with_corridor seed 3
+  272 -> 201 s, but eb/corner 1.23, shared/maze 1.11, shared/house 1.10: unseen walls make
+  most shortcuts through unknown space wrong), decision core p95 40 ms against 11 ms (the
+  graph is built every decision); ``f`` 1.5 (30 runs) 1.000, 7 / 9, geometric mean 1.017.
 - **A dead-end pocket first is what loses eb/room_2, and a rate rule does not fix it**
   (tried, not kept; the experiment code was not kept). eb/room_2 seed 0
   (``bench/trace_decisions.py``, T95 269 s against ``explore_lite``'s 246 s): both drive
