@@ -215,6 +215,11 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   272 -> 201 s, but eb/corner 1.23, shared/maze 1.11, shared/house 1.10: unseen walls make
   most shortcuts through unknown space wrong), decision core p95 40 ms against 11 ms (the
   graph is built every decision); ``f`` 1.5 (30 runs) 1.000, 7 / 9, geometric mean 1.017.
+  Nor does a local tour (TARE's horizon): while a viewpoint lies within 12 m of path, the
+  tour left out those beyond (code 7c9deee, ``exp_opt``; ``out/s26_hz12``, stopped after
+  33 of the 54 runs): median 1.000, 4 faster / 16 slower, geometric mean 1.049 (eb/corner
+  seeds 0, 1 273 -> 351 and 265 -> 406 s, eb/loop_with_corridor seed 1 197 -> 299 s): the
+  far views' legs are also what keeps the tour from leaving a region half seen.
 - **A dead-end pocket first is what loses eb/room_2, and a rate rule does not fix it**
   (tried, not kept; the experiment code was not kept). eb/room_2 seed 0
   (``bench/trace_decisions.py``, T95 269 s against ``explore_lite``'s 246 s): both drive
