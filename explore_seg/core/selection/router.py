@@ -220,6 +220,20 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   33 of the 54 runs): median 1.000, 4 faster / 16 slower, geometric mean 1.049 (eb/corner
   seeds 0, 1 273 -> 351 and 265 -> 406 s, eb/loop_with_corridor seed 1 197 -> 299 s): the
   far views' legs are also what keeps the tour from leaving a region half seen.
+- **A view into a corridor promises what its unseen walls hide** (tried, not kept).
+  eb/room_2 seed 8 (T95 298 s; ``explore_lite`` 251, ``nearest`` 236; ``trace_decisions.py
+  --groups 120:180``): from 132 to 154 s the robot followed the viewpoint of a dead-end
+  corridor east as it receded (x 4.4 -> 9.2 m, goal frontier gone at every step), its view
+  rated 30, 33, 27, 21, 10 m^2 while coverage rose 46.1 -> 48.9 %, about 8 m^2 in all: the
+  ray cast lets rays through the corridor's walls while they are unknown and counts the
+  rooms behind them; then it turned back. Each ray sample counted ``exp(-d / 2 m)``, ``d``
+  the ray's length through unknown space before it (code d50877c, ``exp_opt``;
+  ``out/s26_dc2``, 18 worlds x seeds 0-2, stopped after 23 runs): median per-seed T95
+  ratio 1.005, 9 faster / 11 slower, geometric mean 1.009; faster in the rooms and houses
+  (eb/room_3 561 -> 456 s, generated house 539 -> 483 s, eb/room_2 seed 8 298 -> 264 s),
+  slower in corridors and the maze (eb/corridor 194 -> 238 and 199 -> 243 s, shared/maze
+  540 -> 606 s). The leftover and minimum-gain thresholds were left at 2 and 0.25 m^2,
+  which the decay makes stricter; a decay tuned with them is untried.
 - **A dead-end pocket first is what loses eb/room_2, and a rate rule does not fix it**
   (tried, not kept; the experiment code was not kept). eb/room_2 seed 0
   (``bench/trace_decisions.py``, T95 269 s against ``explore_lite``'s 246 s): both drive
