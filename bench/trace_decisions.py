@@ -245,6 +245,8 @@ def main(argv: list[str] | None = None) -> int:
         except ValueError:
             ap.error(f"--groups expects T0:T1 in seconds, got {a.groups!r}")
         window = (t0, t1)
+    if a.max_sim_time is not None and not a.max_sim_time > 0:
+        ap.error(f"--max-sim-time must be > 0 s, got {a.max_sim_time}")
     summaries = []
     for w in a.worlds.split(","):
         for s in a.strategies.split(","):

@@ -60,7 +60,7 @@ def test_without_a_tour_the_groups_have_no_tour_columns(tmp_path):
     assert sum(g["chosen"] == "1" for g in groups if g["t_s"] == groups[0]["t_s"]) == 1
 
 
-def test_no_groups_file_without_a_window_and_a_bad_window_is_refused(tmp_path, capsys):
+def test_no_groups_file_without_a_window_and_bad_options_are_refused(tmp_path, capsys):
     trace_decisions.trace_run("eb/corridor_asym", "nearest", 0, tmp_path, 0.05,
                               max_sim_time_s=1.0)
     assert not list(tmp_path.glob("groups_*"))
@@ -69,3 +69,8 @@ def test_no_groups_file_without_a_window_and_a_bad_window_is_refused(tmp_path, c
                               "--out", str(tmp_path)])
     assert exc.value.code == 2
     assert "--groups expects T0:T1" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        trace_decisions.main(["--worlds", "eb/corridor_asym", "--max-sim-time", "0",
+                              "--out", str(tmp_path)])
+    assert exc.value.code == 2
+    assert "--max-sim-time must be > 0" in capsys.readouterr().err
