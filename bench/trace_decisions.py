@@ -76,11 +76,10 @@ def group_rows(t_s: float, st: LockstepState) -> list[dict[str, Any]]:
             point_y_m=round(f.point_xy_m[1], 2), centroid_x_m=round(f.centroid_xy_m[0], 2),
             centroid_y_m=round(f.centroid_xy_m[1], 2), size_cells=f.size_cells,
             chosen=int(sel is not None and sel.index == i))
-        if sel is not None and i < len(sel.costs):
+        if sel is not None:
             row["cost"] = round(float(sel.costs[i]), 4)
         if tour is not None:
-            row.update(gain_m2=round(float(tour.gain_m2[i]), 2) if i < len(tour.gain_m2)
-                       else None,
+            row.update(gain_m2=round(float(tour.gain_m2[i]), 2),
                        tour_cost_m=round(float(tour.tour_cost_m[i]), 2),
                        tour_position=place.get(i), region=int(tour.regions[i]))
         rows.append(row)

@@ -526,8 +526,7 @@ class Router:
             # Leftovers last: small views wait while a bigger one remains.
             big = gains >= p.leftover_gain_m2
             if p.leftover_max_length_m > 0:
-                length = np.asarray([f.size_cells for f in frontiers]) * grid.resolution_m
-                big |= length >= p.leftover_max_length_m
+                big |= np.asarray([f.length_m for f in frontiers]) >= p.leftover_max_length_m
             big &= sel
             if big.any():
                 sel = big
