@@ -237,7 +237,8 @@ runs with the benchmark's settings, paired per seed with the ``explore_lite`` an
   4 m (``out/s27_dc4``, the 18 worlds x seeds 0-1, 36 runs, all complete, 0 contacts):
   median per-seed T95 ratio 0.998, 15 faster / 12 slower, geometric mean 0.996 (T99
   0.983); eb/corridor back to 195 / 197 s, eb/room_2 seed 0 251 s, but eb/room_3 seed
-  0 538 s and eb/corridor_sym seed 1 184 -> 204 s: within what single runs swing.
+  0 538 s and eb/corridor_sym seed 1 184 -> 204 s: within what single runs swing (found
+  uncommitted in the work tree; its runs are not kept and were not reproduced).
 - **A dead-end pocket first is what loses eb/room_2, and a rate rule does not fix it**
   (tried, not kept; the experiment code was not kept). eb/room_2 seed 0
   (``bench/trace_decisions.py``, T95 269 s against ``explore_lite``'s 246 s): both drive
