@@ -4,9 +4,8 @@ Runs the DuDe segmentation, object costmap and target selector nodes in one exec
 target selector detects frontiers itself and publishes them, so the standalone
 ``frontier_detector`` is not run here: one detection per map), single-threaded by default:
 rclpy's MultiThreadedExecutor busy-waits while a callback of a mutually exclusive group runs
-(its entity stays ready), and that loop, holding the GIL, starved the object costmap in this process (measured in the
-simulator demo at 4x real time: 25 of 801 camera frames processed, explorer at 100 % of a
-core, against a third to a half of the frames and a third of a core single-threaded). Each node
+(its entity stays ready), and that loop, holding the GIL, starves the object costmap in this
+process (docs/experiments.md#explorer-single-threaded-executor). Each node
 reads its parameters from ``config/explorer.yaml`` (installed to
 ``share/explore_seg/config``) unless ``--ros-args --params-file FILE`` is given; a caller's
 ``-p name:=value`` then overrides that file for every node (rcl lets a file's node section

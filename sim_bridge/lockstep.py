@@ -168,9 +168,8 @@ class LockstepParams:
     nav_feedback: bool = field(default=True, metadata=param_meta(
         "tell the decision core how the navigation stand-in ended each goal (succeeded: "
         "judge its frontier now; aborted/rejected: blacklist it now), as the "
-        "target_selector does with Nav2's action status (default); false reproduces "
-        "benchmark results recorded before this default: goals end by distance and "
-        "progress_timeout_s only"))
+        "target_selector does with Nav2's action status; false: goals end by distance and "
+        "progress_timeout_s only (how benchmark rows without feedback were made)"))
 
     def __post_init__(self) -> None:
         for name in ("max_sim_time_s", "sample_period_s", "camera_scale"):

@@ -21,9 +21,8 @@ class NavParams:
     inflation_soft_margin_m: float = field(default=0.05, metadata=param_meta(
         "cells within the lethal zone + this cost inflation_soft_margin_cost more per metre "
         "(Nav2's near-lethal band): paths keep this clearance where the room allows and "
-        "still pass doors too narrow for it (0.05: paper's contacts in the authors' furnished "
-        "houses 57 -> 9 in 60 paired runs, median T95 ratio 0.993; BENCHMARKS.md, paired "
-        "comparisons); 0 = off", "m", range=(0.0, math.inf)))
+        "still pass doors too narrow for it; raising it keeps plans further from furniture "
+        "and walls; 0 = off", "m", range=(0.0, math.inf)))
     inflation_soft_margin_cost: float = field(default=20.0, metadata=param_meta(
         "extra cost per metre inside inflation_soft_margin_m", range=(0.0, math.inf)))
     inflation_edge_cost: float = field(default=50.0, metadata=param_meta(
@@ -81,9 +80,8 @@ class NavParams:
         "the pure-pursuit arc also keeps arc_clearance_m beyond the robot radius from the "
         "edges of obstacle cells (the lethal zone is judged at cell centres, half a cell "
         "diagonal closer); an arc that cannot is shortened toward the plan, and one that "
-        "starts closer than that only may not get closer still (paper, 18 worlds, seeds "
-        "0-9, paired: contacts 20 -> 0, complete 176 -> 178 of 180, median T95 ratio 1.000; "
-        "BENCHMARKS.md, paired comparisons); false = the lethal zone only"))
+        "starts closer than that only may not get closer still; false = the lethal zone "
+        "only"))
     arc_clearance_m: float = field(default=0.02, metadata=param_meta(
         "clearance beyond the robot radius the arc keeps with arc_check_edges", "m",
         range=(0.0, math.inf)))

@@ -81,8 +81,8 @@ class Pursuit:
             clear = self._arc_clear(pose, rest[k])
         if not clear:
             # No arc from the heading keeps clear (the robot stands close to an obstacle,
-            # heading past it). An unchecked arc is never driven (one drove into a wall
-            # corner the map showed: eb/corner, paper_noseg seed 9, issue #21). In order:
+            # heading past it). An unchecked arc is never driven: it can cut a wall corner
+            # the map shows (docs/experiments.md#navigation-no-unchecked-arc). In order:
             # face the next plan point when the straight line to it is clear (turning in
             # place never moves the footprint, as Nav2's recovery turns); drive an arc that
             # keeps the robot radius itself; face a farther point whose line is clear;

@@ -35,11 +35,8 @@ alpha = 1 makes the whole distance spread worth 1; beta = 0.001 makes a group ho
 0.1 % of all frontier cells cost 1 (a 10-cell group among 1000 costs 0.1, as much as a
 tenth of the distance spread); gamma = 1 makes leaving the robot's region cost as much as
 the largest distance difference, so a room is finished first unless what is left in it
-is tiny or far. beta was chosen by ``bench/sweep_selection.py`` (seeds 100..109, disjoint
-from the benchmark's, generated cluttered house, ``paper_noobj``): with beta = 0.01 the
-size term outweighed distance (the robot crossed rooms for big groups and came back for
-small ones); beta = 0.001 reached 95 % coverage 10 % sooner on paired seeds with shorter
-paths, beta = 0.0003 was no better, and gamma = 0 or 0.3 was slower than gamma = 1.
+is tiny or far. A larger beta lets the size term outweigh distance (the robot crosses rooms
+for big groups and comes back for small ones). See docs/experiments.md#paper-beta-sweep.
 """
 
 from __future__ import annotations

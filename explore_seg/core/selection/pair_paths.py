@@ -17,7 +17,7 @@ A kept length is the one of the map it was computed on: a shortcut found since t
 missed, a path blocked since then still counted, for at most that many decisions (the
 robot -> viewpoint lengths, which decide the next goal's cost most, are always fresh: the
 caller computes them per decision). ``refresh_rows`` at or above the number of
-viewpoints recomputes every length at every decision (exact, as before the cache).
+viewpoints recomputes every length at every decision (exact, slower on large maps).
 
 Examples
 --------
