@@ -77,15 +77,14 @@ class SelectionParams:
     reached_unknown_fraction: float = field(default=0.5, metadata=param_meta(
         "routed: a reached goal whose frontier remains is blacklisted only when at least "
         "this share of its frontier's cells (as last matched before arrival) are still "
-        "unknown (the visit revealed little); when the visit revealed them, the frontier "
-        "that remains is where the space goes on (a corridor longer than the sensor "
-        "range) and stays selectable; 0 = always blacklist, as the other strategies "
-        "(explore_lite's and the paper's rule) do", range=(0.0, 1.0)))
+        "unknown; otherwise the frontier stays selectable (the space goes on, as in a "
+        "corridor longer than the sensor range). Raising it blacklists fewer reached goals; "
+        "0 = always blacklist, as the other strategies do", range=(0.0, 1.0)))
     revealed_arrivals_max: int = field(default=2, metadata=param_meta(
-        "routed, with reached_unknown_fraction > 0: the revealed arrival at a goal area "
-        "(within flicker_radius_m of its first goal) that reaches this count blacklists "
-        "the area's goals (a small leftover is otherwise re-chosen with a shrinking gain); "
-        "0 = no limit", range=(0, INT_MAX)))
+        "routed, with reached_unknown_fraction > 0: number of arrivals that revealed cells "
+        "at one goal area (within flicker_radius_m of its first goal) after which the "
+        "area's goals are blacklisted. Raising it lets a small leftover be re-chosen more "
+        "often; 0 = no limit", range=(0, INT_MAX)))
     goal_change_min_m: float = _non_negative(
         "a new goal closer than this to the current one is not sent", "m", default=0.3)
     blacklist_radius_m: float = _non_negative(
@@ -102,14 +101,14 @@ class SelectionParams:
         range=(0, INT_MAX)))
     retry_reveal_m2: float = _non_negative(
         "a blacklist retry after which at least this much more of the map became known "
-        "does not count against blacklist_retries: the blacklist is retried again while "
-        "its retries reveal space (a pocket whose way in opened once the map around it "
-        "was seen); 0 = every retry counts", "m^2", default=1.0)
+        "does not count against blacklist_retries, so retries go on while they reveal "
+        "space. Raising it makes fewer retries free; 0 = every retry counts", "m^2",
+        default=1.0)
     flicker_vanish_count: int = field(default=3, metadata=param_meta(
         "blacklist a goal area once its frontier vanished this many times before the robot "
-        "got there with its cells still unknown (it came back in between: a wall edge "
-        "flickering between occupied and free next to unknown space pulls the robot back "
-        "and forth otherwise); 0 = never", range=(0, INT_MAX)))
+        "got there with its cells still unknown (a wall edge flickering next to unknown "
+        "space). Raising it follows such a frontier longer; 0 = never",
+        range=(0, INT_MAX)))
     flicker_radius_m: float = _non_negative(
         "goals within this distance of the first goal of an area count as that area for "
         "flicker_vanish_count and revealed_arrivals_max", "m", default=1.0)
@@ -142,9 +141,8 @@ class SelectionParams:
         "best view, the one closest to the robot is the viewpoint", range=(0.0, 1.0)))
     frontier_split_m: float = _non_negative(
         "routed: a frontier group extending more than this along its main axis is split "
-        "(at its mean, recursively) into parts that do not, each with its own viewpoint "
-        "in the tour (a long frontier along a corridor is several places to look from; "
-        "one viewpoint for it jumps between its ends as the map grows); 0 = off", "m",
+        "(at its mean, recursively) into parts, each with its own viewpoint in the tour. "
+        "Raising it gives fewer, longer parts; 0 = off", "m",
         default=3.0)
     region_switch_m: float = _non_negative(
         "routed: extra tour cost of an edge between viewpoints of two different regions "
@@ -156,27 +154,25 @@ class SelectionParams:
         default=0.25)
     leftover_gain_m2: float = _non_negative(
         "routed: a viewpoint that sees less unknown area than this is a leftover, kept out "
-        "of the tour while a viewpoint that sees more remains (small corners that often "
-        "vanish as the robot passes do not bend the tour; they are visited last); "
-        "0 = off", "m^2", default=2.0)
+        "of the tour while a viewpoint that sees more remains and visited last. Raising it "
+        "defers more views; 0 = off", "m^2", default=2.0)
     leftover_max_length_m: float = _non_negative(
         "routed: a group with at least this much frontier (cells x cell size) is never a "
-        "leftover, whatever its viewpoint sees (the ragged end of max-range beams at the "
-        "map's edge, whose view the edge cuts short); 0 = any group can be one", "m",
+        "leftover, whatever its viewpoint sees (the map's ragged edge, whose view the edge "
+        "cuts short). Raising it lets longer groups wait; 0 = any group can be one", "m",
         default=3.0)
     gain_weight_m_per_m2: float = _non_negative(
         "routed: a group's cost is its tour length minus this times the unknown area its "
         "viewpoint sees (big views first when the detour is small)", "m/m^2", default=0.1)
     tour_refresh_rows: int = field(default=8, metadata=param_meta(
-        "routed: path lengths between viewpoints are kept between decisions; each "
-        "decision sweeps from the new viewpoints and from this many kept ones, the oldest "
-        "first (a kept length is recomputed within viewpoints / this decisions); at or "
-        "above the number of viewpoints every length is recomputed every decision "
-        "(exact, slower on large maps)", range=(0, INT_MAX)))
+        "routed: number of kept viewpoints (oldest first) whose path lengths to the others "
+        "are recomputed each decision, besides the new viewpoints'. Raising it keeps lengths "
+        "fresher at more cost; at or above the number of viewpoints every length is "
+        "recomputed every decision", range=(0, INT_MAX)))
     handover_m: float = _non_negative(
-        "routed: a goal this close to the robot counts as reached (its frontier is judged "
-        "and the next goal sent while the robot still drives: no final turn and no stop "
-        "at each viewpoint); below goal_reached_tolerance_m it has no effect", "m",
+        "routed: a goal this close to the robot counts as reached, so its frontier is "
+        "judged and the next goal sent while the robot still drives. Raising it judges "
+        "goals earlier; below goal_reached_tolerance_m it has no effect", "m",
         default=1.0)
 
     def __post_init__(self) -> None:
