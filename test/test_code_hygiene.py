@@ -117,8 +117,9 @@ def test_a_path_default_is_not_history_but_prose_quoting_it_is():
 
 def test_the_scanner_finds_the_history_that_was_in_router_py():
     try:
-        old = subprocess.run(["git", "show", f"{HISTORY_COMMIT}:explore_seg/core/selection/router.py"],
-                             cwd=ROOT, capture_output=True, text=True, check=True).stdout
+        old = subprocess.run(
+            ["git", "show", f"{HISTORY_COMMIT}:explore_seg/core/selection/router.py"],
+            cwd=ROOT, capture_output=True, text=True, check=True).stdout
     except (OSError, subprocess.CalledProcessError) as e:
         pytest.skip(f"git history not available: {e}")
     found = source_findings(old)

@@ -11,8 +11,9 @@ Per decision (:class:`Router`, driven by :class:`~explore_seg.core.explorer.Expl
    (:mod:`.viewpoints`): among the reachable candidates (a lattice of ``viewpoint_step_m``
    within ``viewpoint_radius_m`` of its cells) whose 360-degree view of ``sensor_range_m``
    (``gain_rays`` rays) sees at least ``1 - viewpoint_gain_tolerance`` of the best unknown
-   area, the one closest to the robot. The groups come back with their cPoint replaced by the viewpoint, so the goal
-   manager sends, keeps, judges and blacklists viewpoints exactly as it does cPoints.
+   area, the one closest to the robot. The groups come back with their cPoint replaced by
+   the viewpoint, so the goal manager sends, keeps, judges and blacklists viewpoints exactly
+   as it does cPoints.
    Gains are kept per coarse cell across map versions (:class:`~.viewpoints.GainCache`).
 2. **Selectable groups.** A group is in the tour when its viewpoint is reachable, not
    blacklisted and sees at least ``min_gain_m2`` (exploration ends rather than chasing
