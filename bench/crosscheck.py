@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from bench.worlds import ROOT, load, sim_params_for, world_path
-from sim_bridge.lockstep import STRATEGY_SPECS, LockstepParams, run_exploration
+from sim_bridge.lockstep import LockstepParams, run_exploration, strategy_spec
 
 
 def time_yolo(frames: int, world_spec: str = "house_cluttered") -> dict[str, Any]:
@@ -74,7 +74,7 @@ def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf
                      "coverage_pct": r.coverage_pct, "sim_time_s": r.sim_time_s,
                      "path_length_m": r.path_length_m, "collisions": r.collisions,
                      "goals": r.goals_sent, "objects": r.n_objects,
-                     "object_frames": "every frame" if STRATEGY_SPECS[strategy].use_objects
+                     "object_frames": "every frame" if strategy_spec(strategy).use_objects
                      else "-"})
         d = out / f"seed{seed}"
         cmd = [sys.executable, str(ROOT / "scripts" / "demo.py"), str(d), "--world",

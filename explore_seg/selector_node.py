@@ -45,8 +45,7 @@ from explore_seg.core.grid import GridMap, resample_array
 from explore_seg.core.limits import InputLimits
 from explore_seg.core.pose_fusion import PoseFusionParams
 from explore_seg.core.rrt import RrtParams
-from explore_seg.core.selection import (REGION_STRATEGIES, Action, Goal, NavOutcome,
-                                        SelectorNodeParams)
+from explore_seg.core.selection import Action, Goal, NavOutcome, SelectorNodeParams
 from explore_seg.done_gate import DoneGate
 from explore_seg.frontier_msgs import FrontierPublisher
 from explore_seg.frontier_node import FRONTIER_PREFIX
@@ -373,7 +372,7 @@ class TargetSelectorNode(Node):
     def _log_region_gain(self, out: ExplorerStep) -> None:
         """Say once when a region strategy runs without region labels."""
         sel = out.selection
-        if (sel is not None and self.params.strategy in REGION_STRATEGIES
+        if (sel is not None and self._explorer.strategy.region_term
                 and not sel.region_gain_active and not self._region_warned and out.frontiers):
             self._region_warned = True
             self.get_logger().info("regionGain is 0 (no region labels for the map or the "

@@ -16,11 +16,13 @@ run:
   legs), rasterised onto the map and given both to target selection and, as an
   obstacle layer, to the navigation stand-in - the ``object_costmap`` node.
 
-Strategies (:data:`STRATEGY_SPECS`): ``paper`` (eq. 1-3, regions and object costmap),
-``paper_noseg`` (regions off, i.e. gamma = 0), ``paper_noobj`` (no object costmap),
-``nearest``, ``explore_lite`` and ``rrt_exploration`` (its RRTs seeded with the run's
-seed). The three baselines run as their original packages would: no object costmap
-anywhere (not in frontier detection, not in the planner) and no regions.
+Strategies (:data:`STRATEGY_SPECS`, the benchmark's arms): ``paper`` (eq. 1-3, regions and
+object costmap), ``paper_noseg`` (regions off, i.e. gamma = 0), ``paper_noobj`` (no object
+costmap), ``nearest``, ``explore_lite``, ``rrt_exploration`` (its RRTs seeded with the
+run's seed) and ``routed``. The three baselines run as their original packages would: no
+object costmap anywhere (not in frontier detection, not in the planner) and no regions.
+Any other registered strategy (:mod:`explore_seg.core.selection.strategies`) runs with its
+default arm (:func:`strategy_spec`).
 
 A run stops at completion (coverage >= ``coverage_target_pct`` of the ground-truth
 explorable area, measured by the engine's metrics), when the goal manager reports
@@ -72,6 +74,8 @@ from sim_bridge.navigation import OutcomeFollower
 from sim_bridge.explorer_params import (ExplorerParams, default_explorer_params_file,  # noqa: F401
                                         load_explorer_params)
 from sim_bridge.run_result import TIMING_KEYS, RunResult  # noqa: F401 (API)
+from sim_bridge.strategy_specs import (STRATEGIES, STRATEGY_SPECS, StrategySpec,  # noqa: F401 (API)
+                                      strategy_spec)
 from sim_bridge.sensors import CLASS_IDS
 from sim_bridge.world import World
 
@@ -80,55 +84,6 @@ OBJECT_LAYER = "object_costmap"
 #: One black pixel, broadcast to the image passed to the oracle detector (which reads
 #: only the semantic and instance images).
 _BLACK = np.zeros(3, dtype=np.uint8)
-
-
-@dataclass(frozen=True)
-class StrategySpec:
-    """How one benchmark strategy configures the explorer.
-
-    Attributes
-    ----------
-    selection : str
-        ``SelectionParams.strategy`` (paper | nearest | explore_lite | rrt_exploration).
-    use_regions : bool
-        Run the segmentation and use regionGain.
-    use_objects : bool
-        Run the object costmap; its layer blocks frontiers, selection paths and plans.
-    description : str
-    nav_feedback : bool
-        Feed the navigation stand-in's outcome to the decision core in this strategy's
-        runs even when :attr:`LockstepParams.nav_feedback` (on by default, for every
-        strategy) is off.
-    """
-
-    selection: str
-    use_regions: bool
-    use_objects: bool
-    description: str
-    nav_feedback: bool = False
-
-
-#: The strategies of the benchmark.
-STRATEGY_SPECS: dict[str, StrategySpec] = {
-    "paper": StrategySpec("paper", True, True,
-                          "eq. 1-3 with DuDe regions and the object costmap"),
-    "paper_noseg": StrategySpec("paper", False, True,
-                                "eq. 1-3 without regions (gamma = 0), with the object costmap"),
-    "paper_noobj": StrategySpec("paper", True, False,
-                                "eq. 1-3 with regions, without the object costmap"),
-    "nearest": StrategySpec("nearest", False, False,
-                            "nearest frontier by path length (no object costmap)"),
-    "explore_lite": StrategySpec("explore_lite", False, False,
-                                 "explore_lite cost 3 * dist - 1 * length (no object costmap)"),
-    "rrt_exploration": StrategySpec("rrt_exploration", False, False,
-                                    "Umari & Mukhopadhyay 2017: local + global RRT frontier "
-                                    "points, mean shift, revenue 3 * gain - dist (no object "
-                                    "costmap)"),
-    "routed": StrategySpec("routed", True, True,
-                           "viewpoints + region-routed tour (DuDe regions, object costmap), "
-                           "navigation outcome fed back", nav_feedback=True),
-}
-STRATEGIES: tuple[str, ...] = tuple(STRATEGY_SPECS)
 
 
 @dataclass(frozen=True)
@@ -421,9 +376,7 @@ def run_exploration(world: World, strategy: str, seed: int, *,
     ValueError
         On an unknown strategy or invalid parameters.
     """
-    if strategy not in STRATEGY_SPECS:
-        raise ValueError(f"strategy must be one of {STRATEGIES}, got {strategy!r}")
-    spec = STRATEGY_SPECS[strategy]
+    spec = strategy_spec(strategy)
     p = params if params is not None else LockstepParams()
     if max_sim_time_s is not None:
         p = replace(p, max_sim_time_s=float(max_sim_time_s))

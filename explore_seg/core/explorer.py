@@ -51,10 +51,11 @@ from explore_seg.core.frontiers import (Frontier, FrontierCache, FrontierParams,
                                         traversable_mask)
 from explore_seg.core.grid import GridMap, metres_to_cells
 from explore_seg.core.rrt import RrtFrontierDetector, RrtParams
-from explore_seg.core.selection import (RRT_STRATEGIES, Action, Goal, GoalManager, NavOutcome,
-                                        PathGraphs, Selection, SelectionParams)
+from explore_seg.core.selection import (Action, Goal, GoalManager, NavOutcome, PathGraphs,
+                                        Selection, SelectionParams)
 from explore_seg.core.selection.lookout import lookouts
-from explore_seg.core.selection.router import Router, TourPlan
+from explore_seg.core.selection.router import TourPlan
+from explore_seg.core.selection.strategies import Planner, Strategy, get_strategy
 
 #: Keys of :attr:`ExplorerStep.warnings` (the caller throttles its log per key).
 WARN_LAYER_FRAME = "layer_frame"
@@ -179,7 +180,8 @@ class Explorer:
         self._key: tuple[GridMap, GridMap | None] | None = None
         self._frontiers: list[Frontier] = []
         self._graph: PathGraphs | None = None
-        self._router = Router(frontier, selection) if selection.strategy == "routed" else None
+        self._strategy: Strategy = get_strategy(selection.strategy)
+        self._planner = self._make_planner()
         self._fcache = FrontierCache()
         self._layer_warning = ""
         self._reported_blacklisted = 0
@@ -234,18 +236,27 @@ class Explorer:
         if rrt is not None:
             self._rp = rrt
             self._rrt = None
-        self._router = (Router(self._fp, self._sp) if self._sp.strategy == "routed"
-                        else None)
+        self._strategy = get_strategy(self._sp.strategy)
+        self._planner = self._make_planner()
         self._fcache.reset()
         self._key = None
+
+    def _make_planner(self) -> Planner | None:
+        make = self._strategy.make_planner
+        return make(self._fp, self._sp) if make is not None else None
+
+    @property
+    def strategy(self) -> Strategy:
+        """The registered strategy of the current selection parameters."""
+        return self._strategy
 
     def reset(self, clear_blacklist: bool = False) -> None:
         """Forget the goal and DONE (and the blacklist when asked), as on a (re)start; the
         ``routed`` tour forgets its kept gains and path lengths."""
         self.manager.reset(clear_blacklist=clear_blacklist)
         self._fcache.reset()
-        if self._router is not None:
-            self._router.reset()
+        if self._planner is not None:
+            self._planner.reset()
 
     def report_navigation(self, outcome: NavOutcome,
                           goal: Goal | tuple[float, float] | None = None) -> bool:
@@ -277,18 +288,18 @@ class Explorer:
         reference; the ``routed`` tour forgets its kept path lengths and gains (a sim
         reset comes with a new map)."""
         self.manager.restart_timers(now_s)
-        if self._router is not None:
-            self._router.reset()
+        if self._planner is not None:
+            self._planner.reset()
 
     # ------------------------------------------------------------------- step
     def _detect(self, grid: GridMap, layer: GridMap | None) -> None:
         self._fcache.start(grid)
         det = detect_frontiers(grid, layer, self._fp,
-                               groups=self._sp.strategy not in RRT_STRATEGIES,
+                               groups=self._strategy.candidates == "groups",
                                cache=self._fcache)
         self._det = det
         self._layer_warning = det.layer_warning
-        self._frontiers = (det.frontiers if self._router is None else split_frontiers(
+        self._frontiers = (det.frontiers if self._planner is None else split_frontiers(
             grid, det.frontiers, self._sp.frontier_split_m, self._fp, det.extra_obstacles,
             det.passable, self._fcache))
         self._graph = PathGraphs(grid, det.extra_obstacles, self._fp, self._sp, det.passable)
@@ -333,7 +344,7 @@ class Explorer:
         if detected:
             self._detect(grid, layer)
         x, y, yaw = (float(v) for v in pose)
-        if self._sp.strategy in RRT_STRATEGIES:
+        if self._strategy.candidates == "rrt":
             self._detect_rrt(grid, (x, y))
             detected = True
         if self._layer_warning:
@@ -349,10 +360,10 @@ class Explorer:
         frontiers = self._frontiers
         robot_rc = grid.world_to_cell(x, y)
         start = self._start_cell(grid, robot_rc, (x, y), warnings)
-        router, tour = self._router, None
-        if router is not None:
+        planner, tour = self._planner, None
+        if planner is not None:
             assert self._det is not None
-            frontiers = router.viewpoints(grid, frontiers, self._graph, start,
+            frontiers = planner.viewpoints(grid, frontiers, self._graph, start,
                                           self._det.passable)
         dist, excluded = self._distances(start, robot_rc, frontiers)
         if (self._sp.lookout_goals and dist is not None and len(dist)
@@ -364,8 +375,8 @@ class Explorer:
                                        self._det.passable, self._sp,
                                        self._fp.occupied_threshold, excluded, hop)
             excluded = manager.excluded(frontiers)
-        if router is not None and dist is not None:
-            tour = router.tour_costs(grid, frontiers, dist, excluded, self._graph, robot_rc,
+        if planner is not None and dist is not None:
+            tour = planner.tour_costs(grid, frontiers, dist, excluded, self._graph, robot_rc,
                                      labels, manager.goal_frontier(grid, frontiers))
         old_goal = manager.goal
         added = manager.blacklist_added
@@ -381,7 +392,7 @@ class Explorer:
         return ExplorerStep(res.action, res.goal, res.reason, res.selection, frontiers, dist,
                             robot_rc, detected, blacklisted, switched, tuple(warnings),
                             t1 - t0, time.perf_counter() - t1, tour,
-                            router.viewpoint_s + router.tour_s if router is not None else 0.0)
+                            planner.viewpoint_s + planner.tour_s if planner is not None else 0.0)
 
     def _start_cell(self, grid: GridMap, robot_rc: tuple[int, int], xy: tuple[float, float],
                     warnings: list[tuple[str, str]]) -> tuple[int, int] | None:

@@ -13,7 +13,7 @@ import numpy as np
 
 from scripts.demo_lib.config import DemoConfig
 from scripts.demo_lib.monitor import Monitor
-from sim_bridge.lockstep import STRATEGY_SPECS
+from sim_bridge.lockstep import strategy_spec
 
 
 def write_outputs(cfg: DemoConfig, out: Path, mon: Monitor, gif, sim_json: dict[str, Any],
@@ -64,7 +64,7 @@ def write_outputs(cfg: DemoConfig, out: Path, mon: Monitor, gif, sim_json: dict[
         "nav_raw": {"ends": sorted(mon.nav_ends.values(), key=lambda e: e[1]),
                     "goal_times": mon.goal_times},
         "camera_frames_rendered": (int(mon.sim_time_s * cfg.camera_rate_hz)
-                                   if STRATEGY_SPECS[cfg.strategy].use_objects else 0),
+                                   if strategy_spec(cfg.strategy).use_objects else 0),
         "objects": [np.round(b, 3).tolist() for b in mon.boxes],
         "collision_events": sim_json.get("collision_events", []),
         "coverage_history": samples, "files": files,

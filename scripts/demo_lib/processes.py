@@ -11,13 +11,13 @@ from typing import Any
 
 from scripts.demo_lib.config import REAL_ROBOT_SIM, ROOT, DemoConfig
 from sim_bridge.engine import SimParams
-from sim_bridge.lockstep import STRATEGY_SPECS, LockstepParams
+from sim_bridge.lockstep import LockstepParams, strategy_spec
 
 
 def sim_command(cfg: DemoConfig) -> list[str]:
     """Command line of the simulator process."""
 
-    spec = STRATEGY_SPECS[cfg.strategy]
+    spec = strategy_spec(cfg.strategy)
     sp = SimParams()
     w = max(16, int(round(sp.camera_width_px * cfg.camera_scale)))
     h = max(16, int(round(sp.camera_height_px * cfg.camera_scale)))
@@ -39,7 +39,7 @@ def sim_command(cfg: DemoConfig) -> list[str]:
 
 def explorer_command(cfg: DemoConfig) -> list[str]:
     """Command line of the explorer process (strategy mapped onto its parameters)."""
-    spec = STRATEGY_SPECS[cfg.strategy]
+    spec = strategy_spec(cfg.strategy)
     cmd = [sys.executable, "-m", "explore_seg.explorer", "--threads", str(cfg.explorer_threads)]
     if not spec.use_objects:
         cmd += ["--without", "object_costmap"]

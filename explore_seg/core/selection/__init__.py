@@ -2,7 +2,8 @@
 
 One concern per module:
 
-* :mod:`.strategies`: the cost functions, one table entry per strategy;
+* :mod:`.strategy`: what a strategy is and the registry by name; :mod:`.strategies`: the
+  built-in strategies, one module each (how to add one: its docstring);
 * :mod:`.params`: :class:`SelectionParams` (algorithm) and :class:`SelectorNodeParams`;
 * :mod:`.regions`: region ids of cells and cPoints from DuDe labels;
 * :mod:`.costs`: costs of all frontiers and the cheapest (:func:`select_goal`);
@@ -20,6 +21,9 @@ Traces of where each strategy loses time, and the rules measured against them, a
 docs/experiments.md (e.g. docs/experiments.md#paper-where-time-goes).
 """
 
+# The built-in strategies register first: SelectionParams checks its strategy against the
+# registry, and modules below build default SelectionParams when they are imported.
+from explore_seg.core.selection import strategies  # noqa: I001
 from explore_seg.core.selection.costs import Selection, compute_costs, select_goal
 from explore_seg.core.selection.distances import PathGraphs, frontier_distances
 from explore_seg.core.selection.goals import (Action, Goal, GoalManager, NavOutcome,
@@ -30,6 +34,8 @@ from explore_seg.core.selection.regions import frontier_regions, region_at
 from explore_seg.core.selection.router import Router, TourPlan
 from explore_seg.core.selection.strategies import (COST_FUNCTIONS, REGION_STRATEGIES,
                                                    RRT_STRATEGIES, STRATEGIES, CostInputs)
+from explore_seg.core.selection.strategy import (GoalOptions, Strategy, get_strategy, register,
+                                                 strategy_names, unregister)
 
 __all__ = [
     "Action", "COST_FUNCTIONS", "CostInputs", "Goal", "GoalManager", "NavOutcome", "POSE_TOPIC_TYPES",
@@ -37,4 +43,5 @@ __all__ = [
     "Selection", "SelectionParams",
     "SelectorNodeParams", "StepResult", "compute_costs", "frontier_distances",
     "frontier_regions", "goal_yaw", "region_at", "select_goal",
+    "GoalOptions", "Strategy", "get_strategy", "register", "strategy_names", "unregister",
 ]

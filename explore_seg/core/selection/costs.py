@@ -1,7 +1,8 @@
 """Frontier costs and the choice of the cheapest (Kim, Kim & Lee, RA-L 2022, Alg. 2 and
 eq. 1-3).
 
-The strategies (:data:`~explore_seg.core.selection.strategies.COST_FUNCTIONS`) score every frontier group ``i`` (lower is better; unreachable = inf):
+The strategies (:mod:`explore_seg.core.selection.strategies`) score every frontier group
+``i`` (lower is better; unreachable = inf):
 
 * ``paper`` (eq. 1-3)::
 
@@ -51,8 +52,7 @@ from explore_seg.core.frontiers import Frontier
 from explore_seg.core.grid import metres_to_cells
 from explore_seg.core.selection.params import SelectionParams
 from explore_seg.core.selection.regions import frontier_regions, region_at
-from explore_seg.core.selection.strategies import (COST_FUNCTIONS, REGION_STRATEGIES,
-                                                   CostInputs)
+from explore_seg.core.selection.strategy import CostInputs, get_strategy
 
 
 def _resolution(frontiers: Sequence[Frontier]) -> float:
@@ -124,7 +124,7 @@ def compute_costs(frontiers: Sequence[Frontier], dist_m: npt.ArrayLike,
         regions=reg, robot_region=int(robot_region),
         info_gain_m2=np.asarray([f.info_gain_m2 for f in frontiers], dtype=np.float64),
         tour_cost_m=None if tour_cost_m is None else np.asarray(tour_cost_m, np.float64))
-    costs[finite] = COST_FUNCTIONS[params.strategy](inputs, params)
+    costs[finite] = get_strategy(params.strategy).cost(inputs, params)
     return costs
 
 
@@ -198,7 +198,8 @@ def select_goal(frontiers: Sequence[Frontier], dist_m: npt.ArrayLike,
     regions = frontier_regions(frontiers, use_labels, rad)
     costs = compute_costs(frontiers, dist_m, use_labels, robot_region, params, regions,
                           tour_cost_m)
-    active = params.strategy in REGION_STRATEGIES and use_labels is not None and robot_region > 0
+    active = (get_strategy(params.strategy).region_term and use_labels is not None
+              and robot_region > 0)
     pick = costs.copy()
     if excluded is not None:
         ex = np.asarray(excluded, dtype=bool).reshape(-1)

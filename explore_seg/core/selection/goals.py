@@ -19,6 +19,7 @@ from explore_seg.core.frontiers import Frontier
 from explore_seg.core.grid import GridMap
 from explore_seg.core.selection.costs import Selection, select_goal
 from explore_seg.core.selection.params import SelectionParams
+from explore_seg.core.selection.strategy import get_strategy
 
 #: Goal points kept per counted area (vanished frontiers, revealed arrivals), and areas
 #: kept per kind (oldest dropped).
@@ -416,7 +417,8 @@ class GoalManager:
                     self._last_progress_s = now_s
                 self._best_path_dist = d_path
         reached_m = p.goal_reached_tolerance_m
-        if p.strategy == "routed" and not self.goal.is_return:
+        options = get_strategy(p.strategy).goals
+        if options.handover and not self.goal.is_return:
             reached_m = max(reached_m, p.handover_m)
         if d_goal <= reached_m or self._nav_succeeded:
             if self.goal.is_return:
@@ -431,7 +433,7 @@ class GoalManager:
                                   "goal reached: waiting for the map to update"), ""
             self._arrived_s = None
             if self._matching(grid, frontiers) is not None:
-                if (p.strategy != "routed"
+                if (not options.reveal_on_arrival
                         or self._still_unknown(grid) >= p.reached_unknown_fraction):
                     self.abandon_goal(blacklist=True)
                     return None, "goal reached but its frontier remains: blacklisted"

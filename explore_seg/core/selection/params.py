@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from explore_seg.core.fields import INT_MAX, param_meta
 from explore_seg.core.block_graph import MAX_BLOCK_CELLS
 from explore_seg.core.pose_fusion import POSE_SOURCE_DOC, POSE_SOURCES
-from explore_seg.core.selection.strategies import STRATEGIES
+from explore_seg.core.selection.strategy import get_strategy, strategy_names
 
 #: Robot pose sources (one home: :mod:`explore_seg.core.pose_fusion`).
 POSE_TOPIC_TYPES = POSE_SOURCES
@@ -32,7 +32,7 @@ class SelectionParams:
     """Parameters of target selection (the strategy's cost) and of the goal manager."""
 
     strategy: str = field(default="routed", metadata=param_meta(
-        "cost function: " + " | ".join(STRATEGIES)))
+        "cost function: " + " | ".join(strategy_names())))
     alpha: float = _non_negative("paper: weight of distGain", default=1.0)
     beta: float = _non_negative("paper: weight of 1/sizeGain", default=0.001)
     gamma: float = _non_negative(
@@ -176,8 +176,7 @@ class SelectionParams:
         default=1.0)
 
     def __post_init__(self) -> None:
-        if self.strategy not in STRATEGIES:
-            raise ValueError(f"strategy must be one of {STRATEGIES}, got {self.strategy!r}")
+        get_strategy(self.strategy)   # raises ValueError naming the registered ones
         for name in ("alpha", "beta", "gamma", "potential_scale", "gain_scale",
                      "info_multiplier", "hysteresis_radius_m", "hysteresis_gain",
                      "region_search_radius_m", "start_search_radius_m", "hysteresis_margin",
