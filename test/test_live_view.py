@@ -21,9 +21,11 @@ SCRIPT = ROOT / "scripts" / "run_demo.sh"
 RVIZ = ROOT / "config" / "explore_seg.rviz"
 
 
-def _run(env_extra: dict[str, str], *args: str) -> subprocess.CompletedProcess:
-    env = {k: v for k, v in os.environ.items()
-           if k not in ("LIVE", "DEMO_RTF", "DEMO_MAX_SIM_TIME", "DEMO_WORLD")}
+def _run(env_extra: dict[str, str], *args: str,
+         unset: tuple[str, ...] = ()) -> subprocess.CompletedProcess:
+    """scripts/run_demo.sh as a dry run, with ``env_extra`` set and ``unset`` removed."""
+    drop = {"LIVE", "DEMO_RTF", "DEMO_MAX_SIM_TIME", "DEMO_WORLD", *unset}
+    env = {k: v for k, v in os.environ.items() if k not in drop}
     env.update({"DEMO_DRY_RUN": "1", **env_extra})
     return subprocess.run(["bash", str(SCRIPT), "/tmp/explore_seg_live_test", *args],
                           env=env, capture_output=True, text=True, timeout=30)
@@ -55,11 +57,7 @@ def test_live_runs_at_real_time_on_a_printed_domain_without_a_namespace():
 
 
 def test_live_picks_and_prints_a_domain_when_none_is_set():
-    env = {"LIVE": "1"}
-    r = subprocess.run(["bash", str(SCRIPT), "/tmp/x"], capture_output=True, text=True,
-                       timeout=30, env={**{k: v for k, v in os.environ.items()
-                                           if k != "ROS_DOMAIN_ID"}, "DEMO_DRY_RUN": "1",
-                                        **env})
+    r = _run({"LIVE": "1"}, unset=("ROS_DOMAIN_ID",))
     assert r.returncode == 0, r.stderr
     ids = set(re.findall(r"ROS_DOMAIN_ID=(\d+)", r.stdout))
     assert len(ids) == 1 and 0 <= int(ids.pop()) <= 101, r.stdout
@@ -126,15 +124,10 @@ def _rviz_displays() -> list[dict]:
     return out
 
 
-def _params_of(cmd: list[str]) -> dict:
-    return {a.split(":=", 1)[0]: yaml.safe_load(a.split(":=", 1)[1])
-            for flag, a in zip(cmd, cmd[1:]) if flag == "-p"}
-
-
 def test_rviz_config_shows_only_what_the_demo_publishes(ros, tmp_path):
     from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
 
-    from explore_seg.explorer import COMPONENTS, node_classes
+    from explore_seg.explorer import COMPONENTS, cli_overrides, node_classes
     from explore_seg.params import overrides_from_dict
     from scripts.demo_lib import DemoConfig, explorer_command, sim_command
     from sim_bridge.node import SimBridgeNode
@@ -142,10 +135,10 @@ def test_rviz_config_shows_only_what_the_demo_publishes(ros, tmp_path):
     cfg = DemoConfig(out_dir=str(tmp_path))
     sim = ros.add(SimBridgeNode(context=ros.context,
                                 parameter_overrides=overrides_from_dict(
-                                    _params_of(sim_command(cfg)))))
+                                    cli_overrides(sim_command(cfg)))))
     ecmd = explorer_command(cfg)
     assert "--without" not in ecmd, "the demo's default strategy runs every explorer node"
-    eparams = _params_of(ecmd)
+    eparams = cli_overrides(ecmd)
     nodes = [sim] + [ros.add(cls(context=ros.context,
                                  parameter_overrides=overrides_from_dict(eparams)))
                      for cls in node_classes(set())]
