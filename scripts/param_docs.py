@@ -57,6 +57,7 @@ PARAM_FILES: dict[str, list[str]] = {
 #: The generated parameter reference (written whole; never edit it by hand).
 PARAMS_DOC = "docs/parameters.md"
 
+
 def load_class(spec: str) -> type:
     """Import ``module:Name``."""
     mod, name = spec.split(":")
