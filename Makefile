@@ -2,6 +2,7 @@
 SHELL := /bin/bash
 PY := .venv/bin/python
 OUT ?= out/demo
+LIVE ?= 0
 BENCH_OUT ?= out/bench
 RUNS ?= 20
 QUICK_OUT ?= out/bench-quick
@@ -10,6 +11,7 @@ QUICK_OUT ?= out/bench-quick
 
 help:
 	@echo "make demo   - headless exploration demo on the embedded cluttered house -> $(OUT)/"
+	@echo "make demo LIVE=1 - the same at real time, watchable in RViz (prints the rviz2 command)"
 	@echo "make test   - the test suite (private network namespace where possible)"
 	@echo "make bench  - benchmarks: strategies x worlds x $(RUNS) runs -> $(BENCH_OUT)/, BENCHMARKS.md"
 	@echo "make bench-quick - a representative subset (~10 min on 2 cores) -> $(QUICK_OUT)/QUICK.md, ratios vs bench/results"
@@ -23,7 +25,7 @@ test: setup
 	@bash scripts/run_tests.sh $(PYTEST_ARGS)
 
 demo: setup
-	@bash scripts/run_demo.sh $(OUT)
+	@LIVE=$(LIVE) bash scripts/run_demo.sh $(OUT)
 
 bench: setup
 	@bash scripts/run_bench.sh $(BENCH_OUT) $(RUNS)

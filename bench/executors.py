@@ -99,7 +99,7 @@ class RayPool:
                         f"--address {address}: no Ray cluster answered ({err}). Is `ray start "
                         "--head` running there, and does this machine hold the cluster's "
                         "token (~/.ray/auth_token from the head node, or RAY_AUTH_TOKEN)? "
-                        "See README, 'Running the benchmark on a Ray cluster'") from None
+                        "See docs/benchmarking.md, 'Ray cluster'") from None
             else:
                 ray.init(num_cpus=jobs, **kw)
         self._remote = ray.remote(num_cpus=1, max_retries=RAY_MAX_RETRIES,

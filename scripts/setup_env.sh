@@ -39,7 +39,7 @@ for cand in python3.11 python3.12 python3.10 python3.13 python3; do
 done
 if [ -z "$PY" ]; then log "need Python 3.10-3.13 (the ROS 2 Jazzy wheels are cp310-cp313, x86_64)"; exit 1; fi
 if [ "$(uname -m)" != x86_64 ]; then
-  log "warning: ROS wheels exist for x86_64 only; on $(uname -m) use a native ROS 2 Jazzy install (see README)"
+  log "warning: ROS wheels exist for x86_64 only; on $(uname -m) use a native ROS 2 Jazzy install (see docs/real_robot.md)"
 fi
 want="$(cat requirements.txt constraints.txt | sha256sum | cut -c1-16) $("$PY" -c 'import sys; print("%d.%d" % sys.version_info[:2])')"
 if [ -f "$STAMP" ] && [ "$(cat "$STAMP")" = "$want" ] && "$VENV/bin/python" -c 'import rclpy, cv2, torch' 2>/dev/null; then

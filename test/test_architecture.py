@@ -212,3 +212,12 @@ def test_decision_loop_is_wired_only_by_the_core_explorer(path):
     used = _used_names(path) & WIRING_NAMES
     assert not used, (f"{path.relative_to(ROOT)} wires {sorted(used)} by hand: call "
                       "explore_seg.core.explorer.Explorer.step instead")
+
+
+@pytest.mark.parametrize("path", _files("explore_seg") + _files("sim_bridge"),
+                         ids=lambda p: str(p.relative_to(ROOT)))
+def test_package_and_simulator_never_import_bench_or_scripts(path):
+    """bench/ and scripts/ sit on top: they import the package and the simulator, never
+    the reverse (function-level imports included)."""
+    for mod in _all_imports(path):
+        assert mod.split(".")[0] not in ("bench", "scripts"), f"{path} imports {mod}"
