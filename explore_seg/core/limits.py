@@ -76,11 +76,12 @@ class InputLimits:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
 
     def check_map_size(self, width: int, height: int, resolution_m: float) -> None:
-        """Raise ``ValueError`` when a claimed map geometry exceeds the limits (allocates
-        nothing)."""
+        """Raise ``ValueError`` when a claimed map geometry is empty or exceeds the limits
+        (allocates nothing)."""
         w, h = int(width), int(height)
-        if w < 0 or h < 0:
-            raise ValueError(f"map size must be >= 0, got {w}x{h}")
+        if w < 1 or h < 1:
+            # an empty map (e.g. width=0, data=[]) would replace the last good one
+            raise ValueError(f"map size must be at least 1x1 cells, got {w}x{h}")
         if w * h > self.max_map_cells:
             raise ValueError(f"map claims {w}x{h} = {w * h} cells, more than "
                              f"input.max_map_cells = {self.max_map_cells}")
