@@ -123,7 +123,8 @@ class ObjectCostmapNode(Node):
         self._warn_lag = WarnThrottle(self, _LAG_WARN_PERIOD_S)
         # Time model: jumps of the camera/pose stamps or the clock reset what is keyed by
         # time; the watchdog says why frames that arrive are not processed.
-        self._time = TimeGuard(self._lp.params.clock_jump_s)
+        self._time = TimeGuard(self._lp.params.clock_jump_s,
+                               clock=lambda: self.get_clock().now().nanoseconds)
         self._stall = StallWatchdog(self._lp.params.stall_periods * _POLLS_PER_PERIOD)
         #: Clock jumps seen (any stream).
         self.time_jumps = 0

@@ -86,3 +86,53 @@ def test_an_empty_map_on_the_topic_keeps_the_last_good_one_in_every_node(ros, wi
     assert seg.processed == processed and seg.last_labels.shape == good.shape
     assert sel._grid.shape == good.shape                              # noqa: SLF001
     assert all((img.height, img.width) == good.shape for img in regions)
+
+
+# ------------------------------------------------------------------ finding 2
+def _on_sim_time(node, t_ns: int) -> None:
+    """Set the node's ROS clock to ``t_ns`` (simulated time, no /clock publisher)."""
+    clock = node.get_clock()
+    clock._set_ros_time_is_active(True)                               # noqa: SLF001
+    clock.set_ros_time_override(RosTime(nanoseconds=t_ns))
+
+
+def _slow_maps(node, on_map, period_s: float, maps: int, tick_s: float,
+               start_ns: int = 1000 * S, lag_ns: int = S // 5) -> int:
+    """Run ``node`` on a clock that steps ``tick_s`` per tick; every ``period_s`` a map
+    stamped ``lag_ns`` before the clock arrives (a SLAM map's true stamp). Returns the
+    clock at the end (ns)."""
+    grid = _corridor()
+    t = start_ns
+    for _ in range(maps):
+        _on_sim_time(node, t)
+        on_map(convert.grid_to_msg(grid, stamp=t - lag_ns))
+        for _ in range(int(round(period_s / tick_s))):
+            tick(node)
+            t += int(tick_s * S)
+            _on_sim_time(node, t)
+    return t
+
+
+@pytest.mark.parametrize("which", ["frontier_detector", "segmentation"])
+def test_maps_every_6_s_with_true_stamps_are_no_clock_jump(ros, which):
+    from explore_seg.frontier_node import FrontierDetectorNode
+    from explore_seg.segmentation_node import SegmentationNode
+
+    sim = Parameter("use_sim_time", value=True)
+    if which == "frontier_detector":
+        node = ros.add(FrontierDetectorNode(context=ros.context, parameter_overrides=[sim]))
+        tick_s = 1.0 / node.node_params.rate_hz
+    else:
+        node = ros.add(SegmentationNode(context=ros.context, parameter_overrides=[
+            sim, Parameter("tau_m", value=2.5)]))
+        tick_s = node.params.process_period_s
+    log = LogCapture(node)
+    t = _slow_maps(node, node._on_map, 6.0, 5, tick_s)                # noqa: SLF001
+    assert node.time_jumps == 0, "\n".join(m for _, m in log.lines)
+    assert not [m for _, m in log.lines if "jumped" in m]
+    # A real jump is still one: stamps 60 s ahead of a clock that moved on 1 tick.
+    _on_sim_time(node, t)
+    node._on_map(convert.grid_to_msg(_corridor(), stamp=t + 60 * S))   # noqa: SLF001
+    tick(node)
+    assert node.time_jumps == 1
+    assert any("map stamps jumped ahead" in m and "by 66.2 s: 1023.800 -> 1090.000 s" in m for _, m in log.lines)

@@ -56,7 +56,9 @@ class InputLimits:
         range=(0.0, math.inf)))
     clock_jump_s: float = field(default=5.0, metadata=param_meta(
         "a stamp or the node clock going back (sim reset) or ahead (future-stamped input) by "
-        "more than this is a clock jump: time-keyed state is reset and it is logged once; "
+        "more than this is a clock jump (a stamp's step ahead counts beyond the time the "
+        "node clock advanced since that stream's previous stamp: a slow map publisher is "
+        "none): time-keyed state is reset and it is logged once; "
         "streams whose newest stamps differ by more than this are reported as clock sources "
         "that disagree", "s", range=(0.0, math.inf)))
     stall_periods: int = field(default=10, metadata=param_meta(
