@@ -12,7 +12,9 @@ boxes into an :class:`~explore_seg.core.objects.ObjectMap` and publishes the lay
 markers only while they have subscribers). Frames that arrive while a frame is processed
 are dropped (only the newest few are kept for pairing); when the node processes less than
 half of the frames it could (``rate_hz`` or the camera's rate, whichever is lower) over
-``_LAG_WINDOW_S`` of ROS time, it warns: the layer then lags behind the robot. While
+``_LAG_WINDOW_S`` of ROS time, it warns, naming the cause (malformed frames, frames
+without a robot pose at their stamp, or too little CPU: the layer lags behind). A bad
+``scan`` is dropped on arrival and the last good one kept. While
 ``exploration_done`` is true (and ``idle_when_done``) the timer is paused
 (:class:`~explore_seg.done_gate.DoneGate`).
 """
@@ -116,8 +118,14 @@ class ObjectCostmapNode(Node):
         self.frames_processed = 0
         #: Depth images received (each one a camera frame).
         self.frames_received = 0
-        #: (ROS time ns, frames_received, frames_processed) at the start of the lag window.
-        self._lag_mark: tuple[int, int, int] | None = None
+        #: Frames taken for processing but dropped: malformed, or no robot pose at their stamp.
+        self.frames_malformed = 0
+        self.frames_without_pose = 0
+        #: The last frame taken was dropped for want of a robot pose at its stamp.
+        self._pose_missing = False
+        #: (ROS time ns, frames_received, frames_processed, frames_malformed,
+        #: frames_without_pose) at the start of the lag window.
+        self._lag_mark: tuple[int, int, int, int, int] | None = None
         self._warn = WarnThrottle(self, _WARN_PERIOD_S)
         self.failures = 0          # cycles lost to an exception (node_util.failsafe)
         self._warn_lag = WarnThrottle(self, _LAG_WARN_PERIOD_S)
@@ -209,6 +217,7 @@ class ObjectCostmapNode(Node):
         neither is a clock jump, a stall nor a lag."""
         self._time.forget()
         self._stall.reset()
+        self._pose_missing = False
         self._lag_mark = None
 
     def _limits_changed(self, old: InputLimits, new: InputLimits) -> None:
@@ -269,6 +278,14 @@ class ObjectCostmapNode(Node):
             self._drop("camera_info", str(err))
 
     def _on_scan(self, msg: LaserScan) -> None:
+        # Checked on arrival: a bad scan is dropped once and the last good one kept (it is
+        # used for every frame until the next scan).
+        try:
+            convert.checked_stamp_ns(msg.header.stamp, "scan")
+            convert.scan_ranges(msg)
+        except ValueError as err:
+            self._drop("scan", str(err))
+            return
         self._scan = msg
 
     def _on_map(self, msg: OccupancyGrid) -> None:
@@ -303,8 +320,10 @@ class ObjectCostmapNode(Node):
         self._observe("clock", self.get_clock().now().nanoseconds, period_ns)
         processed = self.frames_processed
         self._tick_inner()
-        reason = self._stall.tick(self._frames_waiting(), self.frames_processed > processed,
-                                  self._wait_reason)
+        # A last frame dropped for want of a pose counts as waiting: with poses stamped
+        # ahead of the camera each frame is taken and dropped at once, none waits.
+        reason = self._stall.tick(self._frames_waiting() or self._pose_missing,
+                                  self.frames_processed > processed, self._wait_reason)
         if reason is not None:
             self._warn("stall", f"camera frames arrive but none was processed for "
                                 f"{self._lp.params.stall_periods} periods: {reason}")
@@ -323,10 +342,10 @@ class ObjectCostmapNode(Node):
 
     def _wait_reason(self) -> str:
         p = self.params
-        newest_pose = self._pose_in.newest_ns()
+        span = self._pose_in.span_ns()
         text = wait_reason([_stamp_ns(m) for m in self._depths],
                            [_stamp_ns(m) for m in self._colors],
-                           [] if newest_pose is None else [newest_pose],
+                           [] if span is None else list(span),
                            self._last_depth_ns, p.sync_tolerance_s, p.pose_tolerance_s,
                            _MIN_GAP_PERIODS / p.rate_hz)
         skew = self._time.disagreement("camera", "pose")
@@ -350,25 +369,24 @@ class ObjectCostmapNode(Node):
         self._check_lag()
 
     def _check_lag(self) -> None:
-        """Warn when fewer than half of the frames that could be processed were."""
+        """Warn when fewer than half of the frames that could be processed were, naming
+        the main cause: malformed frames, frames without a robot pose, or too little CPU."""
         now = self.get_clock().now().nanoseconds
         mark = self._lag_mark
+        counts = (self.frames_received, self.frames_processed, self.frames_malformed,
+                  self.frames_without_pose)
         if mark is None or now < mark[0]:          # first frame, or the clock jumped back
-            self._lag_mark = (now, self.frames_received, self.frames_processed)
+            self._lag_mark = (now, *counts)
             return
         span_s = (now - mark[0]) / 1e9
         if span_s < _LAG_WINDOW_S:
             return
-        received = self.frames_received - mark[1]
-        processed = self.frames_processed - mark[2]
+        received, processed, malformed, no_pose = (c - m for c, m in zip(counts, mark[1:]))
         possible = min(received, span_s * self.params.rate_hz)
-        self._lag_mark = (now, self.frames_received, self.frames_processed)
+        self._lag_mark = (now, *counts)
         if processed < 0.5 * possible:
-            self._warn_lag("lag", (
-                f"processed {processed} of {received} camera frames in the last {span_s:.0f} s "
-                f"(rate_hz {self.params.rate_hz:g}): the object layer lags behind the robot; "
-                "lower the camera rate or the simulation's real-time factor, or run "
-                "object_costmap in a process of its own"))
+            self._warn_lag("lag", lag_warning(processed, received, span_s, self.params.rate_hz,
+                                              malformed, no_pose))
 
     def _newest_pair(self) -> tuple[Image, Image, Image | None] | None:
         """Oldest unprocessed depth at least the least gap after the last processed one,
@@ -427,9 +445,14 @@ class ObjectCostmapNode(Node):
         t_ns = _stamp_ns(depth_msg)
         pose = self._pose_at(t_ns)
         self._last_depth_ns = t_ns
+        self._pose_missing = False
         if pose is None:
+            self.frames_without_pose += 1
+            self._pose_missing = True
+            skew = self._time.disagreement("camera", "pose")
             self._drop("frame", f"no robot pose within {p.pose_tolerance_s} s of the image "
-                                f"({t_ns / 1e9:.2f} s; {self._pose_in.describe()})")
+                                f"({t_ns / 1e9:.2f} s; {self._pose_in.describe()})"
+                                + (f"; {skew}" if skew else ""))
             return
         try:
             depth = convert.depth_from_msg(depth_msg)
@@ -447,6 +470,7 @@ class ObjectCostmapNode(Node):
             if not np.isfinite(depth).any():
                 raise ValueError("depth image has no valid pixel")
         except ValueError as err:
+            self.frames_malformed += 1
             self._drop("frame", str(err))
             return
         t0 = time.perf_counter()
@@ -519,6 +543,33 @@ class ObjectCostmapNode(Node):
             self._pub_cloud.publish(convert.cloud_to_msg(convert.xyz_cloud(cloud), header))
         if self._pub_markers.get_subscription_count() > 0:
             self._pub_markers.publish(_markers(self._objects.boxes(), header))
+
+
+def lag_warning(processed: int, received: int, span_s: float, rate_hz: float,
+                malformed: int, without_pose: int) -> str:
+    """The frame-lag warning: how many frames were processed, and why the others were not
+    (malformed, no robot pose at their stamp, or not reached: too little CPU), with the
+    advice for the largest share.
+
+    >>> text = lag_warning(0, 40, 20.0, 2.0, malformed=0, without_pose=40)
+    >>> text.startswith("processed 0 of 40 camera frames"), "lags behind" in text
+    (True, False)
+    """
+    head = f"processed {processed} of {received} camera frames in the last {span_s:.0f} s " \
+           f"(rate_hz {rate_hz:g}): "
+    possible = min(received, span_s * rate_hz)
+    unreached = max(0, round(possible - processed - malformed - without_pose))
+    causes = [(without_pose, f"{without_pose} had no robot pose at their stamp",
+               "check the pose source and its clock (see the 'dropped frame' warnings)"),
+              (malformed, f"{malformed} malformed",
+               "the camera sends frames that cannot be used (see the 'dropped frame' "
+               "warnings)"),
+              (unreached, f"{unreached} not reached in time",
+               "the object layer lags behind the robot; lower the camera rate or the "
+               "simulation's real-time factor, or run object_costmap in a process of its "
+               "own")]
+    advice = max(causes, key=lambda c: c[0])[2]
+    return head + ", ".join(c[1] for c in causes) + "; " + advice
 
 
 def _closest(msgs, t_ns: int, tol_ns: int):

@@ -135,4 +135,92 @@ def test_maps_every_6_s_with_true_stamps_are_no_clock_jump(ros, which):
     node._on_map(convert.grid_to_msg(_corridor(), stamp=t + 60 * S))   # noqa: SLF001
     tick(node)
     assert node.time_jumps == 1
-    assert any("map stamps jumped ahead" in m and "by 66.2 s: 1023.800 -> 1090.000 s" in m for _, m in log.lines)
+    assert any("map stamps jumped ahead" in m and "by 66.2 s: 1023.800 -> 1090.000 s" in m
+               for _, m in log.lines)
+
+
+# ------------------------------------------------------------------ finding 5
+def test_a_bad_scan_is_dropped_at_once_and_the_last_good_one_kept(ros):
+    from test_robustness import _costmap
+
+    node = _costmap(ros, unknown_enabled=True)
+    header = convert.make_header("base_scan", 10 * S)
+    good = convert.scan_to_msg([1.0, 2.0, 1.5], -0.1, 0.1, 0.1, 10.0, header)
+    node._on_scan(good)                                               # noqa: SLF001
+    bad = convert.scan_to_msg([], 0.0, 0.1, 0.1, 10.0, header)
+    node._on_scan(bad)                                                # noqa: SLF001
+    assert node.dropped["scan"] == 1 and "scan has no ranges" in node.last_drop["scan"]
+    assert "dropped scan: scan has no ranges" in node._warn.text("scan")
+    # every later frame uses the good scan: nothing is re-reported
+    for _ in range(3):
+        pts = node._scan_points(10 * S, (0.0, 0.0, 0.0))              # noqa: SLF001
+        assert pts is not None and len(pts) == 3
+    assert node.dropped["scan"] == 1
+
+
+def _frames_without_poses(node, pose_ns: int, frame_ns: int, n: int) -> None:
+    """Odometry around ``pose_ns``; ``n`` camera frames from ``frame_ns``, 0.5 s apart,
+    each taken (and dropped) by a tick."""
+    from test_robustness import _frame, _odom
+
+    for k in range(5):
+        node._pose_in._on_odom(_odom(pose_ns + k * S // 10))         # noqa: SLF001
+    for k in range(n):
+        _frame(node, frame_ns + k * S // 2)
+        node._tick()                                                  # noqa: SLF001
+
+
+@pytest.mark.parametrize("cause", ["no_pose", "malformed"])
+def test_the_frame_lag_warning_names_the_real_cause(ros, cause):
+    from test_robustness import K, Log, _costmap
+
+    node = _costmap(ros)
+    node._info = K                                                    # noqa: SLF001
+    node._warn_lag = Log()                                            # noqa: SLF001
+    if cause == "no_pose":
+        _frames_without_poses(node, 100_000 * S, 10 * S, 4)          # odometry far ahead
+    else:
+        _frames_without_poses(node, 10 * S, 10 * S, 1)               # mono8 depth: malformed
+    assert node.frames_processed == 0
+    # the lag window (20 s) began before these frames: judge it now
+    now = node.get_clock().now().nanoseconds
+    node._lag_mark = (now - 25 * S, 0, 0, 0, 0)                      # noqa: SLF001
+    node._check_lag()                                                 # noqa: SLF001
+    text = node._warn_lag.text("lag")                                 # noqa: SLF001
+    n = node.frames_received
+    assert f"processed 0 of {n} camera frames" in text
+    assert "lags behind" not in text and "process of its own" not in text
+    if cause == "no_pose":
+        assert f"{n} had no robot pose at their stamp" in text and "pose source" in text
+    else:
+        assert f"{n} malformed" in text and "cannot be used" in text
+
+
+def test_the_frame_lag_warning_still_blames_the_cpu_when_frames_are_not_reached(ros):
+    from test_robustness import Log, _costmap
+
+    node = _costmap(ros)
+    node._warn_lag = Log()                                            # noqa: SLF001
+    now = node.get_clock().now().nanoseconds
+    node._lag_mark = (now - 25 * S, 50, 40, 0, 0)                    # noqa: SLF001
+    node.frames_received, node.frames_processed = 100, 50             # 10 of 50 possible
+    node.frames_malformed = 2
+    node._check_lag()                                                 # noqa: SLF001
+    text = node._warn_lag.text("lag")                                 # noqa: SLF001
+    assert "processed 10 of 50 camera frames" in text and "2 malformed" in text
+    assert "38 not reached in time" in text and "lags behind the robot" in text
+
+
+# ------------------------------------------------------------------ finding 3
+def test_odometry_ahead_of_the_camera_is_diagnosed_like_odometry_behind(ros):
+    from test_robustness import K, _costmap
+
+    node = _costmap(ros, **{"input.stall_periods": 2})
+    node._info = K                                                    # noqa: SLF001
+    _frames_without_poses(node, 100_000 * S, 10 * S, 8)              # odometry 1e5 s ahead
+    assert node.frames_processed == 0
+    skew = "clock sources disagree: camera stamps are 99986.9 s behind pose stamps"
+    assert skew in node.last_drop["frame"]                            # the throttled drop line
+    stall = node._warn.text("stall")
+    assert "no pose older than image stamp 13.500 s (oldest pose 100000.000 s" in stall
+    assert skew in stall
