@@ -33,14 +33,24 @@ def wait_reason(depth_ns: Sequence[int], color_ns: Sequence[int], pose_ns: Seque
                 min_gap_s: float) -> str:
     """Why the newest depth image is not processed, naming the stamps involved.
 
+    ``pose_ns``: the stamps of the poses held (their oldest and newest suffice).
+
     Examples
     --------
     >>> wait_reason([100 * 10**9], [100 * 10**9], [50 * 10**9], None, 0.05, 0.2, 0.45)
     'no pose newer than image stamp 100.000 s (newest pose 50.000 s, pose_tolerance_s 0.2)'
+    >>> wait_reason([100 * 10**9], [100 * 10**9], [900 * 10**9, 901 * 10**9], 100 * 10**9,
+    ...             0.05, 0.2, 0.45)
+    'no pose older than image stamp 100.000 s (oldest pose 900.000 s, pose_tolerance_s 0.2)'
     """
     if not depth_ns:
         return "no depth image"
     t = max(depth_ns)
+    if pose_ns and t < min(pose_ns) - int(pose_tol_s * _NS):
+        # Checked first: such frames are dropped as soon as they arrive, so the newest one
+        # is always the last one taken.
+        return (f"no pose older than image stamp {t / _NS:.3f} s (oldest pose "
+                f"{min(pose_ns) / _NS:.3f} s, pose_tolerance_s {pose_tol_s:g})")
     if last_ns is not None and t < last_ns + int(min_gap_s * _NS):
         return (f"newest image stamp {t / _NS:.3f} s is not {min_gap_s:.2f} s after the last "
                 f"processed one ({last_ns / _NS:.3f} s)")
