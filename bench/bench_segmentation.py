@@ -16,8 +16,9 @@ Prints (never asserts):
 3. recall / precision (IPA definition) on ``--houses`` generated 20 m houses, plain and
    cluttered; targets recall >= 90 %, precision >= 95 %;
 4. peak memory of one full and one incremental update of a big, mostly unknown map (a
-   40 m house, half explored, in a ``--mem-cells`` x ``--mem-cells`` grid at 0.05 m),
-   each in a fresh subprocess: the segmenter on the known cells' crop (what
+   40 m house, half explored, in a ``--mem-cells`` x ``--mem-cells`` grid at 0.05 m;
+   ``--mem-layout tiled``: the grid filled with copies of the house, all known, the
+   worst case), each in a fresh subprocess: the segmenter on the known cells' crop (what
    :meth:`IncrementalSegmenter.update` does) and on the whole grid; peak traced
    allocations during the updates (tracemalloc) and the process's peak RSS (ru_maxrss).
 
@@ -88,21 +89,28 @@ def exploration_maps(grid: GridMap, start_rc: tuple[int, int], radius_m: float,
                                   grid.origin_xy_m[1] + r0 * res)), (r0, c0)
 
 
-def memory_child(mode: str, cells: int, tau_m: float) -> str:
+def memory_child(mode: str, cells: int, tau_m: float, layout: str) -> str:
     """One memory measurement (run in a fresh process): ``mode`` ``crop`` or ``whole``.
     Returns the line to print."""
     from sim_bridge.worlds import generate_house, ground_truth
 
     house = ground_truth(generate_house(3, size_m=(40.0, 40.0))).as_map("lidar")
     h, w = house.shape
-    known = np.zeros(house.shape, bool)
-    known[:, : w // 2] = True                              # half explored
-    data = np.full((cells, cells), -1, np.int8)
-    r0, c0 = (cells - h) // 3, (cells - w) // 3
-    data[r0:r0 + h, c0:c0 + w] = np.where(known, house.data, -1)
+    if layout == "tiled":
+        reps = (-(-cells // h), -(-cells // w))
+        data = np.tile(house.data, reps)[:cells, :cells].copy()
+        data2 = data.copy()
+        data2[h // 2, : cells // 2] = 100                  # a new wall: an update
+    else:
+        known = np.zeros(house.shape, bool)
+        known[:, : w // 2] = True                          # half explored
+        data = np.full((cells, cells), -1, np.int8)
+        r0, c0 = (cells - h) // 3, (cells - w) // 3
+        data[r0:r0 + h, c0:c0 + w] = np.where(known, house.data, -1)
+        data2 = data.copy()
+        data2[r0:r0 + h, c0:c0 + w] = np.where(known | (np.arange(w) < w * 0.6),
+                                               house.data, -1)
     grid = GridMap(data, house.resolution_m)
-    data2 = data.copy()
-    data2[r0:r0 + h, c0:c0 + w] = np.where(known | (np.arange(w) < w * 0.6), house.data, -1)
     grid2 = GridMap(data2, house.resolution_m)
     seg = IncrementalSegmenter(SegmentationParams(tau_m=tau_m))
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
@@ -118,7 +126,7 @@ def memory_child(mode: str, cells: int, tau_m: float) -> str:
         peaks.append(tracemalloc.get_traced_memory()[1] / 2**20)
     tracemalloc.stop()
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    return (f"[memory] {mode:5s} {cells}x{cells} cells ({cells * cells / 1e6:.0f} M), "
+    return (f"[memory] {layout} {mode:5s} {cells}x{cells} cells ({cells * cells / 1e6:.0f} M), "
             f"{int((data != -1).sum())} known: traced peak full update {peaks[0]:.0f} MB, "
             f"incremental {peaks[1]:.0f} MB ({seg.last_update_info.mode}); peak RSS "
             f"{rss:.0f} MB ({rss0:.0f} MB before the updates); {times[0] * 1e3:.0f} ms + "
@@ -136,10 +144,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", choices=("memory",), help="run only this part")
     ap.add_argument("--mem-cells", type=int, default=5000,
                     help="side of the big map of the memory part (cells)")
+    ap.add_argument("--mem-layout", choices=("house", "tiled"), default="house",
+                    help="memory part: one half-explored house in unknown space, or the "
+                         "grid tiled with known houses")
     ap.add_argument("--memory-child", choices=("crop", "whole"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.memory_child:
-        print(memory_child(args.memory_child, args.mem_cells, args.tau), flush=True)
+        print(memory_child(args.memory_child, args.mem_cells, args.tau, args.mem_layout),
+              flush=True)
         return 0
     if args.only == "memory":
         return memory_part(args)
@@ -256,7 +268,8 @@ def memory_part(args: argparse.Namespace) -> int:
     """4. peak memory, each mode in a fresh subprocess."""
     for mode in ("crop", "whole"):
         out = subprocess.run([sys.executable, __file__, "--memory-child", mode,
-                              "--mem-cells", str(args.mem_cells), "--tau", str(args.tau)],
+                              "--mem-cells", str(args.mem_cells), "--tau", str(args.tau),
+                              "--mem-layout", args.mem_layout],
                              capture_output=True, text=True, check=False)
         print(out.stdout.strip() or f"[memory] {mode}: failed (exit {out.returncode}): "
                                     f"{out.stderr.strip()[-300:]}", flush=True)

@@ -41,9 +41,11 @@ class InputLimits:
     ValueError: map claims 100x50 = 5000 cells, more than input.max_map_cells = 100
     """
 
-    max_map_cells: int = field(default=25_000_000, metadata=param_meta(
+    max_map_cells: int = field(default=16_000_000, metadata=param_meta(
         "largest width*height accepted in a map, object layer or region labels (checked "
-        "before any array is made)", "cells", range=(1, INT_MAX)))
+        "before any array is made); 4000 x 4000 cells is 200 x 200 m at 0.05 m, sized so "
+        "that the map nodes of one robot fit a 4-8 GB Jetson even when all of it is known",
+        "cells", range=(1, INT_MAX)))
     min_resolution_m: float = field(default=0.005, metadata=param_meta(
         "finer maps are rejected (kernels sized from the resolution, e.g. the robot-radius "
         "inflation, would grow without bound)", "m", range=(0.0, math.inf)))

@@ -58,10 +58,11 @@ def known_crop(data: npt.NDArray[np.int8], margin: int, chunk: int = CROP_CHUNK_
     >>> known_crop(d, 5)
     (slice(64, 128, None), slice(128, 192, None))
     """
-    rows = np.flatnonzero((data != -1).any(axis=1))
+    # max >= 0 <=> a known cell (values -1..100): no temporary of the grid's size
+    rows = np.flatnonzero(data.max(axis=1) >= 0)
     if rows.size == 0:
         return None
-    cols = np.flatnonzero((data[rows[0]:rows[-1] + 1] != -1).any(axis=0))
+    cols = np.flatnonzero(data[rows[0]:rows[-1] + 1].max(axis=0) >= 0)
     h, w = data.shape
 
     def span(lo: int, hi: int, n: int) -> slice:
@@ -166,14 +167,16 @@ class IncrementalSegmenter:
         if not isinstance(grid, GridMap):
             raise TypeError(f"grid must be a GridMap, got {type(grid).__name__}")
         t0 = time.perf_counter()
-        out = np.zeros(grid.shape, dtype=np.int32)
         box = (known_crop(grid.data, crop_margin_cells(self.params, grid.resolution_m))
                if grid.data.size else None)
         if box is None:
             # nothing known: no region (and no state worth keeping)
             self.reset()
             self.last_update_info = UpdateInfo("empty", time.perf_counter() - t0, 0, 0, 0)
-            return out
+            return np.zeros(grid.shape, dtype=np.int32)
+        if (box[0].stop - box[0].start, box[1].stop - box[1].start) == grid.shape:
+            return self._update_grid(grid, t0)             # the crop is the whole grid
+        out = np.zeros(grid.shape, dtype=np.int32)
         out[box] = self._update_grid(crop_grid(grid, box), t0)
         return out
 
