@@ -45,7 +45,7 @@ from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D,
                                       load_priors, parse_class_ids, process_frame, wall_mask)
 from explore_seg.done_gate import DoneGate
 from explore_seg.node_util import WarnThrottle, config_file, failsafe, run
-from explore_seg.object_inputs import purge_newer, wait_reason
+from explore_seg.object_inputs import lag_warning, purge_newer, wait_reason
 from explore_seg.params import ParamBinding
 from explore_seg.pose_input import PoseInput
 from explore_seg.qos import MAP_QOS, POSE_QOS, SENSOR_QOS, map_qos
@@ -543,33 +543,6 @@ class ObjectCostmapNode(Node):
             self._pub_cloud.publish(convert.cloud_to_msg(convert.xyz_cloud(cloud), header))
         if self._pub_markers.get_subscription_count() > 0:
             self._pub_markers.publish(_markers(self._objects.boxes(), header))
-
-
-def lag_warning(processed: int, received: int, span_s: float, rate_hz: float,
-                malformed: int, without_pose: int) -> str:
-    """The frame-lag warning: how many frames were processed, and why the others were not
-    (malformed, no robot pose at their stamp, or not reached: too little CPU), with the
-    advice for the largest share.
-
-    >>> text = lag_warning(0, 40, 20.0, 2.0, malformed=0, without_pose=40)
-    >>> text.startswith("processed 0 of 40 camera frames"), "lags behind" in text
-    (True, False)
-    """
-    head = f"processed {processed} of {received} camera frames in the last {span_s:.0f} s " \
-           f"(rate_hz {rate_hz:g}): "
-    possible = min(received, span_s * rate_hz)
-    unreached = max(0, round(possible - processed - malformed - without_pose))
-    causes = [(without_pose, f"{without_pose} had no robot pose at their stamp",
-               "check the pose source and its clock (see the 'dropped frame' warnings)"),
-              (malformed, f"{malformed} malformed",
-               "the camera sends frames that cannot be used (see the 'dropped frame' "
-               "warnings)"),
-              (unreached, f"{unreached} not reached in time",
-               "the object layer lags behind the robot; lower the camera rate or the "
-               "simulation's real-time factor, or run object_costmap in a process of its "
-               "own")]
-    advice = max(causes, key=lambda c: c[0])[2]
-    return head + ", ".join(c[1] for c in causes) + "; " + advice
 
 
 def _closest(msgs, t_ns: int, tol_ns: int):
