@@ -157,7 +157,8 @@ class IncrementalSegmenter:
         -------
         ndarray of int32, shape (grid.height, grid.width)
             Region ids (0 = no region), stable between calls for regions that did not
-            change (DuDe spec shared/docs/dude.md §11-§12).
+            change (DuDe spec shared/docs/dude.md §11-§12). Only the known cells' crop
+            (:func:`known_crop`) is segmented; the labels equal the whole grid's.
 
         Raises
         ------
@@ -213,8 +214,10 @@ class IncrementalSegmenter:
                 free_raw, free_clean, domain, res, prev, prev_known_f)
         self._force_full = False
         self._labels = labels
-        self._geom = grid
         self._data = grid.data.copy()
+        # the geometry over the copy: a crop's data is a view that would keep the
+        # caller's whole grid alive
+        self._geom = grid.with_data(self._data)
         self._free_raw, self._free_clean = free_raw, free_clean
         out = np.multiply(labels, free_raw, dtype=np.int32)   # 0 off the free cells
         self.last_update_info = UpdateInfo(mode, time.perf_counter() - t0, n_areas,
