@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import array
 
-import numpy as np
 import pytest
 from nav_msgs.msg import OccupancyGrid
 from rclpy.parameter import Parameter
