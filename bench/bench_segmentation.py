@@ -14,18 +14,28 @@ Prints (never asserts):
    The same two figures on a 20 x 20 m furnished office map
    (``sim_bridge.worlds.furnished``), the issue's sizes;
 3. recall / precision (IPA definition) on ``--houses`` generated 20 m houses, plain and
-   cluttered; targets recall >= 90 %, precision >= 95 %.
+   cluttered; targets recall >= 90 %, precision >= 95 %;
+4. peak memory of one full and one incremental update of a big, mostly unknown map (a
+   40 m house, half explored, in a ``--mem-cells`` x ``--mem-cells`` grid at 0.05 m;
+   ``--mem-layout tiled``: the grid filled with copies of the house, all known, the
+   worst case), each in a fresh subprocess: the segmenter on the known cells' crop (what
+   :meth:`IncrementalSegmenter.update` does) and on the whole grid; peak traced
+   allocations during the updates (tracemalloc) and the process's peak RSS (ru_maxrss).
 
 Usage::
 
     python bench/bench_segmentation.py [--reps 5] [--houses 6] [--tau 1.6]
+    python bench/bench_segmentation.py --only memory [--mem-cells 5000]
 """
 
 from __future__ import annotations
 
 import argparse
+import resource
+import subprocess
 import sys
 import time
+import tracemalloc
 from collections import Counter
 from pathlib import Path
 
@@ -79,6 +89,50 @@ def exploration_maps(grid: GridMap, start_rc: tuple[int, int], radius_m: float,
                                   grid.origin_xy_m[1] + r0 * res)), (r0, c0)
 
 
+def memory_child(mode: str, cells: int, tau_m: float, layout: str) -> str:
+    """One memory measurement (run in a fresh process): ``mode`` ``crop`` or ``whole``.
+    Returns the line to print."""
+    from sim_bridge.worlds import generate_house, ground_truth
+
+    house = ground_truth(generate_house(3, size_m=(40.0, 40.0))).as_map("lidar")
+    h, w = house.shape
+    if layout == "tiled":
+        reps = (-(-cells // h), -(-cells // w))
+        data = np.tile(house.data, reps)[:cells, :cells].copy()
+        data2 = data.copy()
+        data2[h // 2, : cells // 2] = 100                  # a new wall: an update
+    else:
+        known = np.zeros(house.shape, bool)
+        known[:, : w // 2] = True                          # half explored
+        data = np.full((cells, cells), -1, np.int8)
+        r0, c0 = (cells - h) // 3, (cells - w) // 3
+        data[r0:r0 + h, c0:c0 + w] = np.where(known, house.data, -1)
+        data2 = data.copy()
+        data2[r0:r0 + h, c0:c0 + w] = np.where(known | (np.arange(w) < w * 0.6),
+                                               house.data, -1)
+    grid = GridMap(data, house.resolution_m)
+    grid2 = GridMap(data2, house.resolution_m)
+    seg = IncrementalSegmenter(SegmentationParams(tau_m=tau_m))
+    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    run = (seg.update if mode == "crop"
+           else lambda g: seg._update_grid(g, time.perf_counter()))   # noqa: SLF001
+    tracemalloc.start()
+    peaks, times = [], []
+    for g in (grid, grid2):
+        tracemalloc.reset_peak()
+        t0 = time.perf_counter()
+        run(g)
+        times.append(time.perf_counter() - t0)
+        peaks.append(tracemalloc.get_traced_memory()[1] / 2**20)
+    tracemalloc.stop()
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return (f"[memory] {layout} {mode:5s} {cells}x{cells} cells ({cells * cells / 1e6:.0f} M), "
+            f"{int((data != -1).sum())} known: traced peak full update {peaks[0]:.0f} MB, "
+            f"incremental {peaks[1]:.0f} MB ({seg.last_update_info.mode}); peak RSS "
+            f"{rss:.0f} MB ({rss0:.0f} MB before the updates); {times[0] * 1e3:.0f} ms + "
+            f"{times[1] * 1e3:.0f} ms")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--reps", type=int, default=5, help="batch repetitions")
@@ -87,7 +141,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=3, help="seed of the 40 m house and maze")
     ap.add_argument("--radius", type=float, default=5.0, help="reveal disc radius (m)")
     ap.add_argument("--step", type=float, default=2.5, help="reveal raster step (m)")
+    ap.add_argument("--only", choices=("memory",), help="run only this part")
+    ap.add_argument("--mem-cells", type=int, default=5000,
+                    help="side of the big map of the memory part (cells)")
+    ap.add_argument("--mem-layout", choices=("house", "tiled"), default="house",
+                    help="memory part: one half-explored house in unknown space, or the "
+                         "grid tiled with known houses")
+    ap.add_argument("--memory-child", choices=("crop", "whole"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.memory_child:
+        print(memory_child(args.memory_child, args.mem_cells, args.tau, args.mem_layout),
+              flush=True)
+        return 0
+    if args.only == "memory":
+        return memory_part(args)
 
     from sim_bridge.worlds import generate_house, generate_maze, ground_truth
 
@@ -194,6 +261,18 @@ def main(argv: list[str] | None = None) -> int:
         print(f"[quality] same houses, final labels of an incremental exploration: recall "
               f"{np.mean(rec) * 100:.1f} +- {np.std(rec) * 100:.1f} %  precision "
               f"{np.mean(prec) * 100:.1f} +- {np.std(prec) * 100:.1f} %")
+    return memory_part(args)
+
+
+def memory_part(args: argparse.Namespace) -> int:
+    """4. peak memory, each mode in a fresh subprocess."""
+    for mode in ("crop", "whole"):
+        out = subprocess.run([sys.executable, __file__, "--memory-child", mode,
+                              "--mem-cells", str(args.mem_cells), "--tau", str(args.tau),
+                              "--mem-layout", args.mem_layout],
+                             capture_output=True, text=True, check=False)
+        print(out.stdout.strip() or f"[memory] {mode}: failed (exit {out.returncode}): "
+                                    f"{out.stderr.strip()[-300:]}", flush=True)
     return 0
 
 

@@ -67,7 +67,8 @@ class FrontierDetectorNode(Node):
         self.runs = 0
         self._warn = WarnThrottle(self, _WARN_PERIOD_S)
         self.failures = 0          # cycles lost to an exception (node_util.failsafe)
-        self._time = TimeGuard(self._lp.params.clock_jump_s)
+        self._time = TimeGuard(self._lp.params.clock_jump_s,
+                               clock=lambda: self.get_clock().now().nanoseconds)
         self._lp.on_change(lambda old, new: setattr(self._time, "jump_s", new.clock_jump_s))
 
         self._pub_frontiers = FrontierPublisher(self)

@@ -12,7 +12,9 @@ boxes into an :class:`~explore_seg.core.objects.ObjectMap` and publishes the lay
 markers only while they have subscribers). Frames that arrive while a frame is processed
 are dropped (only the newest few are kept for pairing); when the node processes less than
 half of the frames it could (``rate_hz`` or the camera's rate, whichever is lower) over
-``_LAG_WINDOW_S`` of ROS time, it warns: the layer then lags behind the robot. While
+``_LAG_WINDOW_S`` of ROS time, it warns, naming the cause (malformed frames, frames
+without a robot pose at their stamp, or too little CPU: the layer lags behind). A bad
+``scan`` is dropped on arrival and the last good one kept. While
 ``exploration_done`` is true (and ``idle_when_done``) the timer is paused
 (:class:`~explore_seg.done_gate.DoneGate`).
 """
@@ -43,7 +45,7 @@ from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D,
                                       load_priors, parse_class_ids, process_frame, wall_mask)
 from explore_seg.done_gate import DoneGate
 from explore_seg.node_util import WarnThrottle, config_file, failsafe, run
-from explore_seg.object_inputs import purge_newer, wait_reason
+from explore_seg.object_inputs import lag_warning, purge_newer, wait_reason
 from explore_seg.params import ParamBinding
 from explore_seg.pose_input import PoseInput
 from explore_seg.qos import MAP_QOS, POSE_QOS, SENSOR_QOS, map_qos
@@ -116,14 +118,21 @@ class ObjectCostmapNode(Node):
         self.frames_processed = 0
         #: Depth images received (each one a camera frame).
         self.frames_received = 0
-        #: (ROS time ns, frames_received, frames_processed) at the start of the lag window.
-        self._lag_mark: tuple[int, int, int] | None = None
+        #: Frames taken for processing but dropped: malformed, or no robot pose at their stamp.
+        self.frames_malformed = 0
+        self.frames_without_pose = 0
+        #: The last frame taken was dropped for want of a robot pose at its stamp.
+        self._pose_missing = False
+        #: (ROS time ns, frames_received, frames_processed, frames_malformed,
+        #: frames_without_pose) at the start of the lag window.
+        self._lag_mark: tuple[int, int, int, int, int] | None = None
         self._warn = WarnThrottle(self, _WARN_PERIOD_S)
         self.failures = 0          # cycles lost to an exception (node_util.failsafe)
         self._warn_lag = WarnThrottle(self, _LAG_WARN_PERIOD_S)
         # Time model: jumps of the camera/pose stamps or the clock reset what is keyed by
         # time; the watchdog says why frames that arrive are not processed.
-        self._time = TimeGuard(self._lp.params.clock_jump_s)
+        self._time = TimeGuard(self._lp.params.clock_jump_s,
+                               clock=lambda: self.get_clock().now().nanoseconds)
         self._stall = StallWatchdog(self._lp.params.stall_periods * _POLLS_PER_PERIOD)
         #: Clock jumps seen (any stream).
         self.time_jumps = 0
@@ -208,6 +217,7 @@ class ObjectCostmapNode(Node):
         neither is a clock jump, a stall nor a lag."""
         self._time.forget()
         self._stall.reset()
+        self._pose_missing = False
         self._lag_mark = None
 
     def _limits_changed(self, old: InputLimits, new: InputLimits) -> None:
@@ -268,6 +278,14 @@ class ObjectCostmapNode(Node):
             self._drop("camera_info", str(err))
 
     def _on_scan(self, msg: LaserScan) -> None:
+        # Checked on arrival: a bad scan is dropped once and the last good one kept (it is
+        # used for every frame until the next scan).
+        try:
+            convert.checked_stamp_ns(msg.header.stamp, "scan")
+            convert.scan_ranges(msg)
+        except ValueError as err:
+            self._drop("scan", str(err))
+            return
         self._scan = msg
 
     def _on_map(self, msg: OccupancyGrid) -> None:
@@ -302,8 +320,10 @@ class ObjectCostmapNode(Node):
         self._observe("clock", self.get_clock().now().nanoseconds, period_ns)
         processed = self.frames_processed
         self._tick_inner()
-        reason = self._stall.tick(self._frames_waiting(), self.frames_processed > processed,
-                                  self._wait_reason)
+        # A last frame dropped for want of a pose counts as waiting: with poses stamped
+        # ahead of the camera each frame is taken and dropped at once, none waits.
+        reason = self._stall.tick(self._frames_waiting() or self._pose_missing,
+                                  self.frames_processed > processed, self._wait_reason)
         if reason is not None:
             self._warn("stall", f"camera frames arrive but none was processed for "
                                 f"{self._lp.params.stall_periods} periods: {reason}")
@@ -322,10 +342,10 @@ class ObjectCostmapNode(Node):
 
     def _wait_reason(self) -> str:
         p = self.params
-        newest_pose = self._pose_in.newest_ns()
+        span = self._pose_in.span_ns()
         text = wait_reason([_stamp_ns(m) for m in self._depths],
                            [_stamp_ns(m) for m in self._colors],
-                           [] if newest_pose is None else [newest_pose],
+                           [] if span is None else list(span),
                            self._last_depth_ns, p.sync_tolerance_s, p.pose_tolerance_s,
                            _MIN_GAP_PERIODS / p.rate_hz)
         skew = self._time.disagreement("camera", "pose")
@@ -349,25 +369,24 @@ class ObjectCostmapNode(Node):
         self._check_lag()
 
     def _check_lag(self) -> None:
-        """Warn when fewer than half of the frames that could be processed were."""
+        """Warn when fewer than half of the frames that could be processed were, naming
+        the main cause: malformed frames, frames without a robot pose, or too little CPU."""
         now = self.get_clock().now().nanoseconds
         mark = self._lag_mark
+        counts = (self.frames_received, self.frames_processed, self.frames_malformed,
+                  self.frames_without_pose)
         if mark is None or now < mark[0]:          # first frame, or the clock jumped back
-            self._lag_mark = (now, self.frames_received, self.frames_processed)
+            self._lag_mark = (now, *counts)
             return
         span_s = (now - mark[0]) / 1e9
         if span_s < _LAG_WINDOW_S:
             return
-        received = self.frames_received - mark[1]
-        processed = self.frames_processed - mark[2]
+        received, processed, malformed, no_pose = (c - m for c, m in zip(counts, mark[1:]))
         possible = min(received, span_s * self.params.rate_hz)
-        self._lag_mark = (now, self.frames_received, self.frames_processed)
+        self._lag_mark = (now, *counts)
         if processed < 0.5 * possible:
-            self._warn_lag("lag", (
-                f"processed {processed} of {received} camera frames in the last {span_s:.0f} s "
-                f"(rate_hz {self.params.rate_hz:g}): the object layer lags behind the robot; "
-                "lower the camera rate or the simulation's real-time factor, or run "
-                "object_costmap in a process of its own"))
+            self._warn_lag("lag", lag_warning(processed, received, span_s, self.params.rate_hz,
+                                              malformed, no_pose))
 
     def _newest_pair(self) -> tuple[Image, Image, Image | None] | None:
         """Oldest unprocessed depth at least the least gap after the last processed one,
@@ -426,9 +445,14 @@ class ObjectCostmapNode(Node):
         t_ns = _stamp_ns(depth_msg)
         pose = self._pose_at(t_ns)
         self._last_depth_ns = t_ns
+        self._pose_missing = False
         if pose is None:
+            self.frames_without_pose += 1
+            self._pose_missing = True
+            skew = self._time.disagreement("camera", "pose")
             self._drop("frame", f"no robot pose within {p.pose_tolerance_s} s of the image "
-                                f"({t_ns / 1e9:.2f} s; {self._pose_in.describe()})")
+                                f"({t_ns / 1e9:.2f} s; {self._pose_in.describe()})"
+                                + (f"; {skew}" if skew else ""))
             return
         try:
             depth = convert.depth_from_msg(depth_msg)
@@ -446,6 +470,7 @@ class ObjectCostmapNode(Node):
             if not np.isfinite(depth).any():
                 raise ValueError("depth image has no valid pixel")
         except ValueError as err:
+            self.frames_malformed += 1
             self._drop("frame", str(err))
             return
         t0 = time.perf_counter()

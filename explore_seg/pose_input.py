@@ -126,6 +126,11 @@ class PoseInput:
         with self._lock:
             return self.fusion.newest_ns()
 
+    def span_ns(self) -> tuple[int, int] | None:
+        """(oldest, newest) stamp a pose can be given for, None before the first."""
+        with self._lock:
+            return self.fusion.span_ns()
+
     def describe(self) -> str:
         """What the fusion holds, for a log line."""
         with self._lock:

@@ -87,7 +87,8 @@ class SegmentationNode(Node):
         self.processed = 0
         self.skipped = 0
         self.last_labels: npt.NDArray[np.int32] | None = None
-        self._time = TimeGuard(self._lp.params.clock_jump_s)
+        self._time = TimeGuard(self._lp.params.clock_jump_s,
+                               clock=lambda: self.get_clock().now().nanoseconds)
         self._lp.on_change(lambda old, new: setattr(self._time, "jump_s", new.clock_jump_s))
 
         self._pub_regions = self.create_publisher(Image, "regions", MAP_QOS)

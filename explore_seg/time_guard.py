@@ -4,6 +4,10 @@ A node feeds :class:`TimeGuard` the stamp of every timed input (per stream: ``ca
 ``pose``, the node's own ``clock``) and gets a :class:`Jump` back when a stream goes back
 (simulator restart, ``/clock`` reset, the message after a future-stamped one) or ahead by
 more than ``jump_s``; it then resets what it keeps keyed by time and logs the jump once.
+Given the node's clock, a stream's step ahead is measured against the time that passed on
+that clock since the stream's previous newest stamp: a map published every 6 s with true
+stamps (slam_toolbox's ``map_update_interval``) is a slow stream, not a clock jump, while
+stamps that run ahead of the node's clock still are.
 :meth:`TimeGuard.disagreement` names two streams whose newest stamps lie further apart
 than ``jump_s`` (e.g. odometry an hour behind the camera). :class:`StallWatchdog` counts
 periods in which inputs arrived but nothing was produced and says when to log why.
@@ -53,26 +57,56 @@ class TimeGuard:
     True
     """
 
-    def __init__(self, jump_s: float) -> None:
+    #: The stream of the node's own clock: the reference the other streams are measured
+    #: against, so its own steps are checked against ``expected_gap_ns`` only.
+    CLOCK = "clock"
+
+    def __init__(self, jump_s: float, clock: Callable[[], int] | None = None) -> None:
         self.jump_s = float(jump_s)
+        self._clock = clock
         self._newest: dict[str, int] = {}
+        #: Node clock (ns) when each stream's newest stamp was recorded.
+        self._seen_at: dict[str, int] = {}
         #: Jumps seen by :meth:`track`.
         self.jumps = 0
 
     def observe(self, stream: str, t_ns: int, expected_gap_ns: int = 0) -> Jump | None:
         """Record ``t_ns`` of ``stream``; a :class:`Jump` when it went back by more than
-        ``jump_s`` or ahead by more than ``jump_s + expected_gap_ns``. After a jump the
-        stream follows the new time line."""
+        ``jump_s`` or ahead by more than ``jump_s + expected_gap_ns`` plus, with a node
+        clock, the time that clock advanced since the stream's newest stamp was recorded
+        (a long gap between true stamps is no jump). After a jump the stream follows the
+        new time line.
+
+        >>> now = [100 * _NS]
+        >>> g = TimeGuard(jump_s=5.0, clock=lambda: now[0])
+        >>> g.observe("map", 99 * _NS) is None
+        True
+        >>> now[0] += 6 * _NS                            # the next map, 6 s later
+        >>> g.observe("map", 105 * _NS) is None
+        True
+        >>> g.observe("map", 160 * _NS).describe()       # stamps ran ahead of the clock
+        'map stamps jumped ahead (future-stamped input or a paused source?) by 55.0 s: 105.000 -> 160.000 s'
+        """
         last = self._newest.get(stream)
         jump_ns = int(self.jump_s * _NS)
+        now = self._clock() if (self._clock is not None and stream != self.CLOCK) else None
         if last is None:
-            self._newest[stream] = t_ns
+            self._record(stream, t_ns, now)
             return None
-        if t_ns < last - jump_ns or t_ns > last + jump_ns + max(0, expected_gap_ns):
-            self._newest[stream] = t_ns
+        allowed_ns = jump_ns + max(0, expected_gap_ns)
+        if now is not None:
+            allowed_ns += max(0, now - self._seen_at.get(stream, now))
+        if t_ns < last - jump_ns or t_ns > last + allowed_ns:
+            self._record(stream, t_ns, now)
             return Jump(stream, last, t_ns)
-        self._newest[stream] = max(last, t_ns)
+        if t_ns >= last:
+            self._record(stream, t_ns, now)
         return None
+
+    def _record(self, stream: str, t_ns: int, now: int | None) -> None:
+        self._newest[stream] = t_ns
+        if now is not None:
+            self._seen_at[stream] = now
 
     def track(self, stream: str, t_ns: int, warn: Callable[[str, str], None],
               on_back: Callable[[], str] | None = None, expected_gap_ns: int = 0) -> bool:
@@ -106,8 +140,10 @@ class TimeGuard:
         """Forget the named streams (every stream when none is named)."""
         if not streams:
             self._newest.clear()
+            self._seen_at.clear()
         for name in streams:
             self._newest.pop(name, None)
+            self._seen_at.pop(name, None)
 
 
 def jump_warning(jump: Jump, after_back: str) -> tuple[str, str]:

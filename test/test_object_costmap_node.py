@@ -166,11 +166,11 @@ def test_lag_warning_when_most_frames_go_unprocessed(ros):
     warned = []
     node._warn_lag = lambda key, msg: warned.append(msg)
     now = node.get_clock().now().nanoseconds
-    node._lag_mark = (now - int(25e9), 0, 0)
+    node._lag_mark = (now - int(25e9), 0, 0, 0, 0)
     node.frames_received, node.frames_processed = 50, 40      # 40 of min(50, 25 s * 2 Hz)
     node._check_lag()
     assert warned == []
-    node._lag_mark = (now - int(25e9), 50, 40)
+    node._lag_mark = (now - int(25e9), 50, 40, 0, 0)
     node.frames_received, node.frames_processed = 100, 50     # 10 of 50 possible
     node._check_lag()
     assert len(warned) == 1 and "processed 10 of 50 camera frames" in warned[0]

@@ -41,9 +41,11 @@ class InputLimits:
     ValueError: map claims 100x50 = 5000 cells, more than input.max_map_cells = 100
     """
 
-    max_map_cells: int = field(default=25_000_000, metadata=param_meta(
+    max_map_cells: int = field(default=16_000_000, metadata=param_meta(
         "largest width*height accepted in a map, object layer or region labels (checked "
-        "before any array is made)", "cells", range=(1, INT_MAX)))
+        "before any array is made); 4000 x 4000 cells is 200 x 200 m at 0.05 m, sized so "
+        "that the map nodes of one robot fit a 4-8 GB Jetson even when all of it is known",
+        "cells", range=(1, INT_MAX)))
     min_resolution_m: float = field(default=0.005, metadata=param_meta(
         "finer maps are rejected (kernels sized from the resolution, e.g. the robot-radius "
         "inflation, would grow without bound)", "m", range=(0.0, math.inf)))
@@ -56,7 +58,9 @@ class InputLimits:
         range=(0.0, math.inf)))
     clock_jump_s: float = field(default=5.0, metadata=param_meta(
         "a stamp or the node clock going back (sim reset) or ahead (future-stamped input) by "
-        "more than this is a clock jump: time-keyed state is reset and it is logged once; "
+        "more than this is a clock jump (a stamp's step ahead counts beyond the time the "
+        "node clock advanced since that stream's previous stamp: a slow map publisher is "
+        "none): time-keyed state is reset and it is logged once; "
         "streams whose newest stamps differ by more than this are reported as clock sources "
         "that disagree", "s", range=(0.0, math.inf)))
     stall_periods: int = field(default=10, metadata=param_meta(
@@ -76,11 +80,12 @@ class InputLimits:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
 
     def check_map_size(self, width: int, height: int, resolution_m: float) -> None:
-        """Raise ``ValueError`` when a claimed map geometry exceeds the limits (allocates
-        nothing)."""
+        """Raise ``ValueError`` when a claimed map geometry is empty or exceeds the limits
+        (allocates nothing)."""
         w, h = int(width), int(height)
-        if w < 0 or h < 0:
-            raise ValueError(f"map size must be >= 0, got {w}x{h}")
+        if w < 1 or h < 1:
+            # an empty map (e.g. width=0, data=[]) would replace the last good one
+            raise ValueError(f"map size must be at least 1x1 cells, got {w}x{h}")
         if w * h > self.max_map_cells:
             raise ValueError(f"map claims {w}x{h} = {w * h} cells, more than "
                              f"input.max_map_cells = {self.max_map_cells}")

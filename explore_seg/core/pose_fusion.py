@@ -290,14 +290,20 @@ class PoseFusion:
 
     def newest_ns(self) -> int | None:
         """Newest stamp a pose can be given for (odometry rate once fused)."""
+        span = self.span_ns()
+        return None if span is None else span[1]
+
+    def span_ns(self) -> tuple[int, int] | None:
+        """(oldest, newest) stamp of the poses held for :meth:`pose_at` (odometry rate once
+        fused); None before the first. An image older than the oldest by more than the
+        tolerance has no pose (e.g. odometry stamped on another clock, ahead)."""
         if self.source == "odom" or self._odom_stands_for_map():
             buf = self._odom
         elif self.source == "fused" and len(self._corr) and len(self._odom):
             buf = self._odom
         else:
             buf = self._slam
-        newest = buf.newest()
-        return None if newest is None else newest[0]
+        return buf.span_ns()
 
     def describe(self) -> str:
         """The stamps held, for a log line."""

@@ -1,5 +1,13 @@
 """The stateful segmenter: incremental DuDe updates and persistent region ids
-(DuDe spec shared/docs/dude.md §11-§12), and the one-shot :func:`segment`."""
+(DuDe spec shared/docs/dude.md §11-§12), and the one-shot :func:`segment`.
+
+Every update works on the bounding box of the grid's known cells, grown by a margin
+that no cleaning or labelling step reaches across (:func:`known_crop`) and snapped
+outward to :data:`CROP_CHUNK_CELLS`: its memory and time scale with the explored area,
+not with the grid (a 5000 x 5000 map that is mostly unknown costs what its known part
+costs). The labels are the ones the whole grid would get; the state is kept in the
+crop's geometry, so a crop that moves or grows is an ordinary map shift.
+"""
 
 from __future__ import annotations
 
@@ -25,6 +33,51 @@ from explore_seg.core.segmentation.params import SegmentationParams, dude_settin
 #: pieces, and clean pieces whose shape changed.
 _MAX_SEAM_TESTS = 6
 _MAX_SHAPE_TESTS = 4
+#: The crop's edges are snapped outward to multiples of this many cells, so that it
+#: moves only now and then while the known area grows (a move recleans the new strip).
+CROP_CHUNK_CELLS = 64
+
+
+def crop_margin_cells(params: SegmentationParams, res: float) -> int:
+    """Unknown cells kept around the known ones: beyond the reach of the cleaning (free
+    space grows by ``free_close_m``; clutter holes, specks) and of the gap filling and
+    work-area boxes of an update, so the crop's edge changes no label."""
+    p = params
+    fill = 2 * (length_to_cells(p.obstacle_inflation_m, res)
+                + length_to_cells(p.free_close_m, res)) + 4
+    return clean_influence_cells(p, res) + fill + p.inc_touch_cells + 4
+
+
+def known_crop(data: npt.NDArray[np.int8], margin: int, chunk: int = CROP_CHUNK_CELLS
+               ) -> tuple[slice, slice] | None:
+    """(rows, cols) of the known (not -1) cells' bounding box grown by ``margin`` and
+    snapped outward to multiples of ``chunk`` (clipped to the array); None when no cell
+    is known.
+
+    >>> d = np.full((300, 200), -1, np.int8); d[100:110, 150:160] = 0
+    >>> known_crop(d, 5)
+    (slice(64, 128, None), slice(128, 192, None))
+    """
+    # max >= 0 <=> a known cell (values -1..100): no temporary of the grid's size
+    rows = np.flatnonzero(data.max(axis=1) >= 0)
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(data[rows[0]:rows[-1] + 1].max(axis=0) >= 0)
+    h, w = data.shape
+
+    def span(lo: int, hi: int, n: int) -> slice:
+        return slice(max(0, (lo - margin) // chunk * chunk),
+                     min(n, -(-(hi + margin) // chunk) * chunk))
+    return span(int(rows[0]), int(rows[-1]) + 1, h), span(int(cols[0]), int(cols[-1]) + 1, w)
+
+
+def crop_grid(grid: GridMap, box: tuple[slice, slice]) -> GridMap:
+    """The part ``box`` of ``grid`` as a grid of its own (origin at its first cell's
+    corner; the data is a view)."""
+    r0, c0 = box[0].start, box[1].start
+    x, y = grid.cells_to_world(np.array([r0 - 0.5]), np.array([c0 - 0.5]))
+    return GridMap(grid.data[box], grid.resolution_m, (float(x[0]), float(y[0])),
+                   grid.origin_yaw_rad, grid.frame_id, grid.stamp_ns)
 
 
 @dataclass(frozen=True)
@@ -104,7 +157,8 @@ class IncrementalSegmenter:
         -------
         ndarray of int32, shape (grid.height, grid.width)
             Region ids (0 = no region), stable between calls for regions that did not
-            change (DuDe spec shared/docs/dude.md §11-§12).
+            change (DuDe spec shared/docs/dude.md §11-§12). Only the known cells' crop
+            (:func:`known_crop`) is segmented; the labels equal the whole grid's.
 
         Raises
         ------
@@ -114,6 +168,21 @@ class IncrementalSegmenter:
         if not isinstance(grid, GridMap):
             raise TypeError(f"grid must be a GridMap, got {type(grid).__name__}")
         t0 = time.perf_counter()
+        box = (known_crop(grid.data, crop_margin_cells(self.params, grid.resolution_m))
+               if grid.data.size else None)
+        if box is None:
+            # nothing known: no region (and no state worth keeping)
+            self.reset()
+            self.last_update_info = UpdateInfo("empty", time.perf_counter() - t0, 0, 0, 0)
+            return np.zeros(grid.shape, dtype=np.int32)
+        if (box[0].stop - box[0].start, box[1].stop - box[1].start) == grid.shape:
+            return self._update_grid(grid, t0)             # the crop is the whole grid
+        out = np.zeros(grid.shape, dtype=np.int32)
+        out[box] = self._update_grid(crop_grid(grid, box), t0)
+        return out
+
+    def _update_grid(self, grid: GridMap, t0: float) -> npt.NDArray[np.int32]:
+        """:meth:`update` on the whole of ``grid`` (a crop of the caller's grid)."""
         res = grid.resolution_m
         if grid.data.size == 0:
             self.reset()
@@ -145,8 +214,10 @@ class IncrementalSegmenter:
                 free_raw, free_clean, domain, res, prev, prev_known_f)
         self._force_full = False
         self._labels = labels
-        self._geom = grid
         self._data = grid.data.copy()
+        # the geometry over the copy: a crop's data is a view that would keep the
+        # caller's whole grid alive
+        self._geom = grid.with_data(self._data)
         self._free_raw, self._free_clean = free_raw, free_clean
         out = np.multiply(labels, free_raw, dtype=np.int32)   # 0 off the free cells
         self.last_update_info = UpdateInfo(mode, time.perf_counter() - t0, n_areas,
