@@ -28,6 +28,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from bench.percentiles import pct_ms  # noqa: E402
 from explore_seg.core.block_graph import BlockGraph  # noqa: E402
 from explore_seg.core.explorer import Explorer  # noqa: E402
 from explore_seg.core.frontiers import FrontierParams, traversable_mask  # noqa: E402
@@ -82,11 +83,6 @@ def explored_map(occ: np.ndarray, steps: int, sensor_cells: int,
     return data
 
 
-def pct(xs: list[float]) -> str:
-    a = np.asarray(xs) * 1000.0
-    return f"p50 {np.percentile(a, 50):7.2f} ms   p95 {np.percentile(a, 95):7.2f} ms"
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--reps", type=int, default=50)
@@ -126,9 +122,9 @@ def main() -> None:
           f"{np.mean(n_groups):.0f} groups / {np.mean(n_cells):.0f} frontier cells, "
           f"block {params.path_block_cells}, "
           f"strategy {params.strategy}, {args.reps} robot positions")
-    print(f"detect+cluster+graph {pct(t_det)}   (Explorer.step on a new map)")
-    print(f"distances+selection  {pct(t_cold)}   (first step on the map)")
-    print(f"distances+selection  {pct(t_warm)}   (next step, frontiers and graph cached)")
+    print(f"detect+cluster+graph {pct_ms(t_det)}   (Explorer.step on a new map)")
+    print(f"distances+selection  {pct_ms(t_cold)}   (first step on the map)")
+    print(f"distances+selection  {pct_ms(t_warm)}   (next step, frontiers and graph cached)")
 
 
 if __name__ == "__main__":

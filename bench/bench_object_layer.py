@@ -41,6 +41,7 @@ for extra in (ROOT, ROOT / "test"):
     if str(extra) not in sys.path:
         sys.path.insert(0, str(extra))
 
+from bench.percentiles import pct  # noqa: E402
 from explore_seg.core.grid import GridMap  # noqa: E402
 from explore_seg.core.objects import UNKNOWN_CLASS, ObjectMap  # noqa: E402
 from sim_bridge.worlds import default_world, ground_truth, load_world  # noqa: E402
@@ -67,10 +68,6 @@ def union_layer(run: PipelineRun, grid: GridMap, classes: set[str] | None = None
         single.update([obj])
         out |= single.rasterize(grid).data >= om.params.object_value
     return out
-
-
-def pct(values: list[float], q: float) -> float:
-    return float(np.percentile(values, q)) if values else float("nan")
 
 
 def bench_world(label: str, world) -> None:

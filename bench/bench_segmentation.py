@@ -46,6 +46,7 @@ for p in (ROOT, ROOT / "bench"):
     if str(p) not in sys.path:
         sys.path.insert(0, str(p))
 
+from bench.percentiles import pct  # noqa: E402
 from eval_segmentation import run_houses  # noqa: E402
 
 from explore_seg.core.grid import GridMap  # noqa: E402
@@ -55,10 +56,6 @@ from explore_seg.core.segmentation import (IncrementalSegmenter,  # noqa: E402
 
 #: Unknown cells kept around the known ones when cropping a revealed map.
 CROP_MARGIN_CELLS = 10
-
-
-def pct(values: list[float], q: float) -> float:
-    return float(np.percentile(np.asarray(values), q))
 
 
 def exploration_maps(grid: GridMap, start_rc: tuple[int, int], radius_m: float,

@@ -16,6 +16,7 @@ from scipy import ndimage
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from bench.percentiles import pct_ms  # noqa: E402
 from sim_bridge.sensors import CameraParams, DepthCamera, Lidar, LidarParams  # noqa: E402
 from sim_bridge.worlds import default_world, ground_truth  # noqa: E402
 
@@ -31,11 +32,6 @@ def _poses(world, n: int, seed: int) -> list[tuple[float, float, float]]:
     pick = rng.integers(0, rr.size, n)
     xs, ys = gt.lidar.cells_to_world(rr[pick], cc[pick])
     return [(float(x), float(y), float(a)) for x, y, a in zip(xs, ys, rng.uniform(-3.2, 3.2, n))]
-
-
-def _pct(values_s: list[float]) -> str:
-    ms = np.asarray(values_s) * 1e3
-    return f"p50 {np.percentile(ms, 50):7.3f} ms  p95 {np.percentile(ms, 95):7.3f} ms"
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -61,13 +57,13 @@ def main(argv: list[str] | None = None) -> None:
             lidar.scan(pose)
             per.append(time.perf_counter() - t1)
         total = time.perf_counter() - t0
-        print(f"lidar  {args.scans / total:8.0f} scans/s   {_pct(per)}")
+        print(f"lidar  {args.scans / total:8.0f} scans/s   {pct_ms(per, decimals=3)}")
         per = []
         for pose in poses[:args.frames]:
             t1 = time.perf_counter()
             cam.render(pose)
             per.append(time.perf_counter() - t1)
-        print(f"camera 640x480            {_pct(per)}  ({1.0 / np.median(per):.1f} fps)")
+        print(f"camera 640x480            {pct_ms(per, decimals=3)}  ({1.0 / np.median(per):.1f} fps)")
 
 
 if __name__ == "__main__":

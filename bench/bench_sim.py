@@ -26,6 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from bench.percentiles import pct_ms  # noqa: E402
 from sim_bridge import worlds  # noqa: E402
 from sim_bridge.engine import SimEngine, SimParams  # noqa: E402
 from sim_bridge.navigation import NavState  # noqa: E402
@@ -40,13 +41,6 @@ def cpu_model() -> str:
     except (OSError, subprocess.SubprocessError):
         pass
     return platform.processor() or "unknown"
-
-
-def pct(xs: list[float]) -> str:
-    if not xs:
-        return "n/a"
-    a = np.asarray(xs) * 1e3
-    return f"p50 {np.percentile(a, 50):.2f} ms, p95 {np.percentile(a, 95):.2f} ms (n={a.size})"
 
 
 class Timed:
@@ -122,8 +116,8 @@ def main() -> int:
     print(f"[lidar+mapping] {eng.time_s:.0f} sim s in {wall:.2f} wall s: "
           f"real-time factor {eng.time_s / wall:.1f}x (target >= 50x); "
           f"coverage {eng.metrics.coverage_pct:.1f} %, map {eng.map.shape}")
-    print(f"  lidar scan ({eng.scan_geometry.num_beams} beams): {pct(scan_t.times)}")
-    print(f"  scan integration: {pct(map_t.times)}")
+    print(f"  lidar scan ({eng.scan_geometry.num_beams} beams): {pct_ms(scan_t.times, count=True)}")
+    print(f"  scan integration: {pct_ms(map_t.times, count=True)}")
 
     eng = make_engine(world)
     plan_t = Timed(eng.navigator, "_plan")  # noqa: SLF001
@@ -131,7 +125,7 @@ def main() -> int:
     print(f"[lidar+mapping+navigation] {eng.time_s:.0f} sim s in {wall:.2f} wall s: "
           f"real-time factor {eng.time_s / wall:.1f}x; goals reached {reached}, aborted "
           f"{aborted}, collisions {eng.metrics.n_collisions}")
-    print(f"  plan (downsample {eng.params.nav_plan_downsample}): {pct(plan_t.times)}")
+    print(f"  plan (downsample {eng.params.nav_plan_downsample}): {pct_ms(plan_t.times, count=True)}")
 
     eng = make_engine(world, enable_camera=True)
     cam_t = Timed(eng._camera, "render")  # noqa: SLF001
@@ -140,7 +134,7 @@ def main() -> int:
     print(f"[lidar+mapping+camera {p.camera_width_px}x{p.camera_height_px} @ "
           f"{p.camera_rate_hz:g} Hz] {eng.time_s:.0f} sim s in {wall:.2f} wall s: "
           f"real-time factor {eng.time_s / wall:.1f}x")
-    print(f"  camera frame: {pct(cam_t.times)}")
+    print(f"  camera frame: {pct_ms(cam_t.times, count=True)}")
     if not math.isfinite(eng.metrics.coverage_pct):
         print("  (coverage unavailable)")
     return 0

@@ -49,3 +49,69 @@ def test_box_mask_rejects_bad_boxes(box, match):
 def test_box_mask_clips_to_image():
     m = box_mask((-10, 470, 5, 900), (480, 640))
     assert m.sum() == 6 * 10 and m[479, 0] and m[470, 5]
+
+
+# ------------------------------------------- against Open3D, on the pipeline's own clouds
+# The cloud steps stay in numpy/scipy (each function's docstring says why); Open3D's
+# versions are their reference. The inputs are the arguments the object pipeline passes
+# while it processes simulator frames and the synthetic room (bench/bench_libraries.py).
+
+
+@pytest.fixture(scope="module")
+def pipeline_calls():
+    pytest.importorskip("open3d")
+    from bench.bench_libraries import record_cloud_calls
+    calls = record_cloud_calls("small_cluttered", max_views=8)
+    assert len(calls["voxel"]) >= 20 and len(calls["sor"]) >= 10, \
+        {k: len(v) for k, v in calls.items()}
+    return calls
+
+
+def test_voxel_downsample_equals_open3d_voxel_trace_on_pipeline_clouds(pipeline_calls):
+    from bench.bench_libraries import voxel_open3d
+    for args, kwargs in pipeline_calls["voxel"]:
+        ours, theirs = voxel_downsample(*args, **kwargs), voxel_open3d(*args, **kwargs)
+        assert bool(kwargs.get("return_inverse", False)) == isinstance(ours, tuple)
+        for a, b in zip(ours, theirs) if isinstance(ours, tuple) else [(ours, theirs)]:
+            np.testing.assert_array_equal(a, b)
+
+
+def test_statistical_outlier_mask_equals_open3d_on_pipeline_clouds(pipeline_calls):
+    from bench.bench_libraries import sor_open3d
+    dropped = 0
+    for args, kwargs in pipeline_calls["sor"]:
+        ours = statistical_outlier_mask(*args, **kwargs)
+        np.testing.assert_array_equal(ours, sor_open3d(*args, **kwargs))
+        dropped += int((~ours).sum())
+    assert dropped > 0                       # the comparison covers the outlier branch
+
+
+def test_euclidean_clusters_equal_open3d_dbscan_on_pipeline_clouds(pipeline_calls):
+    from bench.bench_libraries import clusters_open3d
+    with_links = 0
+    for args, kwargs in pipeline_calls["clusters"]:
+        ours, theirs = euclidean_clusters(*args, **kwargs), clusters_open3d(*args, **kwargs)
+        np.testing.assert_array_equal(ours < 0, theirs < 0)
+        pairs = np.unique(np.stack([ours, theirs], axis=1), axis=0)   # same partition
+        assert len(pairs) == len(np.unique(ours)) == len(np.unique(theirs))
+        edges = args[3] if len(args) > 3 else kwargs.get("extra_edges")
+        with_links += edges is not None and len(edges) > 0
+    assert 0 < with_links < len(pipeline_calls["clusters"])
+
+
+def test_statistical_outlier_mask_keeps_coincident_points_and_accepts_ratio_zero():
+    """Where Open3D's removal differs: it drops points whose neighbours all coincide with
+    them and refuses std_ratio 0."""
+    rng = np.random.default_rng(2)
+    cloud = rng.normal(0.0, 0.1, (200, 3))
+    stack = np.repeat([[0.05, 0.0, 0.0]], 12, axis=0)        # one point seen 12 times
+    keep = statistical_outlier_mask(np.vstack([cloud, stack]), k=8, std_ratio=2.0)
+    assert keep[200:].all()
+    keep0 = statistical_outlier_mask(cloud, k=8, std_ratio=0.0)
+    assert 0 < keep0.sum() < len(cloud)
+
+
+def test_euclidean_clusters_link_points_exactly_at_the_tolerance():
+    """Open3D's DBSCAN links only points closer than its radius."""
+    pts = np.array([[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [1.5, 0.0, 0.0]])
+    np.testing.assert_array_equal(euclidean_clusters(pts, 0.5, 1), [0, 0, 1])

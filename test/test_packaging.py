@@ -21,20 +21,42 @@ ROOT = Path(__file__).resolve().parents[1]
 VENV_BIN = Path(sys.executable).parent
 
 
-def _ros_imports() -> set[str]:
-    ros_pkgs = {"rclpy", "rcl_interfaces", "builtin_interfaces", "std_msgs", "std_srvs",
-                "geometry_msgs", "nav_msgs", "sensor_msgs", "visualization_msgs",
-                "diagnostic_msgs", "rosgraph_msgs", "ament_index_python"}
+ROS_PKGS = {"rclpy", "rcl_interfaces", "builtin_interfaces", "std_msgs", "std_srvs",
+            "geometry_msgs", "nav_msgs", "sensor_msgs", "visualization_msgs",
+            "diagnostic_msgs", "rosgraph_msgs", "ament_index_python", "action_msgs"}
+#: rosdep key -> the module it provides, for the Python libraries the project uses.
+PY_KEYS = {"python3-numpy": "numpy", "python3-scipy": "scipy", "python3-opencv": "cv2",
+           "python3-yaml": "yaml", "python3-pil": "PIL", "python3-torch": "torch",
+           "python3-shapely": "shapely", "python3-sklearn": "sklearn",
+           "python3-matplotlib": "matplotlib", "python3-pytest": "pytest"}
+#: Modules without a rosdep key (pip, see package.xml's comments); google = protobuf (onnx).
+PIP_ONLY = {"onnx", "onnxruntime", "google", "open3d"}
+#: What the run time is: the installed packages (setup.py's find_packages).
+RUN_TIME = ("explore_seg", "sim_bridge")
+
+
+def _imports(*dirs: str) -> set[str]:
+    """Top-level names of every absolute import (module level or in a function) under
+    ``dirs``."""
     found = set()
-    for path in list((ROOT / "explore_seg").rglob("*.py")) + list((ROOT / "sim_bridge").rglob("*.py")):
-        for node in ast.walk(ast.parse(path.read_text())):
-            names = []
-            if isinstance(node, ast.Import):
-                names = [a.name for a in node.names]
-            elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-                names = [node.module]
-            found.update(n.split(".")[0] for n in names if n.split(".")[0] in ros_pkgs)
+    for d in dirs:
+        for path in (ROOT / d).rglob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text())):
+                names = []
+                if isinstance(node, ast.Import):
+                    names = [a.name for a in node.names]
+                elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                    names = [node.module]
+                found.update(n.split(".")[0] for n in names)
     return found
+
+
+def _ros_imports() -> set[str]:
+    return _imports(*RUN_TIME) & ROS_PKGS
+
+
+def _depends(*tags: str) -> set[str]:
+    return {e.text for e in ET.parse(ROOT / "package.xml").getroot() if e.tag in tags}
 
 
 def test_package_xml_declares_every_imported_ros_package():
@@ -44,6 +66,25 @@ def test_package_xml_declares_every_imported_ros_package():
     missing = _ros_imports() - deps
     assert not missing, f"package.xml lacks exec_depend on {sorted(missing)}"
     assert tree.find("export/build_type").text == "ament_python"
+
+
+def test_exec_depend_lists_exactly_the_python_libraries_imported_at_run_time():
+    """A library only tests or bench/ import is a test_depend, not a run-time dependency."""
+    third_party = _imports(*RUN_TIME) - set(sys.stdlib_module_names) - ROS_PKGS \
+        - set(RUN_TIME)
+    unknown = third_party - set(PY_KEYS.values()) - PIP_ONLY
+    assert not unknown, f"run-time imports without a rosdep key or pip note: {sorted(unknown)}"
+    wanted = {key for key, mod in PY_KEYS.items() if mod in third_party}
+    declared = {d for d in _depends("exec_depend", "depend") if d in PY_KEYS}
+    assert declared == wanted, (f"exec_depend lacks {sorted(wanted - declared)}, "
+                                f"lists unimported {sorted(declared - wanted)}")
+
+
+def test_test_depend_covers_the_libraries_only_tests_and_bench_import():
+    rest = _imports("test", "bench", "scripts") - _imports(*RUN_TIME)
+    wanted = {key for key, mod in PY_KEYS.items() if mod in rest}
+    missing = wanted - _depends("test_depend", "depend", "exec_depend")
+    assert not missing, f"package.xml lacks test_depend on {sorted(missing)}"
 
 
 @pytest.mark.skipif(shutil.which("colcon", path=str(VENV_BIN)) is None, reason="colcon not installed")

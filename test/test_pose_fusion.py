@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from explore_seg.core.angles import wrap_angle
 from explore_seg.core.pose_fusion import (POSE_SOURCES, PoseFusion, PoseFusionParams,
-                                          StampedPoses, compose, inverse, wrap_angle)
+                                          StampedPoses, compose, inverse)
 
 NS = 1_000_000_000
 ODOM_HZ, SLAM_HZ = 50, 5

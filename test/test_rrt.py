@@ -210,3 +210,21 @@ def test_lockstep_runs_rrt_exploration_deterministically():
         d.pop("wall_time_s")
         d.pop("timings_ms")
     assert da == db
+
+
+def test_mean_shift_equals_scikit_learn_on_the_filter_point_sets():
+    """scikit-learn's MeanShift (which the original rrt_exploration uses) is the reference:
+    the same centres, in the same order, on the point sets the filter clusters in a
+    lock-step run (bench/bench_libraries.py records them)."""
+    pytest.importorskip("sklearn")
+    from bench.bench_libraries import mean_shift_sklearn, record_mean_shift_calls
+    calls = record_mean_shift_calls("small_house", [0], 25.0)
+    assert len(calls) >= 10
+    merged = 0
+    for args, kwargs in calls:
+        centres, _ = mean_shift(*args, **kwargs)
+        ref = mean_shift_sklearn(*args, **kwargs)
+        assert centres.shape == ref.shape
+        np.testing.assert_allclose(centres, ref, rtol=0.0, atol=1e-9)
+        merged += len(centres) < len(args[0])
+    assert merged > 0                        # some calls merge points into one centre

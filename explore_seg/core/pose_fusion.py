@@ -32,6 +32,7 @@ import bisect
 import math
 from dataclasses import dataclass, field
 
+from explore_seg.core.angles import wrap_angle
 from explore_seg.core.fields import param_meta
 
 #: Robot pose sources, see the module docstring.
@@ -102,11 +103,6 @@ class PoseEvent:
 
 
 # ------------------------------------------------------------------ SE(2) helpers
-def wrap_angle(a: float) -> float:
-    """``a`` in (-pi, pi]."""
-    return math.atan2(math.sin(a), math.cos(a))
-
-
 def compose(a: Pose2D, b: Pose2D) -> Pose2D:
     """``a o b``: the pose ``b`` (given in frame ``a``) in ``a``'s parent frame.
 

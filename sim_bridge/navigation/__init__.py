@@ -51,11 +51,12 @@ edges).
 This package re-exports their public names.
 """
 
+from explore_seg.core.angles import wrap_angle
 from explore_seg.core.paths import cost_distance_field
 from sim_bridge.navigation.goal_status import (OUTCOME_OF_STATE, STATUS_OF_STATE, GoalBook,
                                               OutcomeFollower)
 from sim_bridge.navigation.navigator import NavState, NavStatus, Navigator
-from sim_bridge.navigation.pursuit import ARC_FREE_START_M, wrap_angle
+from sim_bridge.navigation.pursuit import ARC_FREE_START_M
 from sim_bridge.navigation.params import NavParams
 from sim_bridge.navigation.planner import coarsen, cost_grid, path_cost, plan_path
 

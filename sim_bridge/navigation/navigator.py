@@ -19,12 +19,13 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from explore_seg.core.angles import wrap_angle
 from explore_seg.core.grid import GridMap, metres_to_cells
 from explore_seg.core.paths import _MAX_KERNEL_RADIUS_CELLS, disk_kernel, inflate
 from sim_bridge.navigation.params import NavParams
 from sim_bridge.navigation.costmap import CostGridCache
 from sim_bridge.navigation.planner import coarsen, path_cost, plan_path
-from sim_bridge.navigation.pursuit import Pursuit, clip_magnitude, wrap_angle
+from sim_bridge.navigation.pursuit import Pursuit, clip_magnitude
 
 __all__ = ["NavState", "NavStatus", "Navigator"]
 

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Callable
 import numpy as np
 import numpy.typing as npt
 
+from explore_seg.core.angles import wrap_angle
 from explore_seg.core.grid import GridMap
 from sim_bridge.navigation.clearance import (arc_points, clearance_window, edge_distances,
                                              edge_safe_cost)
@@ -29,11 +30,6 @@ _PROGRESS_WINDOW = 64
 
 #: The pure-pursuit arc check skips this much of the arc next to the robot (m).
 ARC_FREE_START_M = 0.1
-
-
-def wrap_angle(a: float) -> float:
-    """Angle wrapped to [-pi, pi)."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def clip_magnitude(v: float, limit: float) -> float:

@@ -71,6 +71,10 @@ def voxel_downsample(points: npt.NDArray[np.floating], voxel_m: float,
                                                         npt.NDArray[np.int64]]:
     """Indices of one point per occupied voxel (the first in input order).
 
+    Open3D's ``voxel_down_sample_and_trace`` gives the same indices at about 4 times the
+    time on the pipeline's clouds (``bench/bench_libraries.py``); its ``voxel_down_sample``
+    returns centroids, not input points.
+
     Parameters
     ----------
     points : ndarray, shape (N, 3)
@@ -156,6 +160,10 @@ def statistical_outlier_mask(points: npt.NDArray[np.floating], k: int, std_ratio
     """Statistical outlier removal (as PCL / Open3D): keep points whose mean distance to
     their ``k`` nearest neighbours is at most ``mean + std_ratio * std`` over the cloud.
 
+    Open3D's ``remove_statistical_outlier`` matches it on the pipeline's clouds at about 0.7
+    times the time (``bench/bench_libraries.py``), but drops points whose neighbours all
+    coincide with them and refuses ``std_ratio = 0``, which ``sor_std`` allows.
+
     Parameters
     ----------
     points : ndarray, shape (N, 3)
@@ -188,8 +196,12 @@ def statistical_outlier_mask(points: npt.NDArray[np.floating], k: int, std_ratio
 def euclidean_clusters(points: npt.NDArray[np.floating], tolerance_m: float, min_points: int,
                        extra_edges: npt.NDArray[np.integer] | None = None
                        ) -> npt.NDArray[np.int64]:
-    """Euclidean clustering: connected components of the graph linking points closer than
-    ``tolerance_m``.
+    """Euclidean clustering: connected components of the graph linking points at most
+    ``tolerance_m`` apart.
+
+    Open3D's ``cluster_dbscan`` (one point per core) links only points closer than its
+    radius and takes no extra links; with the links joined afterwards it takes about 1.4
+    times as long on the detection clouds (``bench/bench_libraries.py``).
 
     Parameters
     ----------

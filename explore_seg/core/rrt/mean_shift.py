@@ -5,6 +5,10 @@ Every point seeds a window of radius ``bandwidth`` that moves to the mean of the
 inside it until it stops (shift below ``1e-3 * bandwidth``); the converged windows are
 ranked by how many points they hold and a window within ``bandwidth`` of a better-ranked
 one is dropped.
+
+All seeds move at once here; scikit-learn's ``MeanShift`` moves them one by one and takes
+about 100 times as long on the filter's point sets for the same centres within 1e-9 m
+(``bench/bench_libraries.py``).
 """
 
 from __future__ import annotations
