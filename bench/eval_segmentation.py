@@ -18,6 +18,16 @@ Three modes:
 
       python bench/eval_segmentation.py --seeds 0-9 --tau 1.5,2.0,2.5,3.0 [--cluttered]
 
+* the IPA development set (``--set ipa_dev``): five real floor plans of the IPA
+  room-segmentation benchmark (Bormann et al. 2016), plain and with their furniture drawn in,
+  with human-drawn room ground truth, read from ``<shared>/data/ipa_dev`` (``<shared>`` =
+  ``$EXPLORE_SEG_SHARED`` or ``../shared`` beside the repository; ``--ipa-dir`` overrides).
+  Academic, non-commercial licence: the maps are read from there, never copied into the
+  package. Scored as the set's README says (maps binarised: free = grey 254, everything else
+  occupied; rooms = 8-connected components of the ground truth, > 100 px)::
+
+      python bench/eval_segmentation.py --set ipa_dev
+
 * a label image pair (16-bit or 8-bit PNGs of the same size; 0 = none)::
 
       python bench/eval_segmentation.py --pred labels.png --gt rooms.png [--gt-connected]
@@ -138,11 +148,81 @@ def run_furnished(n_maps: int, first_seed: int, params: SegmentationParams,
         for k, a in acc.items()}
 
 
+IPA_DEV_MAPS = ("office_a", "office_h", "lab_ipa", "Freiburg79_scan", "lab_c_scan")
+
+
+def ipa_dev_dir() -> Path:
+    """``$EXPLORE_SEG_SHARED/data/ipa_dev`` or ``../shared/data/ipa_dev``."""
+    import os
+
+    env = os.environ.get("EXPLORE_SEG_SHARED")
+    shared = Path(env) if env else ROOT.parent / "shared"
+    return shared / "data" / "ipa_dev"
+
+
+def ipa_dev_cases(folder: Path, furnished: bool):
+    """(name, GridMap, room labels in grid rows) of the IPA development maps.
+
+    Raises
+    ------
+    FileNotFoundError
+        When a map or its ground truth is missing (naming the file).
+    """
+    import cv2
+
+    from explore_seg.core.grid import GridMap
+
+    suffix = "_furnitures" if furnished else ""
+    for name in IPA_DEV_MAPS:
+        img_path = folder / "maps" / f"{name}{suffix}.pgm"
+        gt_path = folder / "gt" / f"{name}{suffix}.png"
+        for path in (img_path, gt_path):
+            if not path.is_file():
+                raise FileNotFoundError(f"IPA development set: {path} is missing")
+        img = cv2.imread(str(img_path), cv2.IMREAD_UNCHANGED)
+        gt = cv2.imread(str(gt_path), cv2.IMREAD_UNCHANGED)
+        if img is None or gt is None or img.shape != gt.shape[:2]:
+            raise ValueError(f"IPA development set: cannot read {img_path} / {gt_path} as "
+                             f"two images of one size")
+        # The IPA evaluation binarises: free = 254, everything else (unknown too) occupied.
+        data = np.where(img == 254, 0, 100).astype(np.int8)[::-1].copy()
+        yield f"{name}{suffix}", GridMap(data, 0.05, (0.0, 0.0)), gt[::-1].astype(np.int64)
+
+
+def run_ipa_dev(folder: Path, params: SegmentationParams, min_px: int,
+                verbose: bool = True) -> dict[str, dict[str, float]]:
+    """Plain and furnished scores over the IPA development maps; prints per map."""
+    out: dict[str, dict[str, float]] = {}
+    for key, furnished in (("plain", False), ("furnished", True)):
+        acc: dict[str, list[float]] = {"recall": [], "precision": [], "spr": [],
+                                       "spr_max": [], "time_ms": []}
+        for name, grid, rooms in ipa_dev_cases(folder, furnished):
+            t0 = time.perf_counter()
+            labels = segment(grid, params)
+            dt = (time.perf_counter() - t0) * 1e3
+            e = evaluate(labels, rooms, min_px, gt_connected=True)
+            spr, spr_max = segments_per_room(e)
+            for name_v, v in (("recall", e["recall"]), ("precision", e["precision"]),
+                              ("spr", spr), ("spr_max", spr_max), ("time_ms", dt)):
+                acc[name_v].append(v)
+            if verbose:
+                print(f"  {name:28s} {grid.width}x{grid.height}  R {e['recall'] * 100:5.1f}  "
+                      f"P {e['precision'] * 100:5.1f}  rooms {e['n_rooms']:3d}  segments "
+                      f"{e['n_segments']:3d}  seg/room {spr:4.2f} (max {spr_max})  {dt:5.0f} ms")
+        out[key] = {name_v: float(np.mean(v)) for name_v, v in acc.items()} | {
+            "spr_max": float(np.max(acc["spr_max"])), "recall_min": float(np.min(acc["recall"])),
+            "recall_std": float(np.std(acc["recall"])),
+            "precision_std": float(np.std(acc["precision"]))}
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--set", choices=("houses", "furnished"), default="houses",
-                    help="generated houses, or the furnished floor plans (plain and "
-                         "furnished side by side)")
+    ap.add_argument("--set", choices=("houses", "furnished", "ipa_dev"), default="houses",
+                    help="generated houses, the generated furnished floor plans, or the IPA "
+                         "development set (real plans; plain and furnished side by side)")
+    ap.add_argument("--ipa-dir", type=Path, default=None,
+                    help="ipa_dev: folder with maps/ and gt/ (default <shared>/data/ipa_dev)")
     ap.add_argument("--maps", type=int, default=30, help="furnished set: number of maps")
     ap.add_argument("--first-seed", type=int, default=0, help="furnished set: first seed")
     ap.add_argument("--seeds", default="0-7", help="house seeds, e.g. 0-9 or 1,4,7")
@@ -189,6 +269,22 @@ def main(argv: list[str] | None = None) -> int:
 
     taus = [float(t) for t in args.tau.split(",") if t]
     base = SegmentationParams(corridor_merge=args.corridor_merge)
+    if args.set == "ipa_dev":
+        params = SegmentationParams(**{**base.__dict__, "tau_m": taus[0]})
+        folder = args.ipa_dir or ipa_dev_dir()
+        print(f"IPA development set ({folder}), tau {taus[0]:.2f} m; IPA recall/precision, "
+              f"min size {args.min_px} px")
+        try:
+            res_i = run_ipa_dev(folder, params, args.min_px, verbose=not args.quiet)
+        except (FileNotFoundError, ValueError) as err:
+            sys.stderr.write(f"eval_segmentation: {err}\n")
+            return 1
+        for key, r in res_i.items():
+            print(f"{key:9s}: recall {r['recall'] * 100:5.1f} +- {r['recall_std'] * 100:4.1f} % "
+                  f"(min {r['recall_min'] * 100:5.1f})  precision {r['precision'] * 100:5.1f} +- "
+                  f"{r['precision_std'] * 100:4.1f} %  segments per room {r['spr']:4.2f} "
+                  f"(max {r['spr_max']:.0f})  mean time {r['time_ms']:.0f} ms")
+        return 0
     if args.set == "furnished":
         params = SegmentationParams(**{**base.__dict__, "tau_m": taus[0]})
         print(f"furnished floor plans ({args.maps} maps from seed {args.first_seed}), tau "
