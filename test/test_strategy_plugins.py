@@ -139,3 +139,31 @@ def test_no_strategy_name_is_compared_outside_the_registry():
             if re.search(rf"strategy *(==|!=|in) *['\"]({names})['\"]", line)
             or re.search(r"strategy *(not )?in +[A-Z_]*STRATEGIES\b", line)]
     assert hits == []
+
+
+def test_each_builtin_strategy_has_its_parameter_dataclass_in_selection_params():
+    import dataclasses
+
+    from explore_seg.core.selection.params import (BUILTIN_NAMES, SELECTION_PARTS,
+                                                   GoalParams, SelectionParams)
+
+    assert BUILTIN_NAMES == tuple(s.name for s in BUILTIN)
+    owned = {s.name: s.params for s in BUILTIN}
+    assert owned["nearest"] is None
+    for name, cls in owned.items():
+        if cls is not None:
+            assert cls in SELECTION_PARTS and issubclass(SelectionParams, cls), name
+    # the parts partition SelectionParams' fields: each field is one part's, once
+    seen: list[str] = []
+    for part in SELECTION_PARTS:
+        seen += [f.name for f in dataclasses.fields(part)]
+    assert sorted(seen) == sorted(f.name for f in dataclasses.fields(SelectionParams))
+    assert len(seen) == len(set(seen))
+    assert "progress_timeout_s" in {f.name for f in dataclasses.fields(GoalParams)}
+    # each part validates its own fields, alone and inside SelectionParams
+    with pytest.raises(ValueError, match="alpha must be finite and >= 0"):
+        owned["paper"](alpha=-1.0)
+    with pytest.raises(ValueError, match="handover_m must be finite and >= 0"):
+        SelectionParams(handover_m=-1.0)
+    with pytest.raises(ValueError, match="progress_timeout_s must be finite and > 0"):
+        SelectionParams(progress_timeout_s=0.0)

@@ -13,6 +13,7 @@ it before the dataclass's own validation runs); ``read_only`` and ``ros=False`` 
 from __future__ import annotations
 
 import math
+from dataclasses import field
 from typing import Any
 
 #: Upper end of an integer range that has none (ROS integer parameters are int64).
@@ -60,3 +61,16 @@ def param_meta(doc: str, unit: str | None = None, *,
         meta["range"] = tuple(range)
     meta.update({k: v for k, v in extra.items() if v is not False or k != "read_only"})
     return meta
+
+
+def non_negative(doc: str, unit: str | None = None, default: float = 0.0) -> Any:
+    """A float parameter field whose range is [0, inf) (see :func:`param_meta`)."""
+    return field(default=default, metadata=param_meta(doc, unit, range=(0.0, math.inf)))
+
+
+def check_non_negative(params: Any, names: tuple[str, ...]) -> None:
+    """Raise ``ValueError`` naming the first of ``names`` that is not finite and >= 0."""
+    for name in names:
+        value = getattr(params, name)
+        if not (math.isfinite(value) and value >= 0):
+            raise ValueError(f"{name} must be finite and >= 0, got {value}")

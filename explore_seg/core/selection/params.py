@@ -12,94 +12,85 @@ import math
 import re
 from dataclasses import dataclass, field
 
-from explore_seg.core.fields import INT_MAX, param_meta
+from explore_seg.core.fields import INT_MAX, check_non_negative, non_negative, param_meta
 from explore_seg.core.block_graph import MAX_BLOCK_CELLS
 from explore_seg.core.pose_fusion import POSE_SOURCE_DOC, POSE_SOURCES
-from explore_seg.core.selection.strategy import get_strategy, strategy_names
+from explore_seg.core.selection.strategy import get_strategy
+
+#: The built-in strategies (core/selection/strategies/), as the ``strategy`` parameter's
+#: description lists them; a test checks it against the registry.
+BUILTIN_NAMES = ("paper", "nearest", "explore_lite", "rrt_exploration", "routed")
 
 #: Robot pose sources (one home: :mod:`explore_seg.core.pose_fusion`).
 POSE_TOPIC_TYPES = POSE_SOURCES
 _INF = math.inf
 
 
-def _non_negative(doc: str, unit: str | None = None, default: float = 0.0) -> float:
-    """A float field >= 0 (finite)."""
-    return field(default=default, metadata=param_meta(doc, unit, range=(0.0, _INF)))
-
-
 @dataclass(frozen=True)
-class SelectionParams:
-    """Parameters of target selection (the strategy's cost) and of the goal manager."""
+class SelectionBaseParams:
+    """What every strategy shares: the strategy's name, path lengths, region lookup."""
 
     strategy: str = field(default="routed", metadata=param_meta(
-        "cost function: " + " | ".join(strategy_names())))
-    alpha: float = _non_negative("paper: weight of distGain", default=1.0)
-    beta: float = _non_negative("paper: weight of 1/sizeGain", default=0.001)
-    gamma: float = _non_negative(
-        "paper: regionGain of a frontier outside the robot's region", default=1.0)
-    potential_scale: float = _non_negative(
-        "explore_lite: weight of the path length", "1/m", default=3.0)
-    gain_scale: float = _non_negative(
-        "explore_lite: weight of the frontier length", "1/m", default=1.0)
-    info_multiplier: float = _non_negative(
-        "rrt_exploration: weight of a candidate's information gain (unknown area, m^2) "
-        "against its path length in the revenue", "1/m", default=3.0)
-    hysteresis_radius_m: float = _non_negative(
-        "rrt_exploration: candidates within this path length of the robot have their "
-        "information gain multiplied by hysteresis_gain", "m", default=3.0)
-    hysteresis_gain: float = _non_negative(
-        "rrt_exploration: information gain factor of candidates near the robot (> 1 keeps "
-        "it exploring where it is)", default=2.0)
-    region_search_radius_m: float = _non_negative(
+        "target-selection strategy: " + " | ".join(BUILTIN_NAMES)
+        + ", or a strategy registered by a plug-in (docs/strategies.md)"))
+    region_search_radius_m: float = non_negative(
         "a cell without region takes the nearest labelled cell's within this radius", "m",
         default=0.3)
     path_block_cells: int = field(default=4, metadata=param_meta(
         f"path lengths on blocks of this many cells per side (1 = exact, "
         f"max {MAX_BLOCK_CELLS})", "cells", range=(1, MAX_BLOCK_CELLS)))
-    start_search_radius_m: float = _non_negative(
+    start_search_radius_m: float = non_negative(
         "a robot on a non-passable cell starts from the nearest passable cell within this "
         "radius", "m", default=0.5)
-    hysteresis_margin: float = _non_negative(
+    unknown_path_factor: float = field(default=1.5, metadata=param_meta(
+        "when no cPoint is reachable through known free space, distances through unknown "
+        "cells are used, multiplied by this factor (>= 1)", range=(1.0, _INF)))
+    use_regions: bool = field(default=True, metadata=param_meta(
+        "use the regions labels for regionGain (paper strategy) and region_switch_m "
+        "(routed)"))
+
+    def __post_init__(self) -> None:
+        get_strategy(self.strategy)   # raises ValueError naming the registered ones
+        check_non_negative(self, ("region_search_radius_m", "start_search_radius_m"))
+        if not 1 <= self.path_block_cells <= MAX_BLOCK_CELLS:
+            raise ValueError(f"path_block_cells must be in 1..{MAX_BLOCK_CELLS}, "
+                             f"got {self.path_block_cells}")
+        if not self.unknown_path_factor >= 1.0:
+            raise ValueError(f"unknown_path_factor must be >= 1, got {self.unknown_path_factor}")
+
+
+@dataclass(frozen=True)
+class GoalParams:
+    """The goal manager's rules (:class:`~explore_seg.core.selection.goals.GoalManager`):
+    keeping and switching goals, progress, arrival, blacklist, DONE."""
+
+    hysteresis_margin: float = non_negative(
         "switch goals only when the new cost < current - margin * |current|", default=0.1)
     progress_timeout_s: float = field(default=30.0, metadata=param_meta(
         "blacklist a goal whose distance did not decrease for this long", "s",
         range=(0.0, _INF)))
-    progress_min_m: float = _non_negative(
+    progress_min_m: float = non_negative(
         "decrease of the distance to the goal that counts as progress", "m", default=0.1)
-    goal_reached_tolerance_m: float = _non_negative(
+    goal_reached_tolerance_m: float = non_negative(
         "robot closer than this to its goal has reached it", "m", default=0.3)
-    frontier_match_radius_m: float = _non_negative(
+    frontier_match_radius_m: float = non_negative(
         "a frontier with a cell this close to the goal (plus the goal's distance to its "
         "frontier when set) is the goal's frontier", "m", default=0.5)
-    arrival_wait_s: float = _non_negative(
+    arrival_wait_s: float = non_negative(
         "after reaching a goal, wait this long (or for a newer map) before judging whether "
         "its frontier was cleared", "s", default=2.0)
-    reached_unknown_fraction: float = field(default=0.5, metadata=param_meta(
-        "routed: a reached goal whose frontier remains is blacklisted only when at least "
-        "this share of its frontier's cells (as last matched before arrival) are still "
-        "unknown; otherwise the frontier stays selectable (the space goes on, as in a "
-        "corridor longer than the sensor range). Raising it blacklists fewer reached goals; "
-        "0 = always blacklist, as the other strategies do", range=(0.0, 1.0)))
-    revealed_arrivals_max: int = field(default=2, metadata=param_meta(
-        "routed, with reached_unknown_fraction > 0: number of arrivals that revealed cells "
-        "at one goal area (within flicker_radius_m of its first goal) after which the "
-        "area's goals are blacklisted. Raising it lets a small leftover be re-chosen more "
-        "often; 0 = no limit", range=(0, INT_MAX)))
-    goal_change_min_m: float = _non_negative(
+    goal_change_min_m: float = non_negative(
         "a new goal closer than this to the current one is not sent", "m", default=0.3)
-    blacklist_radius_m: float = _non_negative(
+    blacklist_radius_m: float = non_negative(
         "frontiers whose cPoint lies this close to a blacklisted goal are skipped", "m",
         default=0.5)
     blacklist_max: int = field(default=50, metadata=param_meta(
         "blacklist length (oldest entries dropped)", range=(1, INT_MAX)))
-    unknown_path_factor: float = field(default=1.5, metadata=param_meta(
-        "when no cPoint is reachable through known free space, distances through unknown "
-        "cells are used, multiplied by this factor (>= 1)", range=(1.0, _INF)))
     blacklist_retries: int = field(default=1, metadata=param_meta(
         "times the blacklist is cleared to retry its frontiers before DONE (a retry that "
         "revealed retry_reveal_m2 does not count)",
         range=(0, INT_MAX)))
-    retry_reveal_m2: float = _non_negative(
+    retry_reveal_m2: float = non_negative(
         "a blacklist retry after which at least this much more of the map became known "
         "does not count against blacklist_retries, so retries go on while they reveal "
         "space. Raising it makes fewer retries free; 0 = every retry counts", "m^2",
@@ -109,7 +100,7 @@ class SelectionParams:
         "got there with its cells still unknown (a wall edge flickering next to unknown "
         "space). Raising it follows such a frontier longer; 0 = never",
         range=(0, INT_MAX)))
-    flicker_radius_m: float = _non_negative(
+    flicker_radius_m: float = non_negative(
         "goals within this distance of the first goal of an area count as that area for "
         "flicker_vanish_count and revealed_arrivals_max", "m", default=1.0)
     done_confirmations: int = field(default=3, metadata=param_meta(
@@ -121,98 +112,51 @@ class SelectionParams:
         "when no frontier has a path, drive to a lookout from which an unreachable one is "
         "in sight (within sensor_range_m) and look, before exploration ends (a gap behind "
         "a passage narrower than the robot)"))
-    use_regions: bool = field(default=True, metadata=param_meta(
-        "use the regions labels for regionGain (paper strategy) and region_switch_m "
-        "(routed)"))
+
+    def __post_init__(self) -> None:
+        check_non_negative(self, ("hysteresis_margin", "progress_min_m",
+                                  "goal_reached_tolerance_m", "frontier_match_radius_m",
+                                  "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
+                                  "flicker_radius_m", "retry_reveal_m2"))
+        if not (math.isfinite(self.progress_timeout_s) and self.progress_timeout_s > 0):
+            raise ValueError(f"progress_timeout_s must be finite and > 0, "
+                             f"got {self.progress_timeout_s}")
+        if self.blacklist_max < 1:
+            raise ValueError(f"blacklist_max must be >= 1, got {self.blacklist_max}")
+        if self.blacklist_retries < 0:
+            raise ValueError(f"blacklist_retries must be >= 0, got {self.blacklist_retries}")
+        if self.flicker_vanish_count < 0:
+            raise ValueError(f"flicker_vanish_count must be >= 0, got "
+                             f"{self.flicker_vanish_count}")
+        if self.done_confirmations < 1:
+            raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
+
+
+@dataclass(frozen=True)
+class ViewParams:
+    """How a viewpoint's view of unknown space is rated (``routed``'s viewpoints and the
+    goal manager's lookout goals)."""
+
     sensor_range_m: float = field(default=5.0, metadata=param_meta(
         "routed and lookout goals: range of the 360-degree sensor whose view of "
         "unknown space rates the viewpoints", "m", range=(0.0, _INF)))
     gain_rays: int = field(default=24, metadata=param_meta(
         "routed and lookout goals: rays cast over 360 degrees per viewpoint candidate",
         range=(4, 720)))
-    viewpoint_radius_m: float = _non_negative(
-        "routed: viewpoint candidates lie within this distance of their frontier's cells",
-        "m", default=0.75)
     viewpoint_step_m: float = field(default=0.3, metadata=param_meta(
         "routed and lookout goals: spacing of the viewpoint candidates' lattice", "m",
         range=(0.0, _INF)))
     viewpoint_gain_tolerance: float = field(default=0.1, metadata=param_meta(
         "routed and lookout goals: among candidates seeing at least (1 - this) of the "
         "best view, the one closest to the robot is the viewpoint", range=(0.0, 1.0)))
-    frontier_split_m: float = _non_negative(
-        "routed: a frontier group extending more than this along its main axis is split "
-        "(at its mean, recursively) into parts, each with its own viewpoint in the tour. "
-        "Raising it gives fewer, longer parts; 0 = off", "m",
-        default=3.0)
-    region_switch_m: float = _non_negative(
-        "routed: extra tour cost of an edge between viewpoints of two different regions "
-        "(finish a region unless its rest is a longer detour)", "m", default=1.0)
-    min_gain_m2: float = _non_negative(
+    min_gain_m2: float = non_negative(
         "routed and lookout goals: a group whose viewpoint (lookout) sees less unknown "
         "area than this is not a goal (it would reveal nothing: exploration ends instead "
         "of chasing it)", "m^2",
         default=0.25)
-    leftover_gain_m2: float = _non_negative(
-        "routed: a viewpoint that sees less unknown area than this is a leftover, kept out "
-        "of the tour while a viewpoint that sees more remains and visited last. Raising it "
-        "defers more views; 0 = off", "m^2", default=2.0)
-    leftover_max_length_m: float = _non_negative(
-        "routed: a group with at least this much frontier (cells x cell size) is never a "
-        "leftover, whatever its viewpoint sees (the map's ragged edge, whose view the edge "
-        "cuts short). Raising it lets longer groups wait; 0 = any group can be one", "m",
-        default=3.0)
-    gain_weight_m_per_m2: float = _non_negative(
-        "routed: a group's cost is its tour length minus this times the unknown area its "
-        "viewpoint sees (big views first when the detour is small)", "m/m^2", default=0.1)
-    tour_refresh_rows: int = field(default=8, metadata=param_meta(
-        "routed: number of kept viewpoints (oldest first) whose path lengths to the others "
-        "are recomputed each decision, besides the new viewpoints'. Raising it keeps lengths "
-        "fresher at more cost; at or above the number of viewpoints every length is "
-        "recomputed every decision", range=(0, INT_MAX)))
-    handover_m: float = _non_negative(
-        "routed: a goal this close to the robot counts as reached, so its frontier is "
-        "judged and the next goal sent while the robot still drives. Raising it judges "
-        "goals earlier; below goal_reached_tolerance_m it has no effect", "m",
-        default=1.0)
 
     def __post_init__(self) -> None:
-        get_strategy(self.strategy)   # raises ValueError naming the registered ones
-        for name in ("alpha", "beta", "gamma", "potential_scale", "gain_scale",
-                     "info_multiplier", "hysteresis_radius_m", "hysteresis_gain",
-                     "region_search_radius_m", "start_search_radius_m", "hysteresis_margin",
-                     "progress_min_m", "goal_reached_tolerance_m", "frontier_match_radius_m",
-                     "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
-                     "flicker_radius_m", "viewpoint_radius_m", "frontier_split_m",
-                     "region_switch_m",
-                     "gain_weight_m_per_m2", "min_gain_m2", "leftover_gain_m2",
-                     "leftover_max_length_m", "handover_m",
-                     "retry_reveal_m2"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be finite and >= 0, got {v}")
-        if not 0.0 <= self.reached_unknown_fraction <= 1.0:
-            raise ValueError(f"reached_unknown_fraction must be in [0, 1], "
-                             f"got {self.reached_unknown_fraction}")
-        if not (math.isfinite(self.progress_timeout_s) and self.progress_timeout_s > 0):
-            raise ValueError(f"progress_timeout_s must be finite and > 0, "
-                             f"got {self.progress_timeout_s}")
-        if not 1 <= self.path_block_cells <= MAX_BLOCK_CELLS:
-            raise ValueError(f"path_block_cells must be in 1..{MAX_BLOCK_CELLS}, "
-                             f"got {self.path_block_cells}")
-        if self.blacklist_max < 1:
-            raise ValueError(f"blacklist_max must be >= 1, got {self.blacklist_max}")
-        if not self.unknown_path_factor >= 1.0:
-            raise ValueError(f"unknown_path_factor must be >= 1, got {self.unknown_path_factor}")
-        if self.blacklist_retries < 0:
-            raise ValueError(f"blacklist_retries must be >= 0, got {self.blacklist_retries}")
-        if self.revealed_arrivals_max < 0:
-            raise ValueError(f"revealed_arrivals_max must be >= 0, got "
-                             f"{self.revealed_arrivals_max}")
-        if self.tour_refresh_rows < 0:
-            raise ValueError(f"tour_refresh_rows must be >= 0, got {self.tour_refresh_rows}")
-        if self.flicker_vanish_count < 0:
-            raise ValueError(f"flicker_vanish_count must be >= 0, got "
-                             f"{self.flicker_vanish_count}")
+        check_non_negative(self, ("min_gain_m2",))
         if not (math.isfinite(self.sensor_range_m) and self.sensor_range_m > 0):
             raise ValueError(f"sensor_range_m must be finite and > 0, got {self.sensor_range_m}")
         if not (math.isfinite(self.viewpoint_step_m) and self.viewpoint_step_m > 0):
@@ -223,8 +167,132 @@ class SelectionParams:
         if not 0.0 <= self.viewpoint_gain_tolerance <= 1.0:
             raise ValueError(f"viewpoint_gain_tolerance must be in [0, 1], "
                              f"got {self.viewpoint_gain_tolerance}")
-        if self.done_confirmations < 1:
-            raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
+
+
+@dataclass(frozen=True)
+class PaperParams:
+    """The weights of eq. 1-3 (bound flat as ROS parameters through ``SelectionParams``)."""
+
+    alpha: float = non_negative("paper: weight of distGain", default=1.0)
+    beta: float = non_negative("paper: weight of 1/sizeGain", default=0.001)
+    gamma: float = non_negative(
+        "paper: regionGain of a frontier outside the robot's region", default=1.0)
+
+    def __post_init__(self) -> None:
+        check_non_negative(self, ('alpha', 'beta', 'gamma'))
+
+
+@dataclass(frozen=True)
+class ExploreLiteParams:
+    """explore_lite's cost weights (bound flat as ROS parameters through ``SelectionParams``)."""
+
+    potential_scale: float = non_negative(
+        "explore_lite: weight of the path length", "1/m", default=3.0)
+    gain_scale: float = non_negative(
+        "explore_lite: weight of the frontier length", "1/m", default=1.0)
+
+    def __post_init__(self) -> None:
+        check_non_negative(self, ('potential_scale', 'gain_scale'))
+
+
+@dataclass(frozen=True)
+class RrtExplorationParams:
+    """The assigner's revenue weights (bound flat as ROS parameters through ``SelectionParams``; the RRT detector's own are :class:`explore_seg.core.rrt.RrtParams`, ``rrt.*``)."""
+
+    info_multiplier: float = non_negative(
+        "rrt_exploration: weight of a candidate's information gain (unknown area, m^2) "
+        "against its path length in the revenue", "1/m", default=3.0)
+    hysteresis_radius_m: float = non_negative(
+        "rrt_exploration: candidates within this path length of the robot have their "
+        "information gain multiplied by hysteresis_gain", "m", default=3.0)
+    hysteresis_gain: float = non_negative(
+        "rrt_exploration: information gain factor of candidates near the robot (> 1 keeps "
+        "it exploring where it is)", default=2.0)
+
+    def __post_init__(self) -> None:
+        check_non_negative(self, ('info_multiplier', 'hysteresis_radius_m', 'hysteresis_gain'))
+
+
+@dataclass(frozen=True)
+class RoutedParams:
+    """Viewpoints, tour and goal handling of ``routed`` (bound flat as ROS parameters through ``SelectionParams``)."""
+
+    viewpoint_radius_m: float = non_negative(
+        "routed: viewpoint candidates lie within this distance of their frontier's cells",
+        "m", default=0.75)
+    frontier_split_m: float = non_negative(
+        "routed: a frontier group extending more than this along its main axis is split "
+        "(at its mean, recursively) into parts, each with its own viewpoint in the tour. "
+        "Raising it gives fewer, longer parts; 0 = off", "m",
+        default=3.0)
+    region_switch_m: float = non_negative(
+        "routed: extra tour cost of an edge between viewpoints of two different regions "
+        "(finish a region unless its rest is a longer detour)", "m", default=1.0)
+    leftover_gain_m2: float = non_negative(
+        "routed: a viewpoint that sees less unknown area than this is a leftover, kept out "
+        "of the tour while a viewpoint that sees more remains and visited last. Raising it "
+        "defers more views; 0 = off", "m^2", default=2.0)
+    leftover_max_length_m: float = non_negative(
+        "routed: a group with at least this much frontier (cells x cell size) is never a "
+        "leftover, whatever its viewpoint sees (the map's ragged edge, whose view the edge "
+        "cuts short). Raising it lets longer groups wait; 0 = any group can be one", "m",
+        default=3.0)
+    gain_weight_m_per_m2: float = non_negative(
+        "routed: a group's cost is its tour length minus this times the unknown area its "
+        "viewpoint sees (big views first when the detour is small)", "m/m^2", default=0.1)
+    tour_refresh_rows: int = field(default=8, metadata=param_meta(
+        "routed: number of kept viewpoints (oldest first) whose path lengths to the others "
+        "are recomputed each decision, besides the new viewpoints'. Raising it keeps lengths "
+        "fresher at more cost; at or above the number of viewpoints every length is "
+        "recomputed every decision", range=(0, INT_MAX)))
+    handover_m: float = non_negative(
+        "routed: a goal this close to the robot counts as reached, so its frontier is "
+        "judged and the next goal sent while the robot still drives. Raising it judges "
+        "goals earlier; below goal_reached_tolerance_m it has no effect", "m",
+        default=1.0)
+    reached_unknown_fraction: float = field(default=0.5, metadata=param_meta(
+        "routed: a reached goal whose frontier remains is blacklisted only when at least "
+        "this share of its frontier's cells (as last matched before arrival) are still "
+        "unknown; otherwise the frontier stays selectable (the space goes on, as in a "
+        "corridor longer than the sensor range). Raising it blacklists fewer reached goals; "
+        "0 = always blacklist, as the other strategies do", range=(0.0, 1.0)))
+    revealed_arrivals_max: int = field(default=2, metadata=param_meta(
+        "routed, with reached_unknown_fraction > 0: number of arrivals that revealed cells "
+        "at one goal area (within flicker_radius_m of its first goal) after which the "
+        "area's goals are blacklisted. Raising it lets a small leftover be re-chosen more "
+        "often; 0 = no limit", range=(0, INT_MAX)))
+
+    def __post_init__(self) -> None:
+        check_non_negative(self, ('viewpoint_radius_m', 'frontier_split_m', 'region_switch_m', 'gain_weight_m_per_m2', 'leftover_gain_m2', 'leftover_max_length_m', 'handover_m'))
+        if not 0.0 <= self.reached_unknown_fraction <= 1.0:
+            raise ValueError(f"reached_unknown_fraction must be in [0, 1], "
+                             f"got {self.reached_unknown_fraction}")
+        if self.revealed_arrivals_max < 0:
+            raise ValueError(f"revealed_arrivals_max must be >= 0, got "
+                             f"{self.revealed_arrivals_max}")
+        if self.tour_refresh_rows < 0:
+            raise ValueError(f"tour_refresh_rows must be >= 0, got {self.tour_refresh_rows}")
+
+
+#: The parts of :class:`SelectionParams`, in the order their fields (and ROS parameters)
+#: are listed; each validates its own fields.
+SELECTION_PARTS: tuple[type, ...] = (SelectionBaseParams, GoalParams, ViewParams, PaperParams,
+                                     ExploreLiteParams, RrtExplorationParams, RoutedParams)
+
+
+@dataclass(frozen=True)
+class SelectionParams(RoutedParams, RrtExplorationParams, ExploreLiteParams, PaperParams,
+                      ViewParams, GoalParams, SelectionBaseParams):
+    """Parameters of target selection: the shared ones (:class:`SelectionBaseParams`), the
+    goal manager's (:class:`GoalParams`), the view rating's (:class:`ViewParams`) and each
+    built-in strategy's (:class:`PaperParams`, :class:`ExploreLiteParams`,
+    :class:`RrtExplorationParams`, :class:`RoutedParams`; its ``Strategy.params``). The parts
+    are bases, so every field is one flat ROS parameter (``alpha``, ``handover_m``, ...) and
+    code reads ``params.alpha``."""
+
+    def __post_init__(self) -> None:
+        for part in SELECTION_PARTS:
+            part.__post_init__(self)
 
 
 @dataclass(frozen=True)
@@ -236,7 +304,7 @@ class SelectorNodeParams(SelectionParams):
     pose_topic_type: str = field(default="odom", metadata=param_meta(POSE_SOURCE_DOC))
     pose_timeout_s: float = field(default=5.0, metadata=param_meta(
         "a pose older than this is not used", "s", range=(0.0, _INF)))
-    goal_republish_s: float = _non_negative(
+    goal_republish_s: float = non_negative(
         "re-publish the current goal this often (0 = only when it changes)", "s")
     autostart: bool = field(default=True, metadata=param_meta(
         "start exploring without a call to ~/start"))

@@ -144,6 +144,10 @@ class Strategy:
     nav_feedback : bool
         The lock step always feeds the navigator's outcome to the explorer in this
         strategy's runs (a ROS robot always reports it through the action status).
+    params : type or None
+        The dataclass of its own parameters. A built-in strategy's is a part of
+        ``SelectionParams`` (its fields are flat ROS parameters of ``target_selector``);
+        the cost function reads them from the ``SelectionParams`` it is given.
     """
 
     name: str
@@ -154,6 +158,7 @@ class Strategy:
     make_planner: PlannerFactory | None = None
     goals: GoalOptions = GoalOptions()
     nav_feedback: bool = False
+    params: type | None = None
 
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name.isidentifier()):

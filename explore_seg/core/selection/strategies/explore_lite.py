@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from explore_seg.core.selection.params import ExploreLiteParams
 from explore_seg.core.selection.strategy import CostInputs, Strategy
 
 
@@ -18,4 +19,5 @@ def explore_lite_cost(inp: CostInputs, params: Any) -> npt.NDArray[np.float64]:
 
 
 STRATEGY = Strategy("explore_lite", explore_lite_cost,
-                    "explore_lite: potential_scale * dist - gain_scale * length")
+                    "explore_lite: potential_scale * dist - gain_scale * length",
+                    params=ExploreLiteParams)

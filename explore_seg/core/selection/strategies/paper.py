@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from explore_seg.core.selection.params import PaperParams
 from explore_seg.core.selection.strategy import CostInputs, Strategy
 
 
@@ -26,4 +27,4 @@ def paper_cost(inp: CostInputs, params: Any) -> npt.NDArray[np.float64]:
 
 STRATEGY = Strategy("paper", paper_cost,
                     "eq. 1-3 of the paper: alpha * distGain + beta / sizeGain + regionGain",
-                    region_term=True)
+                    region_term=True, params=PaperParams)

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
+from explore_seg.core.selection.params import RoutedParams
 from explore_seg.core.selection.strategy import CostInputs, GoalOptions, Strategy
 
 if TYPE_CHECKING:
@@ -36,4 +37,4 @@ STRATEGY = Strategy("routed", routed_cost,
                     "viewpoints + a global tour over them, DuDe regions as routing structure",
                     region_term=True, make_planner=make_router,
                     goals=GoalOptions(handover=True, reveal_on_arrival=True),
-                    nav_feedback=True)
+                    nav_feedback=True, params=RoutedParams)

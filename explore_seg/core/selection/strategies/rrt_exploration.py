@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from explore_seg.core.selection.params import RrtExplorationParams
 from explore_seg.core.selection.strategy import CostInputs, Strategy
 
 
@@ -33,4 +34,4 @@ def rrt_exploration_cost(inp: CostInputs, params: Any) -> npt.NDArray[np.float64
 
 STRATEGY = Strategy("rrt_exploration", rrt_exploration_cost,
                     "rrt_exploration: RRT frontier points, mean shift, "
-                    "info_multiplier * gain - dist", candidates="rrt")
+                    "info_multiplier * gain - dist", candidates="rrt", params=RrtExplorationParams)
