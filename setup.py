@@ -1,10 +1,18 @@
 """ament_python build of explore_seg (colcon) and plain pip installs."""
 
+import os
 from glob import glob
 
 from setuptools import find_packages, setup
 
 PACKAGE = "explore_seg"
+
+
+def data_tree(folder: str) -> list[tuple[str, list[str]]]:
+    """data_files entries installing ``folder`` with its subfolders to share/PACKAGE/folder
+    (a data_files entry takes files only, one destination folder each)."""
+    return [(f"share/{PACKAGE}/{path}", sorted(os.path.join(path, f) for f in files))
+            for path, _dirs, files in sorted(os.walk(folder)) if files]
 
 setup(
     name=PACKAGE,
@@ -14,8 +22,7 @@ setup(
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml", "README.md"]),
         (f"share/{PACKAGE}/config", glob("config/*.yaml") + glob("config/*.rviz")),
-        (f"share/{PACKAGE}/worlds", glob("worlds/*")),
-    ],
+    ] + data_tree("worlds"),
     install_requires=["setuptools"],
     extras_require={"test": ["pytest"], "ray": ["ray==2.60.0"]},
     zip_safe=True,

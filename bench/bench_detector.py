@@ -5,8 +5,8 @@ Times the whole :meth:`Detector.detect` (letterbox, network, decoding, NMS) for 
 and onnx backends at input sizes 320 and 416 on each device present (``detector.device``:
 the CPU always; CUDA for torch when ``torch.cuda.is_available()``, also in fp16; onnxruntime's
 TensorRT / CUDA providers when its build has them), plus the oracle backend on a synthetic
-semantic image. Prints, never asserts. Uses a real frame from the shared data when present,
-else seeded noise. Target: <= 30 ms per frame on 2 CPU threads.
+semantic image. Prints, never asserts. Times the real frame ``tum_fr3_office`` of the test
+data (``test/data/rgbd``). Target: <= 30 ms per frame on 2 CPU threads.
 
 Usage::
 
@@ -16,7 +16,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from pathlib import Path
@@ -31,16 +30,15 @@ if str(ROOT) not in sys.path:
 from explore_seg.core.detector import Detector, DetectorParams  # noqa: E402
 from explore_seg.core.detector.devices import ONNX_GPU_PROVIDERS  # noqa: E402
 
-SHARED = Path(os.environ.get("EXPLORE_SEG_SHARED", ROOT.parent / "shared"))
-FRAME = SHARED / "data" / "rgbd" / "tum_fr3_office_color.png"
+FRAME = ROOT / "test" / "data" / "rgbd" / "tum_fr3_office_color.png"
 FRAME_HW = (480, 640)
 
 
 def _frame() -> tuple[np.ndarray, str]:
-    if FRAME.is_file():
-        return cv2.cvtColor(cv2.imread(str(FRAME)), cv2.COLOR_BGR2RGB), FRAME.name
-    rng = np.random.default_rng(0)
-    return rng.integers(0, 256, FRAME_HW + (3,), dtype=np.uint8), "seeded noise"
+    img = cv2.imread(str(FRAME))
+    if img is None:
+        raise SystemExit(f"cannot read the benchmark frame {FRAME}")
+    return cv2.cvtColor(img, cv2.COLOR_BGR2RGB), FRAME.name
 
 
 def _time(fn, iterations: int, warmup: int) -> tuple[float, float, int]:

@@ -17,19 +17,18 @@ oracle detection and of process_frame + ObjectMap.update. The column ``union`` i
 diagnostic: the coverage when every fused box is rasterised on its own and the results
 are OR-ed (it differs from ``covered`` while ObjectMap.rasterize drops overlaps).
 
-Worlds: ``default_world("house_cluttered")`` and, when the shared data folder exists
-(``../shared`` or $EXPLORE_SEG_SHARED), ``worlds/house_cluttered_plus.world.yaml``.
+Worlds: ``house_cluttered`` (generated) and ``shared/house_cluttered_plus`` (the package's
+``worlds/house_cluttered_plus.world.yaml``) unless ``--world`` names others.
 Prints, never asserts.
 
 Usage::
 
-    .venv/bin/python bench/bench_object_layer.py [--world NAME_OR_PATH ...]
+    .venv/bin/python bench/bench_object_layer.py [--world SPEC ...]
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from pathlib import Path
@@ -44,13 +43,12 @@ for extra in (ROOT, ROOT / "test"):
 from bench.percentiles import pct  # noqa: E402
 from explore_seg.core.grid import GridMap  # noqa: E402
 from explore_seg.core.objects import UNKNOWN_CLASS, ObjectMap  # noqa: E402
-from sim_bridge.worlds import default_world, ground_truth, load_world  # noqa: E402
+from sim_bridge.worlds import ground_truth, load_world  # noqa: E402
 # Viewpoints, pipeline run and coverage of the simulator-level acceptance tests.
 from test_object_layer_sim import (MIN_COVERAGE, SEEN_MIN_PX, PipelineRun,  # noqa: E402
                                    coverage_report, free_floor_far, object_footprint,
                                    plan_viewpoints, run_pipeline)
 
-SHARED = Path(os.environ.get("EXPLORE_SEG_SHARED", ROOT.parent / "shared"))
 
 
 def union_layer(run: PipelineRun, grid: GridMap, classes: set[str] | None = None
@@ -126,22 +124,13 @@ def bench_world(label: str, world) -> None:
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--world", action="append", default=None,
-                    help="world name or *.world.yaml path (repeatable); default: "
-                         "house_cluttered and the shared house_cluttered_plus")
+                    help="world spec: name, shared/NAME, eb/NAME or *.yaml path (repeatable); "
+                         "default: house_cluttered and shared/house_cluttered_plus")
     args = ap.parse_args(argv)
-    specs = args.world
-    if specs is None:
-        specs = ["house_cluttered"]
-        plus = SHARED / "worlds" / "house_cluttered_plus.world.yaml"
-        if plus.is_file():
-            specs.append(str(plus))
-        else:
-            print(f"(skipping house_cluttered_plus: {plus} not found)")
+    specs = args.world or ["house_cluttered", "shared/house_cluttered_plus"]
     for spec in specs:
-        if spec.endswith((".yaml", ".yml")):
-            bench_world(Path(spec).name, load_world(Path(spec)))
-        else:
-            bench_world(spec, default_world(spec))
+        bench_world(Path(spec).name if spec.endswith((".yaml", ".yml")) else spec,
+                    load_world(spec))
 
 
 if __name__ == "__main__":

@@ -8,8 +8,8 @@ cloud. Two inputs:
 
 * synthetic: a ray-cast room (table, two chairs, a wall, and an undetected table whose 4
   legs are in the scan) seen by a camera 1 m up, with the boxes of the detected objects;
-* real: ``tum_fr3_office`` from the shared RGB-D frames with its hand-annotated boxes
-  (skipped when ../shared is absent); no scan.
+* real: ``tum_fr3_office`` from the test frames (``test/data/rgbd``) with its
+  hand-annotated boxes; no scan.
 
 Prints, never asserts. Target: <= 40 ms per frame.
 
@@ -21,7 +21,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from pathlib import Path
@@ -40,7 +39,6 @@ from explore_seg.core.objects import (DepthFrame, ObjectMap, ObjectParams,  # no
 from objects_scene import (K, Det, box_parts, camera_pose, leg_scan,  # noqa: E402
                            project_box, real_frames, render_depth, table_parts)
 
-SHARED = Path(os.environ.get("EXPLORE_SEG_SHARED", ROOT.parent / "shared"))
 
 
 def synthetic_case():
@@ -59,16 +57,10 @@ def synthetic_case():
 
 
 def real_case():
-    """(frame, detections, None) of tum_fr3_office with its annotated boxes, or None."""
-    root = SHARED / "data" / "rgbd"
-    if not (root / "frames.yaml").is_file():
-        return None
+    """(frame, detections, None) of tum_fr3_office with its annotated boxes."""
     names = {"chair": "chair", "desk": "dining table", "table": "dining table"}
-    for f, frame in real_frames(SHARED):
-        if f["name"] == "tum_fr3_office":
-            dets = [Det(names[o["class"]], o["bbox_px"]) for o in f["objects"]]
-            return frame, dets, None
-    return None
+    f, frame = next(real_frames(["tum_fr3_office"]))
+    return frame, [Det(names[o["class"]], o["bbox_px"]) for o in f["objects"]], None
 
 
 def bench(name, case, iterations, warmup):
@@ -105,11 +97,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     print(f"object costmap update per 640x480 frame ({args.iterations} iterations)")
     bench("synthetic (3 det + 1 legs)", synthetic_case(), args.iterations, args.warmup)
-    real = real_case()
-    if real is None:
-        print("real frame: skipped (no ../shared/data/rgbd)")
-    else:
-        bench("tum_fr3_office (3 boxes)", real, args.iterations, args.warmup)
+    bench("tum_fr3_office (3 boxes)", real_case(), args.iterations, args.warmup)
     return 0
 
 

@@ -11,8 +11,8 @@ Ray (``pip install -e .[ray]`` or ``pip install -r requirements-ray.txt``) is op
 imported only when ``--executor ray`` is asked for. Without ``--address`` a local Ray with
 ``--jobs`` CPUs is started for the sweep; with one, the driver joins that cluster (``auto``
 = the cluster this machine belongs to, or ``ray://HOST:10001`` through Ray Client). Every
-node needs this repository and the shared worlds at the paths the driver uses (the
-workers get ``PYTHONPATH`` and ``EXPLORE_SEG_SHARED`` from the driver). A task whose worker
+node needs this repository (its ``worlds/`` folder included) at the path the driver uses
+(the workers get ``PYTHONPATH`` from the driver). A task whose worker
 process or node dies is retried by Ray (``RAY_MAX_RETRIES`` times); a task that raises is
 reported as failed, like in the process pool, and ``--resume`` runs it again.
 """
@@ -25,7 +25,6 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
 from bench import tasks as bench_tasks
-from bench.worlds import shared_dir
 
 ROOT = Path(__file__).resolve().parents[1]
 EXECUTORS = ("process", "ray")
@@ -84,9 +83,6 @@ class RayPool:
                    [str(ROOT)] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep)
                                   if p]),
                "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-        sh = shared_dir()
-        if sh is not None:
-            env["EXPLORE_SEG_SHARED"] = str(sh.resolve())
         self._started = not ray.is_initialized()
         if self._started:
             kw: dict[str, Any] = {"runtime_env": {"env_vars": env},

@@ -14,14 +14,17 @@ how many worlds both say the same about the subject being faster). A full run wi
 rows of the subject (``bench/results`` predates ``routed``) gives the subset's ratios only,
 and says so.
 
-The worlds mix the generated cluttered house, the shared houses and Explore-Bench rooms,
+The worlds mix the generated cluttered house, the shipped houses and Explore-Bench rooms,
 corridors and loops; the maze and the large generated worlds are left out (one of their
 ``paper`` runs takes minutes).
 
 Usage::
 
     .venv/bin/python bench/quick.py [--out out/bench-quick] [--full bench/results]
-        [--subject paper] [run_bench.py options, e.g. --resume or --jobs 2]
+        [--subject paper] [--list] [run_bench.py options, e.g. --resume or --jobs 2]
+
+``--list`` (``make bench-quick BENCH_ARGS=--list``) prints the subset's worlds with the
+file each one loads and runs nothing.
 """
 
 from __future__ import annotations
@@ -121,6 +124,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--subject", default=DEFAULT_SUBJECT,
                     help="the strategy judged against the baselines (default: the "
                          "explorer's default strategy)")
+    ap.add_argument("--list", action="store_true",
+                    help="print the worlds (with the file each loads), strategies and runs "
+                         "of the subset, and run nothing")
     a, rest = ap.parse_known_args(argv)
     if a.subject in BASELINES:
         ap.error(f"--subject must not be a baseline ({', '.join(BASELINES)})")
@@ -128,7 +134,9 @@ def main(argv: list[str] | None = None) -> int:
     rc = run_bench.main(["--worlds", ",".join(QUICK_WORLDS),
                          "--strategies", ",".join((a.subject,) + BASELINES),
                          "--runs", str(QUICK_RUNS), "--no-tour", "--yolo-frames", "0",
-                         "--md", "", "--out", str(out)] + rest)
+                         "--md", "", "--out", str(out)] + rest + (["--list"] if a.list else []))
+    if a.list or rc == 2 and not (out / "runs.csv").is_file():
+        return rc
     quick = store.read_csv(out / "runs.csv")
     full = store.read_csv(Path(a.full) / "runs.csv")
     text = "\n".join(comparison(quick, full, a.subject)) + "\n"

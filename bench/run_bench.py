@@ -16,16 +16,19 @@ world x strategy), the figures of :mod:`bench.report`, and ``BENCHMARKS.md`` at 
 (default: the repository root).
 
 World names: the generated worlds (``house``, ``maze``, ``house_cluttered``,
-``small_house``, ``small_cluttered``), ``shared/NAME`` for ``<shared>/worlds/NAME.world.yaml``
-and ``eb/NAME`` for the Explore-Bench map ``<shared>/worlds/explore_bench/NAME.yaml``
-(``<shared>`` = ``$EXPLORE_SEG_SHARED`` or ``../shared`` beside the repository), or a
-path to a world file.
+``small_house``, ``small_cluttered``), ``shared/NAME`` for the package's
+``worlds/NAME.world.yaml`` and ``eb/NAME`` for the Explore-Bench map
+``worlds/explore_bench/NAME.yaml``, or a path to a world file. Without ``--worlds`` the
+benchmark runs all 20 (:func:`bench.worlds.default_worlds`); a world that cannot be found
+stops it before any run, naming the world. ``--list`` prints the worlds a command would
+run, with the file each one loads, and runs nothing.
 
 Usage::
 
     .venv/bin/python bench/run_bench.py --runs 20 --jobs 2 --out out/bench
     .venv/bin/python bench/run_bench.py --runs 3 --worlds house --strategies paper,nearest
     .venv/bin/python bench/run_bench.py --report-only --out out/bench
+    .venv/bin/python bench/run_bench.py --list
     .venv/bin/python bench/run_bench.py --ros 2 --runs 2 --worlds small_house
     .venv/bin/python bench/run_bench.py --executor ray --address auto --jobs 64 --runs 20
 
@@ -85,7 +88,10 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--runs", type=int, default=20, help="seeded runs per world x strategy")
     ap.add_argument("--worlds", default="", help="comma-separated world specs "
-                    "(default: generated + shared worlds)")
+                    "(default: the 20 of bench.worlds.default_worlds)")
+    ap.add_argument("--list", action="store_true",
+                    help="print the worlds (with the file each loads), strategies and runs "
+                         "this command would run, and run nothing")
     ap.add_argument("--strategies", default=",".join(STRATEGIES),
                     help=f"comma-separated, from {','.join(STRATEGIES)}")
     ap.add_argument("--jobs", type=int, default=2,
@@ -213,20 +219,31 @@ def main(argv: list[str] | None = None) -> int:
     """Run the benchmark (see the module docstring); returns the exit status."""
     a = _parse(argv)
     out = Path(a.out)
-    out.mkdir(parents=True, exist_ok=True)
-    command = "bench/run_bench.py " + " ".join(shlex.quote(x) for x in (argv if argv is not None
-                                                                        else sys.argv[1:]))
     if a.report_only:
+        out.mkdir(parents=True, exist_ok=True)
         report.write_all(out, Path(a.md) if a.md else None, command=None)
         return 0
     specs = [w for w in (a.worlds.split(",") if a.worlds else default_worlds()) if w]
     strategies = [s for s in a.strategies.split(",") if s]
-    try:
-        for s in specs:
-            world_path(s)
-    except ValueError as err:
+    resolved, missing = {}, []
+    for s in specs:
+        try:
+            resolved[s] = world_path(s)
+        except ValueError as err:
+            missing.append(str(err))
+    for err in missing:
         print(f"[bench] {err}", file=sys.stderr)
+    if missing:
         return 2
+    if a.list:
+        print(f"[bench] {len(specs)} worlds x {len(strategies)} strategies "
+              f"({', '.join(strategies)}) x {a.runs} runs:")
+        for s in specs:
+            print(f"{s}\t{resolved[s] if resolved[s] != s else '(generated)'}")
+        return 0
+    out.mkdir(parents=True, exist_ok=True)
+    command = "bench/run_bench.py " + " ".join(shlex.quote(x) for x in (argv if argv is not None
+                                                                        else sys.argv[1:]))
     meta = {"command": command, "runs": a.runs, "seed0": a.seed0, "worlds": specs,
             "strategies": strategies, "jobs": a.jobs, "cpus": os.cpu_count(),
             "settings": _settings(a), "code": store.code_version(),

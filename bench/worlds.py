@@ -1,75 +1,56 @@
 """The benchmark's worlds and simulator settings: world specs, their loading, the sim
 time limit of a run and the simulator parameters (camera mount, navigation margin).
 
-World specs: the generated worlds (``house``, ``maze``, ``house_cluttered``,
-``office_floor``, ``small_house``, ``small_cluttered``), ``shared/NAME`` for ``<shared>/worlds/NAME.world.yaml``
-and ``eb/NAME`` for the Explore-Bench map ``<shared>/worlds/explore_bench/NAME.yaml``
-(``<shared>`` = ``$EXPLORE_SEG_SHARED`` or ``../shared`` beside the repository), or a
-path to a world file.
+World specs (:mod:`sim_bridge.worlds.catalog`): the generated worlds (``house``, ``maze``,
+``house_cluttered``, ``office_floor``, ``small_house``, ``small_cluttered``),
+``shared/NAME`` for the package's ``worlds/NAME.world.yaml``, ``eb/NAME`` for the
+Explore-Bench map ``worlds/explore_bench/NAME.yaml``, or a path to a world file.
 """
 
 from __future__ import annotations
 
 import functools
-import os
 from pathlib import Path
 
 from sim_bridge import worlds as sim_worlds
-from sim_bridge.engine import SimParams, load_world
+from sim_bridge.engine import SimParams
 from sim_bridge.observable import with_observable
+from sim_bridge.worlds import EXPLORE_BENCH_MAPS, FILE_WORLDS, load_world, resolve_world
 
 ROOT = Path(__file__).resolve().parents[1]
 
 GENERATED_WORLDS = ("house", "maze", "house_cluttered", "office_floor")
-SHARED_WORLDS = ("house", "house_cluttered", "house_cluttered_plus", "maze")
 #: Sim time limit per m^2 of explorable area, and its bounds (s).
 TIME_PER_AREA_S = 5.0
 MIN_SIM_TIME_S = 600.0
 MAX_SIM_TIME_S = 7200.0
 
 
-def shared_dir() -> Path | None:
-    """``$EXPLORE_SEG_SHARED`` or ``../shared`` beside the repository, when present."""
-    env = os.environ.get("EXPLORE_SEG_SHARED")
-    cand = Path(env) if env else ROOT.parent / "shared"
-    return cand if cand.is_dir() else None
-
-
 def default_worlds() -> list[str]:
-    """Generated worlds, plus the shared worlds and Explore-Bench maps when present."""
-    names = list(GENERATED_WORLDS)
-    sh = shared_dir()
-    if sh is not None:
-        names += [f"shared/{n}" for n in SHARED_WORLDS
-                  if (sh / "worlds" / f"{n}.world.yaml").is_file()]
-        eb = sh / "worlds" / "explore_bench"
-        names += [f"eb/{p.stem}" for p in sorted(eb.glob("*.yaml")) if p.stem != "starts"]
-    return names
+    """The full benchmark's worlds: the generated ones, the four world files and the
+    twelve Explore-Bench maps shipped in ``worlds/`` (20 specs)."""
+    return (list(GENERATED_WORLDS) + [f"shared/{n}" for n in FILE_WORLDS]
+            + [f"eb/{n}" for n in EXPLORE_BENCH_MAPS])
 
 
 def world_path(spec: str) -> str:
-    """Resolve a world spec to what :func:`sim_bridge.engine.load_world` takes.
+    """What the simulator's ``world`` parameter takes for a spec: the file of a shipped
+    or file world, or the name of a generated one.
 
     Raises
     ------
     ValueError
-        When a ``shared/`` or ``eb/`` world is asked for and the shared folder is absent.
+        When the spec names no world (a ``shared/`` or ``eb/`` name that is not shipped,
+        a missing file, an unknown name); the message names it.
     """
-    for prefix, sub, suffix in (("shared/", "", ".world.yaml"), ("eb/", "explore_bench", ".yaml")):
-        if spec.startswith(prefix):
-            sh = shared_dir()
-            if sh is None:
-                raise ValueError(f"world {spec!r} needs the shared folder (../shared or "
-                                 "$EXPLORE_SEG_SHARED), which is absent")
-            return str(sh / "worlds" / sub / f"{spec[len(prefix):]}{suffix}")
-    return spec
+    return resolve_world(spec)
 
 
 @functools.lru_cache(maxsize=64)
 def load(spec: str):
     """(World, GroundTruth with its observable cells) of a spec, cached per process (the
     main process fills it before the workers fork)."""
-    world = load_world(world_path(spec))
+    world = load_world(spec)
     world.name = spec
     sp = SimParams()
     return world, with_observable(world, sim_worlds.ground_truth(world), sp.lidar_params(),

@@ -23,7 +23,6 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, fields, replace
-from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
@@ -42,7 +41,7 @@ from sim_bridge.world import World
 
 #: Re-exported: SimParams and Collider moved to sim_bridge.params / sim_bridge.collision.
 __all__ = ["DEPTH_ENCODINGS", "CameraSample", "Collider", "ScanFrame", "ScanGeometry",
-           "SimEngine", "SimParams", "engine_from_params", "load_world"]
+           "SimEngine", "SimParams", "engine_from_params"]
 
 
 @dataclass(frozen=True)
@@ -479,19 +478,6 @@ class SimEngine:
 # ------------------------------------------------------------------ defaults
 
 
-def load_world(spec: str) -> World:
-    """A world from a name (:func:`sim_bridge.worlds.default_world`) or a file path.
-
-    Raises
-    ------
-    ValueError
-        On an unknown name or an unreadable/invalid file.
-    """
-    if spec.endswith((".yaml", ".yml")) or "/" in spec:
-        return worlds.load_world(Path(spec))
-    return worlds.default_world(spec)
-
-
 def engine_from_params(params: SimParams) -> SimEngine:
     """Load ``params.world`` and build an engine with the default sensors."""
-    return SimEngine(load_world(params.world), params)
+    return SimEngine(worlds.load_world(params.world), params)

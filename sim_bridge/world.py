@@ -1,8 +1,8 @@
 """2.5D world model of the simulator: upright boxes and cylinders with a z-extent.
 
 This module holds the data types every part of the simulator shares and
-:func:`rasterize`, which turns primitives into occupancy rasters with the rules of the
-shared worlds' README (section 3): a cell is occupied when a primitive's cross-section
+:func:`rasterize`, which turns primitives into occupancy rasters with the rules of
+``worlds/README.md`` (section 3): a cell is occupied when a primitive's cross-section
 overlaps the cell square by more than 1 mm. Loading (``explore_seg_world/1`` YAML,
 map_server YAML+PGM), procedural generation and ground truth live in
 :mod:`sim_bridge.worlds`; sensors in :mod:`sim_bridge.sensors`.

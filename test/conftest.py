@@ -35,13 +35,6 @@ import pytest  # noqa: E402
 DOMAIN_ID = int(os.environ["ROS_DOMAIN_ID"])
 
 
-def shared_dir() -> Path | None:
-    """The data folder beside the checkout (``../shared``) or $EXPLORE_SEG_SHARED, if present."""
-    env = os.environ.get("EXPLORE_SEG_SHARED")
-    cand = Path(env) if env else ROOT.parent / "shared"
-    return cand if cand.is_dir() else None
-
-
 class RosHarness:
     """A private rclpy context + executor for one test."""
 
@@ -103,12 +96,3 @@ def ros():
         yield h
     finally:
         h.close()
-
-
-@pytest.fixture
-def shared():
-    """Path of ../shared, or skip the test when it is not there."""
-    d = shared_dir()
-    if d is None:
-        pytest.skip("../shared is not present")
-    return d

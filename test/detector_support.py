@@ -1,11 +1,11 @@
 """Shared by the test_detector_* files: model and frame locations, the torch network
 fixture and the oracle's class table. Tests that need the YOLOv3-tiny files skip when they
-are absent (fetch them with ``python scripts/fetch_weights.py``); tests on real frames skip
-when ``/work/shared`` (or ``$EXPLORE_SEG_SHARED``) is absent."""
+are absent (fetch them with ``python scripts/fetch_weights.py``). Real frames come from
+:mod:`rgbd_data` (the TUM frames ship in test/data/rgbd; a test on an NYU frame skips
+when it is absent)."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import cv2
@@ -13,10 +13,9 @@ import numpy as np
 import pytest
 
 from explore_seg.core.detector import TorchBackend, default_model_dir
+from rgbd_data import color_path
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = Path(os.environ.get("EXPLORE_SEG_SHARED", ROOT.parent / "shared"))
-FRAMES = SHARED / "data" / "rgbd"
 MODEL_DIR = default_model_dir()
 HAVE_WEIGHTS = all(p.is_file() for p in (MODEL_DIR / "yolov3-tiny.cfg",
                                          MODEL_DIR / "yolov3-tiny.weights",
@@ -27,17 +26,8 @@ needs_weights = pytest.mark.skipif(
 
 
 def frame(name: str) -> np.ndarray:
-    path = FRAMES / f"{name}_color.png"
-    if not path.is_file():
-        pytest.skip(f"shared frame {path} absent")
-    return cv2.cvtColor(cv2.imread(str(path), cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
-
-
-def frame_or_noise(name: str) -> np.ndarray:
-    path = FRAMES / f"{name}_color.png"
-    if path.is_file():
-        return frame(name)
-    return np.random.default_rng(0).integers(0, 256, (480, 640, 3), dtype=np.uint8)
+    """RGB uint8 image of a real frame (skips the test when the frame is absent)."""
+    return cv2.cvtColor(cv2.imread(str(color_path(name)), cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
 
 
 @pytest.fixture(scope="module")

@@ -1,14 +1,12 @@
 """Scene helpers of the object costmap tests (and bench/bench_objects.py): a ray caster
 of boxes and the floor (``render_depth``), so every expected size and position is known
-exactly, 2D boxes of parts, laser legs, maps, and the shared RGB-D frames."""
+exactly, 2D boxes of parts, laser legs, maps, and the real RGB-D frames."""
 
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
-import pytest
 
 from explore_seg.core.camera import (CameraIntrinsics, apply_transform, base_from_optical,
                                      depth_to_points, invert_transform, map_from_base,
@@ -165,19 +163,18 @@ def floor_transform(depth_m, intr, rng):
     return t
 
 
-def real_frames(shared: Path):
-    """(frame entry, DepthFrame) of ../shared/data/rgbd (skips the test when absent)."""
+def real_frames(names):
+    """(frame entry, DepthFrame) of the named real frames (:mod:`rgbd_data`; skips the
+    test, naming the missing file, when one is absent)."""
     import cv2
-    import yaml
 
-    root = shared / "data" / "rgbd"
-    if not (root / "frames.yaml").is_file():
-        pytest.skip("no RGB-D frames in ../shared/data/rgbd")
+    from rgbd_data import annotations, frame_dir
+
     rng = np.random.default_rng(0)
-    for f in yaml.safe_load((root / "frames.yaml").read_text())["frames"]:
+    for f in annotations(names).values():
         intr = CameraIntrinsics(**{k: f["intrinsics"][k]
                                    for k in ("fx", "fy", "cx", "cy", "width", "height")})
-        raw = cv2.imread(str(root / f["depth_file"]), cv2.IMREAD_UNCHANGED)
+        raw = cv2.imread(str(frame_dir(f["name"]) / f["depth_file"]), cv2.IMREAD_UNCHANGED)
         depth = raw.astype(np.float32) / float(f["depth_units_per_m"])
         depth[raw == 0] = np.nan
         yield f, DepthFrame(depth, intr, floor_transform(depth, intr, rng))

@@ -51,3 +51,18 @@ def test_the_default_subject_is_the_default_strategy_and_a_full_run_without_it_s
     text = "\n".join(quick.comparison(sub, full))
     assert "| w | nearest | 0.50 | - | - | - |" in text
     assert "The full run has no `routed` runs" in text
+
+
+def test_list_prints_the_subsets_worlds_and_runs_nothing(tmp_path, capsys):
+    out = tmp_path / "quick"
+    assert quick.main(["--list", "--out", str(out)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == (f"[bench] {len(quick.QUICK_WORLDS)} worlds x 3 strategies "
+                        f"({quick.DEFAULT_SUBJECT}, explore_lite, nearest) x {quick.QUICK_RUNS} runs:")
+    listed = dict(line.split("\t") for line in lines[1:])
+    assert tuple(listed) == quick.QUICK_WORLDS
+    root = Path(__file__).resolve().parents[1] / "worlds"
+    assert listed["shared/house"] == str(root / "house.world.yaml")
+    assert listed["eb/corner"] == str(root / "explore_bench" / "corner.yaml")
+    assert all(v == "(generated)" or Path(v).is_file() for v in listed.values())
+    assert not out.exists()

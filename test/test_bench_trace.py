@@ -1,7 +1,7 @@
 """``bench/trace_decisions.py``: the per-decision trace and the groups' dump of a window.
 
 Short lock-step runs (a few seconds of sim time) of the small Explore-Bench world
-eb/corridor_asym from ``../shared``.
+eb/corridor_asym (shipped in ``worlds/explore_bench``).
 """
 
 from __future__ import annotations

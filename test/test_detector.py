@@ -6,9 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from detector_support import FRAMES, HAVE_WEIGHTS, SIM_IDS, frame, needs_weights
+from detector_support import HAVE_WEIGHTS, SIM_IDS, frame, needs_weights
 from explore_seg.core.detector import (COCO_NAMES, DEFAULT_CLASSES, Detector, DetectorParams,
                                        box_iou)
+from rgbd_data import EXTRA_FRAMES, LICENSED_FRAMES, annotations
 
 @pytest.fixture(scope="module")
 def detector():
@@ -41,41 +42,39 @@ REAL_HITS = [
 ]
 
 
-def _annotations() -> dict:
-    path = FRAMES / "frames.yaml"
-    if not path.is_file():
-        pytest.skip(f"{path} absent")
-    import yaml
-
-    return {f["name"]: f for f in yaml.safe_load(path.read_text())["frames"]}
-
-
 @pytest.fixture(scope="module")
 def real_detections(detector):
-    frames = _annotations()
-    return {name: detector.detect(frame(name)) for name in frames}
+    """{frame name: detections} of the frames present (the licensed ones always)."""
+    cache: dict = {}
+
+    def get(name: str):
+        if name not in cache:
+            cache[name] = detector.detect(frame(name))
+        return cache[name]
+    return get
 
 
 @needs_weights
 @pytest.mark.parametrize("frame, index, cls", REAL_HITS)
 def test_real_frame_objects_detected(real_detections, frame, index, cls):
-    obj = _annotations()[frame]["objects"][index]
+    obj = annotations([frame])[frame]["objects"][index]
     x0, y0, x1, y1 = obj["bbox_px"]
     truth = [x0, y0, x1 + 1, y1 + 1]  # inclusive pixel box -> continuous corners
-    boxes = [d.box_xyxy for d in real_detections[frame] if d.cls_name == cls]
-    assert boxes, f"no {cls} in {frame}: {real_detections[frame]}"
+    boxes = [d.box_xyxy for d in real_detections(frame) if d.cls_name == cls]
+    assert boxes, f"no {cls} in {frame}: {real_detections(frame)}"
     assert box_iou(boxes, truth).max() > 0.3
 
 
 @needs_weights
 @pytest.mark.parametrize("frame", ["tum_fr2_desk_a", "tum_fr2_desk_b"])
 def test_real_frames_without_chairs_report_none(real_detections, frame):
-    assert [d for d in real_detections[frame] if d.cls_name == "chair"] == []
+    assert [d for d in real_detections(frame) if d.cls_name == "chair"] == []
 
 
 @needs_weights
-def test_real_detections_respect_params(real_detections):
-    dets = [d for ds in real_detections.values() for d in ds]
+@pytest.mark.parametrize("names", [LICENSED_FRAMES, EXTRA_FRAMES], ids=["tum", "nyu"])
+def test_real_detections_respect_params(real_detections, names):
+    dets = [d for name in annotations(names) for d in real_detections(name)]
     assert dets
     assert all(d.cls_name in DEFAULT_CLASSES and COCO_NAMES[d.class_id] == d.cls_name
                for d in dets)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from detector_support import HAVE_WEIGHTS, MODEL_DIR, frame_or_noise, needs_weights
+from detector_support import HAVE_WEIGHTS, MODEL_DIR, frame, needs_weights
 from detector_support import torch_backend  # noqa: F401 - a fixture
 from explore_seg.core.detector import DetectorParams, OnnxBackend, decode, letterbox, onnx_source
 
@@ -25,7 +25,7 @@ def onnx_backend(onnx_cache):
 
 @needs_weights
 def test_onnx_backend_matches_torch(torch_backend, onnx_backend):
-    rgb = frame_or_noise("nyu_home_2")
+    rgb = frame("tum_fr3_office")
     blob, geo = letterbox(rgb, 416)
     raw_t, raw_o = torch_backend.infer(blob), onnx_backend.infer(blob)
     assert raw_t.shape == raw_o.shape == (507 + 2028, 85)

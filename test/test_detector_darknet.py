@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from detector_support import MODEL_DIR, frame_or_noise, needs_weights
+from detector_support import MODEL_DIR, frame, needs_weights
 from detector_support import torch_backend  # noqa: F401 - a fixture
 from explore_seg.core.detector import darknet, letterbox
 
@@ -218,7 +218,7 @@ def test_weights_foreign_header(tmp_path):
 def test_loader_matches_opencv_darknet(torch_backend, size):
     import torch
 
-    rgb = frame_or_noise("tum_fr3_office")
+    rgb = frame("tum_fr3_office")
     blob, _ = letterbox(rgb, size)
     cv_net = cv2.dnn.readNetFromDarknet(str(MODEL_DIR / "yolov3-tiny.cfg"),
                                         str(MODEL_DIR / "yolov3-tiny.weights"))

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from detector_support import MODEL_DIR, frame_or_noise, needs_weights
+from detector_support import MODEL_DIR, frame, needs_weights
 from detector_support import torch_backend  # noqa: F401 - a fixture
 from explore_seg.core.detector import Detector, DetectorParams, OnnxBackend, letterbox
 from explore_seg.core.detector.backends import TorchBackend
@@ -67,7 +67,7 @@ def test_torch_backend_on_a_machine_without_cuda_runs_on_the_cpu(torch_backend, 
         pytest.skip("this machine has CUDA: the fallback is not exercised")
     gpu = TorchBackend(MODEL_DIR, 416, num_threads=2, device=device, half=True)
     assert gpu.device.target == "cpu" and "running on the CPU" in gpu.device.note
-    blob, _ = letterbox(frame_or_noise("nyu_home_2"), 416)
+    blob, _ = letterbox(frame("tum_fr3_office"), 416)
     np.testing.assert_array_equal(gpu.infer(blob), torch_backend.infer(blob))
 
 

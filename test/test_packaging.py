@@ -99,6 +99,18 @@ def test_colcon_build_and_installed_executable_exits_cleanly_on_sigint(tmp_path)
     assert build.returncode == 0, build.stdout + build.stderr
     exe = tmp_path / "install" / "explore_seg" / "lib" / "explore_seg" / "explorer"
     assert exe.exists(), sorted(p.name for p in exe.parent.iterdir())
+    # the worlds, subfolders included, are installed, and the installed loader finds them
+    share = tmp_path / "install" / "explore_seg" / "share" / "explore_seg" / "worlds"
+    shipped = sorted(str(p.relative_to(ROOT / "worlds")) for p in (ROOT / "worlds").rglob("*")
+                     if p.is_file())
+    assert sorted(str(p.relative_to(share)) for p in share.rglob("*") if p.is_file()) == shipped
+    found = subprocess.run(
+        ["sh", "-c", f". {tmp_path / 'install' / 'setup.sh'} && exec {sys.executable} -c "
+         "'from sim_bridge.worlds import world_file; print(world_file(\"eb/room\"))'"],
+        cwd=tmp_path, env={k: v for k, v in env.items() if k != "PYTHONPATH"},
+        capture_output=True, text=True, timeout=60)
+    assert found.stdout.strip() == str(share / "explore_bench" / "room.yaml"), (
+        found.stdout + found.stderr)
     proc = subprocess.Popen(
         ["sh", "-c", f". {tmp_path / 'install' / 'setup.sh'} && exec {exe}"],
         cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,

@@ -174,10 +174,9 @@ def test_lidar_matches_brute_force_and_hits_lie_on_boundaries(name):
             assert gap < 2e-4, (pose, p)
 
 
-@pytest.mark.parametrize("rel", ["house_cluttered_plus.world.yaml",
-                                 "explore_bench/room_with_corridor.yaml"])
-def test_lidar_matches_brute_force_on_shared_worlds(shared, rel):
-    world = load_world(shared / "worlds" / rel)
+@pytest.mark.parametrize("spec", ["shared/house_cluttered_plus", "eb/room_with_corridor"])
+def test_lidar_matches_brute_force_on_shipped_worlds(spec):
+    world = load_world(spec)
     params = LidarParams()
     lidar = Lidar(world, params)
     for pose in random_free_poses(world, 8, seed=9):

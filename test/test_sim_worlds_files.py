@@ -1,4 +1,5 @@
-"""World files: shared worlds, Explore-Bench maps, loader errors naming file and key."""
+"""World files: the worlds shipped in ``worlds/`` (houses, maze, Explore-Bench maps), world
+specs, loader errors naming file and key."""
 
 from __future__ import annotations
 
@@ -11,13 +12,13 @@ from scipy import ndimage
 import yaml
 
 from sim_bridge.world import Primitive
-from sim_bridge.worlds import ground_truth, load_world
-
+from sim_bridge.worlds import ground_truth, load_world, worlds_dir
 
 SHARED_WORLDS = ("house", "house_cluttered", "house_cluttered_plus", "maze")
 EXPLORE_BENCH = ("corner", "corridor", "corridor_asym", "corridor_sym", "loop",
                  "loop_with_corridor", "room", "room_1", "room_2", "room_3", "room_with_corner",
                  "room_with_corridor")
+WORLDS = worlds_dir()
 
 
 def _pgm(path: Path) -> np.ndarray:
@@ -26,8 +27,8 @@ def _pgm(path: Path) -> np.ndarray:
 
 
 @pytest.mark.parametrize("name", SHARED_WORLDS)
-def test_shared_world_loads(shared, name):
-    path = shared / "worlds" / f"{name}.world.yaml"
+def test_shared_world_loads(name):
+    path = WORLDS / f"{name}.world.yaml"
     w = load_world(path)
     doc = yaml.safe_load(path.read_text())
     assert w.name == name
@@ -39,10 +40,10 @@ def test_shared_world_loads(shared, name):
 @pytest.mark.parametrize("name", ["house_cluttered_plus", "maze", "house"])
 @pytest.mark.parametrize("which, suffix", [("lidar", ""), ("footprint", "_footprint"),
                                            ("footprint_tall", "_footprint_tall")])
-def test_shared_rasters_match_pgm(shared, name, which, suffix):
-    w = load_world(shared / "worlds" / f"{name}.world.yaml")
+def test_shared_rasters_match_pgm(name, which, suffix):
+    w = load_world(WORLDS / f"{name}.world.yaml")
     gt = ground_truth(w)
-    ref = _pgm(shared / "worlds" / f"{name}{suffix}.pgm")
+    ref = _pgm(WORLDS / f"{name}{suffix}.pgm")
     mine = gt.as_map(which).data
     assert mine.shape == ref.shape
     assert (mine == ref).mean() >= 0.995
@@ -52,8 +53,8 @@ def test_shared_rasters_match_pgm(shared, name, which, suffix):
 
 
 @pytest.mark.parametrize("name", EXPLORE_BENCH)
-def test_explore_bench_map_loads_with_start(shared, name):
-    folder = shared / "worlds" / "explore_bench"
+def test_explore_bench_map_loads_with_start(name):
+    folder = WORLDS / "explore_bench"
     w = load_world(folder / f"{name}.yaml")
     starts = yaml.safe_load((folder / "starts.yaml").read_text())["maps"][name]
     assert w.start_pose == tuple(starts["start_pose"])
@@ -66,8 +67,8 @@ def test_explore_bench_map_loads_with_start(shared, name):
     assert np.array_equal(gt.as_map("lidar").data, grid.data)
 
 
-def test_explore_bench_start_override_and_fallback(shared, tmp_path):
-    src = shared / "worlds" / "explore_bench"
+def test_explore_bench_start_override_and_fallback(tmp_path):
+    src = WORLDS / "explore_bench"
     w = load_world(src / "room.yaml", start_pose=(1.0, 2.0, 0.5))
     assert w.start_pose == (1.0, 2.0, 0.5)
     # without starts.yaml: the free cell farthest from non-free cells

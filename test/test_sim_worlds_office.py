@@ -8,8 +8,8 @@ from scipy import ndimage
 
 from explore_seg.core.grid import OCCUPIED_THRESHOLD
 from explore_seg.core.paths import inflate
-from sim_bridge.engine import SimParams, load_world
-from sim_bridge.worlds import generate_office_floor, ground_truth, world_to_dict
+from sim_bridge.engine import SimParams
+from sim_bridge.worlds import generate_office_floor, ground_truth, load_world, world_to_dict
 
 
 @pytest.fixture(scope="module", params=[1, 7])

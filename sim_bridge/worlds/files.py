@@ -1,8 +1,9 @@
 """World files: ``explore_seg_world/1`` YAML and map_server YAML + PGM/PNG.
 
-* :func:`load_world` reads an ``explore_seg_world/1`` file (``*.world.yaml``) or a
+* :func:`read_world_file` reads an ``explore_seg_world/1`` file (``*.world.yaml``) or a
   map_server YAML (+ PGM/PNG; an Explore-Bench map, with its start from a sibling
-  ``starts.yaml``) into a :class:`~sim_bridge.world.World`.
+  ``starts.yaml``) into a :class:`~sim_bridge.world.World`. Loading by spec (names,
+  shipped worlds, paths) is :func:`sim_bridge.worlds.catalog.load_world`.
 * :func:`save_world` / :func:`world_to_dict` write the ``explore_seg_world/1`` format.
 """
 
@@ -22,7 +23,7 @@ from explore_seg.core.grid import MAP_IMAGE_MODES, GridMap, occupancy_from_map_i
 from sim_bridge.world import SHAPES, Primitive, World, WorldObject
 
 WORLD_FORMAT = "explore_seg_world/1"
-#: Classes a primitive or object may have (``table`` also covers desks in the shared worlds).
+#: Classes a primitive or object may have (``table`` also covers desks in the shipped worlds).
 KNOWN_CLASSES = ("wall", "chair", "table", "desk", "cabinet", "sofa", "other")
 #: Height given to the occupied cells of a map-only world (they act as unlimited walls).
 MAP_WALL_HEIGHT_M = 10.0
@@ -258,9 +259,9 @@ def _parse_map_yaml(doc: Any, path: Path,
                  description=f"map-only world from {path.name}")
 
 
-def load_world(path: str | Path, start_pose: tuple[float, float, float] | None = None
-               ) -> World:
-    """Load a world file.
+def read_world_file(path: str | Path,
+                    start_pose: tuple[float, float, float] | None = None) -> World:
+    """Read a world file.
 
     Parameters
     ----------
@@ -287,7 +288,8 @@ def load_world(path: str | Path, start_pose: tuple[float, float, float] | None =
 
     Examples
     --------
-    >>> w = load_world("/work/shared/worlds/maze.world.yaml")  # doctest: +SKIP
+    >>> from sim_bridge.worlds import worlds_dir
+    >>> w = read_world_file(worlds_dir() / "maze.world.yaml")
     >>> w.start_pose
     (0.0, 0.0, 0.0)
     """
