@@ -27,8 +27,9 @@ class SimParams:
     """
 
     world: str = field(default="small_house", metadata=param_meta(
-        "world name (house, house_cluttered, maze, small_house, small_cluttered, "
-        "office_floor) or a "
+        "world: a generated one (house, house_cluttered, maze, small_house, small_cluttered, "
+        "office_floor), a shipped file (shared/house, shared/house_cluttered, "
+        "shared/house_cluttered_plus, shared/maze, eb/NAME for the Explore-Bench maps) or a "
         "path to a *.world.yaml / map_server *.yaml", read_only=True))
     seed: int = field(default=0, metadata=param_meta(
         "seed of the sensor and pose noise", read_only=True))

@@ -15,10 +15,18 @@ sys.path.insert(0, str(ROOT / "bench"))
 import eval_segmentation  # noqa: E402
 
 
-def test_ipa_dev_cases_are_binarised_and_flipped_like_the_ipa_evaluation(shared):
-    folder = shared / "data" / "ipa_dev"
+def _ipa_dev() -> Path:
+    """``<shared>/data/ipa_dev`` (academic, non-commercial licence: never in the repository),
+    or skip the test naming where it was looked for."""
+    folder = eval_segmentation.ipa_dev_dir()
     if not folder.is_dir():
-        pytest.skip(f"{folder} is not present")
+        pytest.skip(f"the IPA development maps are not present at {folder} "
+                    "($EXPLORE_SEG_SHARED/data/ipa_dev or ../shared/data/ipa_dev)")
+    return folder
+
+
+def test_ipa_dev_cases_are_binarised_and_flipped_like_the_ipa_evaluation():
+    folder = _ipa_dev()
     import cv2
 
     name, grid, rooms = next(eval_segmentation.ipa_dev_cases(folder, furnished=True))
@@ -31,10 +39,8 @@ def test_ipa_dev_cases_are_binarised_and_flipped_like_the_ipa_evaluation(shared)
     assert grid.resolution_m == 0.05
 
 
-def test_ipa_dev_prints_plain_and_furnished_scores(shared, capsys):
-    folder = shared / "data" / "ipa_dev"
-    if not folder.is_dir():
-        pytest.skip(f"{folder} is not present")
+def test_ipa_dev_prints_plain_and_furnished_scores(capsys):
+    folder = _ipa_dev()
     assert eval_segmentation.main(["--set", "ipa_dev", "--ipa-dir", str(folder)]) == 0
     out = capsys.readouterr().out
     for name in eval_segmentation.IPA_DEV_MAPS:
