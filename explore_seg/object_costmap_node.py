@@ -1,24 +1,21 @@
 """``object_costmap`` node: furniture boxes from YOLO + depth (+ laser legs) as a map layer.
 
-Callbacks only store the newest inputs. A timer on the ROS clock (``_POLLS_PER_PERIOD``
-times per ``1 / rate_hz``), and a guard condition woken when a depth image arrives or a
-pose reaches a waiting image's stamp, take the oldest waiting colour/depth pair whose stamps match
-(``sync_tolerance_s``) and lie at least ``_MIN_GAP_PERIODS / rate_hz`` after the last one
-processed (so a camera at ``rate_hz`` has every frame processed, a faster one about
-``rate_hz`` of them), the robot pose nearest to it, runs the detector and
-:func:`explore_seg.core.objects.process_frame`, fuses the
-boxes into an :class:`~explore_seg.core.objects.ObjectMap` and publishes the layer
-(aligned with the latest ``map``), the virtual cloud, markers and timings (cloud and
-markers only while they have subscribers). Frames that arrive while a frame is processed
-are dropped (only the newest few are kept for pairing); when the node processes less than
-half of the frames it could (``rate_hz`` or the camera's rate, whichever is lower) over
-``_LAG_WINDOW_S`` of ROS time, it warns, naming the cause (malformed frames, frames
-without a robot pose at their stamp, or too little CPU: the layer lags behind). A bad
-``scan`` is dropped on arrival and the last good one kept. While
-``exploration_done`` is true (and ``idle_when_done``) the timer is paused
-(:class:`~explore_seg.done_gate.DoneGate`).
+Callbacks only store the newest inputs. A timer on the ROS clock (``_POLLS_PER_PERIOD`` times
+per ``1 / rate_hz``), and a guard condition woken when a depth image arrives or a pose
+reaches a waiting image's stamp, take the oldest waiting colour/depth pair whose stamps
+match (``sync_tolerance_s``) and lie at least ``_MIN_GAP_PERIODS / rate_hz`` after the last
+one processed (a camera at ``rate_hz`` has every frame processed, a faster one about
+``rate_hz`` of them), the robot pose nearest to it, run the detector and
+:func:`explore_seg.core.objects.process_frame`, fuse the boxes into an
+:class:`~explore_seg.core.objects.ObjectMap` and publish the layer (aligned with the latest
+``map``), the virtual cloud, markers and timings (cloud and markers only while subscribed).
+Frames that arrive while a frame is processed are dropped (the newest few are kept for
+pairing); when the node processes less than half of the frames it could (``rate_hz`` or the
+camera's rate, whichever is lower) over ``_LAG_WINDOW_S`` of ROS time, it warns, naming the
+cause (malformed frames, frames without a robot pose at their stamp, or too little CPU). A
+bad ``scan`` is dropped on arrival and the last good one kept. While ``exploration_done``
+is true (and ``idle_when_done``) the timer is paused (:class:`~explore_seg.done_gate.DoneGate`).
 """
-
 from __future__ import annotations
 
 import collections
@@ -47,7 +44,7 @@ from explore_seg.done_gate import DoneGate
 from explore_seg.node_util import WarnThrottle, config_file, failsafe, run
 from explore_seg.object_inputs import lag_warning, purge_newer, wait_reason
 from explore_seg.params import ParamBinding
-from explore_seg.pose_input import PoseInput
+from explore_seg.pose_input import PoseHooks, PoseInput
 from explore_seg.qos import MAP_QOS, POSE_QOS, SENSOR_QOS, map_qos
 from explore_seg.time_guard import StallWatchdog, TimeGuard
 
@@ -94,13 +91,16 @@ class ObjectCostmapNode(Node):
         self._lp = ParamBinding(self, InputLimits(), prefix="input.")
         self._pfp = ParamBinding(self, PoseFusionParams(), prefix="pose_fusion.")
         p = self._p.params
-        # the installed share's priors when no file is given (the core knows only the
-        # source tree)
+        # the installed share's priors when no file is given (the core knows the source tree)
         self._priors = load_priors(p.priors_path or config_file("object_priors.yaml"))
         self._objects = ObjectMap(p, self._priors)
         self._detector: Detector | None = None
         self._detector_failed = False
+        self._init_state()
+        self._init_topics(p)
 
+    def _init_state(self) -> None:
+        """Inputs, state machine, counters and time model before the first message."""
         self._info = None
         self._colors: collections.deque = collections.deque(maxlen=_PAIR_BUFFER)
         self._depths: collections.deque = collections.deque(maxlen=_PAIR_BUFFER)
@@ -137,6 +137,8 @@ class ObjectCostmapNode(Node):
         #: Clock jumps seen (any stream).
         self.time_jumps = 0
 
+    def _init_topics(self, p: ObjectCostmapNodeParams) -> None:
+        """Publishers, subscriptions (sensors through the done gate), timer, wake-up."""
         self._pub_grid = self.create_publisher(OccupancyGrid, "object_costmap", MAP_QOS)
         self._pub_cloud = self.create_publisher(PointCloud2, "object_costmap/cloud", 1)
         self._pub_markers = self.create_publisher(MarkerArray, "object_costmap/markers", 1)
@@ -156,12 +158,11 @@ class ObjectCostmapNode(Node):
         # arriving while a frame is processed (else the poses around the next image's
         # stamp are lost and that frame is dropped).
         self._pose_in = PoseInput(
-            self, p.pose_topic_type, self._pfp.params, POSE_QOS,
-            map_frame=lambda: self.params.map_frame, limits=lambda: self._lp.params,
-            warn=self._warn, drop=lambda text: self._drop("pose", text),
-            on_pose=self._on_robot_pose, on_stamp=self._observe,
-            callback_group=MutuallyExclusiveCallbackGroup(), subscribe=sub,
-            grid=lambda: self._grid)
+            self, p.pose_topic_type, self._pfp.params, POSE_QOS, PoseHooks(
+                map_frame=lambda: self.params.map_frame, limits=lambda: self._lp.params,
+                warn=self._warn, drop=lambda text: self._drop("pose", text),
+                on_pose=self._on_robot_pose, on_stamp=self._observe, grid=lambda: self._grid),
+            callback_group=MutuallyExclusiveCallbackGroup(), subscribe=sub)
         # Used (and required for pairing) only by the oracle detector backend.
         sub(Image, "camera/semantic/image_raw", self._on_semantic, SENSOR_QOS)
         self._timer = self.create_timer(1.0 / (p.rate_hz * _POLLS_PER_PERIOD), self._tick)

@@ -14,6 +14,7 @@ thread: every access to the fusion holds a lock.
 from __future__ import annotations
 
 import threading
+from dataclasses import dataclass
 from typing import Any, Callable
 
 from geometry_msgs.msg import PoseWithCovarianceStamped
@@ -30,36 +31,49 @@ from explore_seg.core.pose_fusion import Pose2D, PoseFusion, PoseFusionParams
 PoseCallback = Callable[[int, Pose2D], None]
 
 
-class PoseInput:
-    """Pose subscriptions of one node feeding a :class:`PoseFusion`.
+@dataclass(frozen=True)
+class PoseHooks:
+    """What a :class:`PoseInput` asks of its node.
 
     ``map_frame()`` names the frame map-frame poses must be in (None: not known yet, not
     checked); ``limits()`` the node's current input limits; ``on_stamp("pose", t_ns)``
     sees every accepted stamp of the stream that sets the pose's rate (the node's time
     model; not the SLAM poses of ``fused``), ``on_pose`` every new newest pose;
-    ``subscribe`` creates the subscriptions (default ``node.create_subscription``; a
-    :class:`~explore_seg.done_gate.DoneGate`'s to drop them while idle after done);
     ``grid()`` is the node's current map (None before one): a map-frame pose beyond its
     bounds by more than the limits' margin is dropped;
     ``warn(key, text)`` is the node's throttled warning, ``drop(text)`` its (throttled,
     counted) report of a dropped pose message.
     """
 
+    map_frame: Callable[[], str | None]
+    limits: Callable[[], InputLimits]
+    warn: Callable[[str, str], None]
+    drop: Callable[[str], None]
+    on_pose: PoseCallback | None = None
+    on_stamp: Callable[[str, int], None] | None = None
+    grid: Callable[[], GridMap | None] | None = None
+
+
+class PoseInput:
+    """Pose subscriptions of one node feeding a :class:`PoseFusion`.
+
+    ``hooks`` (:class:`PoseHooks`) are what it asks of the node. ``subscribe`` creates the
+    subscriptions (default ``node.create_subscription``; a
+    :class:`~explore_seg.done_gate.DoneGate`'s to drop them while idle after done), in
+    ``callback_group``.
+    """
+
     def __init__(self, node: Node, source: str, params: PoseFusionParams, qos: QoSProfile,
-                 map_frame: Callable[[], str | None], limits: Callable[[], InputLimits],
-                 warn: Callable[[str, str], None], drop: Callable[[str], None],
-                 on_pose: PoseCallback | None = None,
-                 on_stamp: Callable[[str, int], None] | None = None,
-                 callback_group: Any = None,
-                 subscribe: Callable[..., Any] | None = None,
-                 grid: Callable[[], GridMap | None] | None = None) -> None:
+                 hooks: PoseHooks, *, callback_group: Any = None,
+                 subscribe: Callable[..., Any] | None = None) -> None:
         self.fusion = PoseFusion(source, params)
         self._clock = node.get_clock()
         #: ROS time (ns) of the last accepted pose message, None before the first.
         self.arrival_ns: int | None = None
         self._lock = threading.Lock()
-        self._map_frame, self._limits, self._warn, self._drop = map_frame, limits, warn, drop
-        self._on_pose, self._on_stamp, self._grid = on_pose, on_stamp, grid
+        self._map_frame, self._limits = hooks.map_frame, hooks.limits
+        self._warn, self._drop = hooks.warn, hooks.drop
+        self._on_pose, self._on_stamp, self._grid = hooks.on_pose, hooks.on_stamp, hooks.grid
         sub = subscribe if subscribe is not None else node.create_subscription
         if source in ("odom", "fused"):
             sub(Odometry, "odom", self._on_odom, qos, callback_group=callback_group)

@@ -52,7 +52,7 @@ from explore_seg.frontier_node import FRONTIER_PREFIX
 from explore_seg.nav_client import NavClient
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
-from explore_seg.pose_input import PoseInput
+from explore_seg.pose_input import PoseHooks, PoseInput
 from explore_seg.qos import MAP_QOS, POSE_QOS, RELIABLE_QOS, map_qos
 from explore_seg.time_guard import StallWatchdog, TimeGuard
 
@@ -123,11 +123,12 @@ class TargetSelectorNode(Node):
         # ~/start or ~/resume publish false, which subscribes again).
         self._done_gate = DoneGate(self, "pose subscription", lambda: [], lambda: True)
         self._pose_in = PoseInput(
-            self, p.pose_topic_type, self._pfp.params, POSE_QOS,
-            map_frame=lambda: None if self._grid is None else self._grid.frame_id,
-            limits=lambda: self._lp.params, warn=self._warn,
-            drop=lambda text: self._warn("pose", f"dropped {text}"), on_pose=self._set_pose,
-            subscribe=self._done_gate.subscribe, grid=lambda: self._grid)
+            self, p.pose_topic_type, self._pfp.params, POSE_QOS, PoseHooks(
+                map_frame=lambda: None if self._grid is None else self._grid.frame_id,
+                limits=lambda: self._lp.params, warn=self._warn,
+                drop=lambda text: self._warn("pose", f"dropped {text}"),
+                on_pose=self._set_pose, grid=lambda: self._grid),
+            subscribe=self._done_gate.subscribe)
         self._pfp.on_change(lambda old, new: self._pose_in.set_params(new))
         self._nav = (NavClient(self, p.nav_action, p.nav_accept_timeout_s, p.cancel_timeout_s,
                                self._warn) if p.nav_action else None)

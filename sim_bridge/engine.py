@@ -73,6 +73,23 @@ class CameraSample:
     frame: Any
 
 
+@dataclass(frozen=True)
+class EngineBuffers:
+    """Bounds of what a :class:`SimEngine` records.
+
+    Attributes
+    ----------
+    event_queue_len : int
+        Bound of ``SimEngine.scan_events`` (camera events: 1/8 of it, at least 1).
+    trail_spacing_m, trail_max : float, int
+        Spacing and bound of the recorded trail (halved when full; at least 16 points).
+    """
+
+    event_queue_len: int = 64
+    trail_spacing_m: float = 0.05
+    trail_max: int = 20000
+
+
 class SimEngine:
     """Lock-step simulator.
 
@@ -92,10 +109,8 @@ class SimEngine:
         With ``params.coverage_observable`` its ``observable`` mask is added when missing.
     scan_geometry : ScanGeometry, optional
         Angles/limits of the lidar's ranges; default from ``params``.
-    event_queue_len : int
-        Bound of :attr:`scan_events` (camera events: 1/8 of it, at least 1).
-    trail_spacing_m, trail_max : float, int
-        Spacing and bound of the recorded trail (halved when full).
+    buffers : EngineBuffers
+        Bounds of the recorded scan / camera events and trail.
 
     Notes
     -----
@@ -107,8 +122,7 @@ class SimEngine:
     def __init__(self, world: World, params: SimParams | None = None, *,
                  lidar: Any = None, camera: Any = None, ground_truth: Any = None,
                  scan_geometry: ScanGeometry | None = None,
-                 event_queue_len: int = 64, trail_spacing_m: float = 0.05,
-                 trail_max: int = 20000) -> None:
+                 buffers: EngineBuffers = EngineBuffers()) -> None:
         self.params = params if params is not None else SimParams()
         p = self.params
         self.world = world
@@ -148,16 +162,17 @@ class SimEngine:
         self._next_coverage_s = 0.0
         self._latest_scan: ScanFrame | None = None
         self._latest_camera: CameraSample | None = None
-        self.scan_events: deque[ScanFrame] = deque(maxlen=event_queue_len)
-        self.camera_events: deque[CameraSample] = deque(maxlen=max(1, event_queue_len // 8))
+        self.scan_events: deque[ScanFrame] = deque(maxlen=buffers.event_queue_len)
+        self.camera_events: deque[CameraSample] = deque(
+            maxlen=max(1, buffers.event_queue_len // 8))
         self._layers: dict[str, GridMap] = {}
         self._nav_prev_state = NavState.IDLE
         self._on_collision: list[Callable[[CollisionEvent], None]] = []
         self._backup_left_m = 0.0
         self._backup_dir = -1.0
         self._trail: list[tuple[float, float]] = [(x, y)]
-        self._trail_spacing_m = trail_spacing_m
-        self._trail_max = max(16, trail_max)
+        self._trail_spacing_m = buffers.trail_spacing_m
+        self._trail_max = max(16, buffers.trail_max)
 
     # ------------------------------------------------------------ properties
     @property

@@ -110,7 +110,7 @@ class Monitor:
 
         from explore_seg.core.limits import InputLimits
         from explore_seg.core.pose_fusion import PoseFusionParams
-        from explore_seg.pose_input import PoseInput
+        from explore_seg.pose_input import PoseHooks, PoseInput
         from explore_seg.qos import MAP_QOS, POSE_QOS, RELIABLE_QOS
 
         from rclpy.parameter import Parameter
@@ -141,11 +141,10 @@ class Monitor:
         n.create_subscription(Bool, "exploration_done", self._on_done, MAP_QOS)
         n.create_subscription(OccupancyGrid, "map", self._on_map, MAP_QOS)
         # The robot pose as the explorer takes it (odom, or odom fused with SLAM poses).
-        self.pose_input = PoseInput(
-            n, pose_source, PoseFusionParams(), POSE_QOS, map_frame=lambda: "map",
-            limits=InputLimits,
+        self.pose_input = PoseInput(n, pose_source, PoseFusionParams(), POSE_QOS, PoseHooks(
+            map_frame=lambda: "map", limits=InputLimits,
             warn=lambda key, text: n.get_logger().warn(text, throttle_duration_sec=5.0),
-            drop=lambda text: self._drop("pose", text), on_pose=self._on_pose)
+            drop=lambda text: self._drop("pose", text), on_pose=self._on_pose))
         n.create_subscription(Image, "regions", self._on_regions, MAP_QOS)
         n.create_subscription(MapMetaData, "regions/info", self._on_regions_info, MAP_QOS)
         n.create_subscription(MarkerArray, "object_costmap/markers", self._on_markers,

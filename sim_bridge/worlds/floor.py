@@ -94,10 +94,15 @@ def cut_doors(rng: np.random.Generator, walls: list[Wall], rooms: list[tuple[Rec
                  (ex0 + ux * (s0 + dw), ey0 + uy * (s0 + dw)))
 
 
-def assemble_floor(rng: np.random.Generator, walls: list[Wall],
-                   rooms: list[tuple[Rect, str]], links: list[tuple[int, int]],
-                   start: tuple[float, float, float], o: Any, size_m: tuple[float, float],
-                   cluttered: bool, vertical: bool, name: str, description: str) -> World:
+#: A floor plan in its canonical frame: wall centre lines, (rect, kind) per room, pairs of
+#: room indices to join by a door, the start pose.
+FloorPlan = tuple[list[Wall], list[tuple[Rect, str]], list[tuple[int, int]],
+                  tuple[float, float, float]]
+
+
+def assemble_floor(rng: np.random.Generator, plan: FloorPlan, o: Any,
+                   size_m: tuple[float, float], cluttered: bool, vertical: bool, name: str,
+                   description: str) -> World:
     """The world of a floor plan centred at the origin: doors cut for ``links``, the
     plan turned by 90 degrees when ``vertical``, wall boxes with lintels, furniture in
     every room of a :data:`FURNISHED_KINDS` kind (door approaches kept free), a start
@@ -107,9 +112,8 @@ def assemble_floor(rng: np.random.Generator, walls: list[Wall],
     ----------
     rng : numpy.random.Generator
         Draws the doors and the furniture (in that order).
-    walls, rooms, links, start
-        The plan in its canonical frame: wall centre lines, (rect, kind) per room, pairs of
-        room indices to join by a door, the start pose.
+    plan : FloorPlan
+        (walls, rooms, links, start) in the plan's canonical frame.
     o : HouseOptions (or an object with its fields)
     size_m : (float, float)
         Outer size (width along x, height along y) after the turn.
@@ -129,6 +133,7 @@ def assemble_floor(rng: np.random.Generator, walls: list[Wall],
     ValueError
         When no start cell keeps ``o.start_clearance_m``.
     """
+    walls, rooms, links, start = plan
     cut_doors(rng, walls, rooms, links, o)
     if vertical:
         for w in walls:

@@ -162,8 +162,7 @@ def generate_house(seed: int, size_m: tuple[float, float] = (20.0, 20.0),
     rng = np.random.default_rng(seed)
     vertical = bool(rng.random() < 0.5)
     cw, ch = (height, width) if vertical else (width, height)
-    walls, rooms, links, start = _house_layout(rng, cw, ch, o)
-    return assemble_floor(rng, walls, rooms, links, start, o, (width, height), cluttered,
+    return assemble_floor(rng, _house_layout(rng, cw, ch, o), o, (width, height), cluttered,
                           vertical, f"house{'_cluttered' if cluttered else ''}_s{seed}",
                           f"generated house seed={seed} size={width}x{height} m"
                           f"{' cluttered' if cluttered else ''}")

@@ -43,9 +43,11 @@ _Room = tuple[Rect, str]
 
 
 def _band(rng: np.random.Generator, walls: list[Wall], rooms: list[_Room],
-          links: list[tuple[int, int]], corridor: int, x0: float, x1: float,
-          near: float, far: float, o: HouseOptions) -> None:
-    """Offices between a corridor wall (``near``) and the outer wall (``far``)."""
+          links: list[tuple[int, int]], corridor: int,
+          span: tuple[float, float, float, float], o: HouseOptions) -> None:
+    """Offices along x in [x0, x1] between a corridor wall at y = ``near`` and the outer
+    wall at y = ``far`` (``span`` = (x0, x1, near, far))."""
+    x0, x1, near, far = span
     side = 1.0 if far > near else -1.0
     depth = abs(far - near)
     x = x0
@@ -128,8 +130,8 @@ def _office_layout(rng: np.random.Generator, width: float, height: float, o: Hou
     for k in range(MIDDLE_BLOCKS - 1):
         rooms.append(((edges[2 * k + 1], yl1, edges[2 * k + 2], yu0), "corridor"))
         cross.append(len(rooms) - 1)
-    _band(rng, walls, rooms, links, 0, -hw, hw, yl0, -hh, o)
-    _band(rng, walls, rooms, links, 1, -hw, hw, yu1, hh, o)
+    _band(rng, walls, rooms, links, 0, (-hw, hw, yl0, -hh), o)
+    _band(rng, walls, rooms, links, 1, (-hw, hw, yu1, hh), o)
     for k in range(MIDDLE_BLOCKS):
         left = cross[k - 1] if k > 0 else None
         right = cross[k] if k < MIDDLE_BLOCKS - 1 else None
@@ -174,8 +176,8 @@ def generate_office_floor(seed: int, size_m: tuple[float, float] = OFFICE_SIZE_M
     if not (width >= MIN_OFFICE_SIZE_M[0] and height >= MIN_OFFICE_SIZE_M[1]):
         raise ValueError(f"size_m must be at least {MIN_OFFICE_SIZE_M} m, got {size_m}")
     rng = np.random.default_rng([int(seed), 0x0FF1CE])
-    walls, rooms, links, start = _office_layout(rng, width, height, o)
-    return assemble_floor(rng, walls, rooms, links, start, o, (width, height), cluttered,
+    return assemble_floor(rng, _office_layout(rng, width, height, o), o, (width, height),
+                          cluttered,
                           False, f"office_floor{'_cluttered' if cluttered else ''}_s{seed}",
                           f"generated office floor seed={seed} size={width}x{height} m"
                           f"{' cluttered' if cluttered else ''}")

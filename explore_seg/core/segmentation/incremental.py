@@ -365,60 +365,94 @@ class IncrementalSegmenter:
         return labels
 
     def _incremental(self, free_raw, free_clean, domain, res, prev, prev_known_f):
-        p = self.params
-        cell_area = res * res
         labels = prev.copy()
         old_area = label_counts(labels)
-        dirty: set[int] = set()
         # known free cells that left the cleaned free space: new obstacles, map fixes
         blocked = (labels > 0) & prev_known_f & ~free_clean
         lost = (labels > 0) & ~domain
         labels[lost] = 0
-        new_free = free_clean & (labels == 0)
-        blobs = None
-        box_new = bbox(new_free, 0)
-        if box_new is not None:
-            nf = new_free[box_new].astype(np.uint8)
-            n, lab, stats, _ = cv2.connectedComponentsWithStats(nf, connectivity=8)
-            big = stats[:, cv2.CC_STAT_AREA] * cell_area > p.inc_min_blob_m2
-            big[0] = False
-            if big.any():
-                blobs = np.zeros(domain.shape, dtype=bool)
-                blobs[box_new] = big[lab]
-                t = p.inc_touch_cells
-                bb = bbox(blobs, t + 1)
-                near = cv2.dilate(blobs[bb].astype(np.uint8),
-                                  np.ones((2 * t + 1, 2 * t + 1), np.uint8)) > 0
-                dirty.update(label_counts(labels[bb][near]))
+        dirty, blobs = self._new_blobs(labels, free_clean & (labels == 0), domain.shape, res)
         if blocked.any():
-            bl_cnt = label_counts(prev[blocked])
-            for i, c in bl_cnt.items():
-                if c > p.inc_lost_frac * old_area[i]:
-                    dirty.add(i)
-            check = sorted((i for i in bl_cnt if i not in dirty), key=lambda i: -bl_cnt[i])
-            if check:
-                from scipy import ndimage
-                objs = ndimage.find_objects(labels, max_label=max(check))
-                st = dude_settings(p, res)
-                tau_cells = p.tau_m / res
-                tests = 0
-                for i in check:
-                    sl = objs[i - 1]
-                    if sl is None:
-                        continue
-                    piece = labels[sl] == i
-                    # split by a new obstacle, or a new structure DuDe would now cut
-                    if cv2.connectedComponents(piece.astype(np.uint8), connectivity=8)[0] > 2:
-                        dirty.add(i)
-                    elif bl_cnt[i] >= tau_cells and tests < _MAX_SHAPE_TESTS:
-                        tests += 1
-                        sub = np.pad((piece & free_clean[sl]).astype(np.uint8), 1)
-                        n_sub = cv2.connectedComponents(sub, connectivity=4)[0]
-                        if n_sub > 2 or (n_sub == 2 and find_cuts(sub, st)):
-                            dirty.add(i)
+            dirty |= self._blocked_pieces(labels, prev[blocked], free_clean, res, old_area,
+                                          dirty)
         if not dirty and blobs is None:
             self._leftovers(labels, free_raw, domain, res)
             return labels, "unchanged", 0, 0, ""
+        work = self._work_area(labels, dirty, blobs, old_area)
+        n_work = int(work.sum())
+        n_dom = max(1, int(domain.sum()))
+        if n_work > self.params.inc_full_frac * n_dom:
+            full = self._full(free_raw, free_clean, domain, res, prev)
+            return full, "full", 0, n_dom, (
+                f"work areas {n_work} cells > {self.params.inc_full_frac:.2f} of {n_dom}")
+        box = bbox(work, self._fill_iters(res) + self.params.inc_touch_cells + 2)
+        if box is None:
+            self._leftovers(labels, free_raw, domain, res)
+            return labels, "unchanged", 0, 0, ""
+        n_areas = self._redo(labels, work, box, free_raw, free_clean, domain, res, old_area)
+        self._leftovers(labels, free_raw, domain, res)
+        return labels, "incremental", n_areas, n_work, ""
+
+    def _new_blobs(self, labels, new_free, shape, res):
+        """(ids of pieces touching a newly seen free blob, mask of those blobs or None).
+        Blobs of at most ``inc_min_blob_m2`` are only gap-filled."""
+        p = self.params
+        dirty: set[int] = set()
+        box_new = bbox(new_free, 0)
+        if box_new is None:
+            return dirty, None
+        nf = new_free[box_new].astype(np.uint8)
+        n, lab, stats, _ = cv2.connectedComponentsWithStats(nf, connectivity=8)
+        big = stats[:, cv2.CC_STAT_AREA] * (res * res) > p.inc_min_blob_m2
+        big[0] = False
+        if not big.any():
+            return dirty, None
+        blobs = np.zeros(shape, dtype=bool)
+        blobs[box_new] = big[lab]
+        t = p.inc_touch_cells
+        bb = bbox(blobs, t + 1)
+        near = cv2.dilate(blobs[bb].astype(np.uint8),
+                          np.ones((2 * t + 1, 2 * t + 1), np.uint8)) > 0
+        dirty.update(label_counts(labels[bb][near]))
+        return dirty, blobs
+
+    def _blocked_pieces(self, labels, prev_blocked, free_clean, res, old_area, dirty):
+        """Ids of pieces that new obstacles split, took a large share of, or changed so
+        that DuDe would now cut them (``prev_blocked``: their old labels of those cells)."""
+        p = self.params
+        out: set[int] = set()
+        bl_cnt = label_counts(prev_blocked)
+        for i, c in bl_cnt.items():
+            if c > p.inc_lost_frac * old_area[i]:
+                out.add(i)
+        check = sorted((i for i in bl_cnt if i not in dirty and i not in out),
+                       key=lambda i: -bl_cnt[i])
+        if not check:
+            return out
+        from scipy import ndimage
+        objs = ndimage.find_objects(labels, max_label=max(check))
+        st = dude_settings(p, res)
+        tau_cells = p.tau_m / res
+        tests = 0
+        for i in check:
+            sl = objs[i - 1]
+            if sl is None:
+                continue
+            piece = labels[sl] == i
+            # split by a new obstacle, or a new structure DuDe would now cut
+            if cv2.connectedComponents(piece.astype(np.uint8), connectivity=8)[0] > 2:
+                out.add(i)
+            elif bl_cnt[i] >= tau_cells and tests < _MAX_SHAPE_TESTS:
+                tests += 1
+                sub = np.pad((piece & free_clean[sl]).astype(np.uint8), 1)
+                n_sub = cv2.connectedComponents(sub, connectivity=4)[0]
+                if n_sub > 2 or (n_sub == 2 and find_cuts(sub, st)):
+                    out.add(i)
+        return out
+
+    @staticmethod
+    def _work_area(labels, dirty, blobs, old_area):
+        """Cells to decompose again: the dirty pieces and the new blobs."""
         if len(dirty) <= 4:     # a few comparisons are faster than a table look-up
             work = np.zeros(labels.shape, dtype=bool)
             for i in dirty:
@@ -429,16 +463,10 @@ class IncrementalSegmenter:
             work = lut[labels]
         if blobs is not None:
             work |= blobs
-        n_work = int(work.sum())
-        n_dom = max(1, int(domain.sum()))
-        if n_work > p.inc_full_frac * n_dom:
-            full = self._full(free_raw, free_clean, domain, res, prev)
-            return full, "full", 0, n_dom, (
-                f"work areas {n_work} cells > {p.inc_full_frac:.2f} of {n_dom}")
-        box = bbox(work, self._fill_iters(res) + p.inc_touch_cells + 2)
-        if box is None:
-            self._leftovers(labels, free_raw, domain, res)
-            return labels, "unchanged", 0, 0, ""
+        return work
+
+    def _redo(self, labels, work, box, free_raw, free_clean, domain, res, old_area) -> int:
+        """Decompose the work areas inside ``box`` again, in place; the number of areas."""
         lab_c = labels[box]
         work_c = work[box]
         old_c = np.multiply(lab_c, work_c, dtype=np.int32)
@@ -453,8 +481,7 @@ class IncrementalSegmenter:
         redone = self._finish(lab_c, free_raw[box], domain[box], res, temp_ids, old_c,
                               old_area, False)
         self._heal_seams(labels, free_clean, box, redone, res)
-        self._leftovers(labels, free_raw, domain, res)
-        return labels, "incremental", n_areas - 1, n_work, ""
+        return n_areas - 1
 
     def _heal_seams(self, labels: npt.NDArray[np.int32], free_clean: npt.NDArray[np.bool_],
                     box: tuple[slice, slice], redone: set[int], res: float) -> None:
