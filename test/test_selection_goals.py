@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.selection import Action, GoalManager, SelectionParams, goal_yaw
+from explore_seg.core.selection import Action, GoalManager, SelectionParams, StepInputs, \
+    goal_yaw
 from selection_cases import make_frontier, manager_world
 
 
@@ -295,10 +296,10 @@ def test_routed_goal_counts_as_reached_within_handover_m(strategy, handover_m, r
     m = GoalManager(SelectionParams(strategy=strategy, handover_m=handover_m,
                                     arrival_wait_s=0.0))
     cost = np.array([1.0, 3.0])
-    goal = m.step(0.0, (0.6, 2.0), g, fr, cost, tour_cost_m=cost).goal
+    goal = m.step(0.0, (0.6, 2.0), g, fr, cost, StepInputs(tour_cost_m=cost)).goal
     assert goal.xy_m == fr[0].point_xy_m
     near = (goal.xy_m[0] + 0.8, goal.xy_m[1])     # 0.8 m away, the frontier still there
-    res = m.step(1.0, near, g, fr, [0.8, 2.0], tour_cost_m=np.array([0.8, 2.0]))
+    res = m.step(1.0, near, g, fr, [0.8, 2.0], StepInputs(tour_cost_m=np.array([0.8, 2.0])))
     if reached:
         assert res.action is Action.NEW_GOAL and res.goal.xy_m == fr[1].point_xy_m
         assert "frontier remains" in res.reason and m.blacklist == (goal.xy_m,)
