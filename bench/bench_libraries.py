@@ -119,15 +119,15 @@ def record_mean_shift_calls(world_spec: str, seeds: list[int], sim_time_s: float
     """Arguments of ``mean_shift`` in rrt_exploration's filter during lock-step runs."""
     from bench.worlds import load
     from explore_seg.core.rrt import detector
-    from sim_bridge.lockstep import run_exploration
+    from sim_bridge.lockstep import LockstepParams, run_exploration
 
     rec = Recorder()
     rec.wrap(detector, "mean_shift", "mean_shift")
     try:
         world, gt = load(world_spec)
         for seed in seeds:
-            r = run_exploration(world, "rrt_exploration", seed, max_sim_time_s=sim_time_s,
-                                ground_truth=gt)
+            r = run_exploration(world, "rrt_exploration", seed, ground_truth=gt,
+                                params=LockstepParams(max_sim_time_s=sim_time_s))
             print(f"recorded {world_spec} seed {seed}: {r.coverage_pct:.1f} % coverage, "
                   f"{len(rec.calls['mean_shift'])} mean-shift calls so far")
     finally:

@@ -67,9 +67,10 @@ def compare_with_ros(world: str, strategy: str, seeds: list[int], out: Path, rtf
     rows = []
     world_obj, gt = load(world)
     for seed in seeds:
-        r = run_exploration(world_obj, strategy, seed, max_sim_time_s=max_sim_time_s,
+        r = run_exploration(world_obj, strategy, seed,
                             ground_truth=gt, sim_params=sim_params_for(camera_mount, nav_margin),
-                            params=LockstepParams(start_jitter_m=0.0, start_yaw_jitter_rad=0.0))
+                            params=LockstepParams(max_sim_time_s=max_sim_time_s,
+                                                  start_jitter_m=0.0, start_yaw_jitter_rad=0.0))
         rows.append({"seed": seed, "mode": "lock-step", "stop": r.stop_reason,
                      "coverage_pct": r.coverage_pct, "sim_time_s": r.sim_time_s,
                      "path_length_m": r.path_length_m, "collisions": r.collisions,

@@ -189,7 +189,8 @@ def _run(task: tuple[str, str, str, int, float]) -> dict[str, Any]:
     ex, sim, ls = _ARMS[arm]
     world, gt = load(world_spec)
     t0 = time.process_time()
-    res = run_exploration(world, strategy, seed, max_sim_time_s=limit, params=ls,
+    res = run_exploration(world, strategy, seed,
+                          params=dataclasses.replace(ls, max_sim_time_s=float(limit)),
                           sim_params=sim, explorer_params=ex, ground_truth=gt)
     row = res.summary_row()
     row.update(arm=arm, cpu_s=round(time.process_time() - t0, 2), code=_CODE[0])

@@ -32,7 +32,8 @@ for _p in (ROOT, ROOT / "bench"):
 import numpy as np  # noqa: E402
 
 from run_bench import Progress, load  # noqa: E402
-from sim_bridge.lockstep import STRATEGIES, load_explorer_params, run_exploration  # noqa: E402
+from sim_bridge.lockstep import (STRATEGIES, LockstepParams,  # noqa: E402
+                                 load_explorer_params, run_exploration)
 
 Config = tuple[float, float, float]
 
@@ -43,7 +44,7 @@ def _task(args: tuple[str, str, int, Config, float]) -> dict[str, Any]:
     ep = load_explorer_params()
     ep = replace(ep, selection=replace(ep.selection, alpha=a, beta=b, gamma=g))
     r = run_exploration(w, strategy, seed, explorer_params=ep, ground_truth=gt,
-                        max_sim_time_s=max_t)
+                        params=LockstepParams(max_sim_time_s=max_t))
     return {"config": [a, b, g], "seed": seed, "t95": r.time_to_s.get("95", math.nan),
             "t99": r.time_to_s.get("99", math.nan), "completed": bool(r.completed),
             "stop": r.stop_reason, "coverage": r.coverage_pct, "path": r.path_length_m,

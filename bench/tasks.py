@@ -22,8 +22,8 @@ import numpy as np
 
 from bench.worlds import load, sim_params_for
 from sim_bridge.coverage_tour import TourParams, coverage_tours
-from sim_bridge.lockstep import ExplorerParams, LockstepState, load_explorer_params, \
-    run_exploration
+from sim_bridge.lockstep import ExplorerParams, LockstepParams, LockstepState, \
+    load_explorer_params, run_exploration
 
 #: The nodes' parameters of this benchmark, read once before the workers fork (an edit
 #: of config/explorer.yaml during a long benchmark must not change its later runs).
@@ -54,7 +54,8 @@ def run_task(task: tuple[str, str, int, float, str | None, tuple[float, float] |
     def keep_last(st: LockstepState) -> None:
         last["state"] = st
 
-    res = run_exploration(world, strategy, seed, max_sim_time_s=max_t, ground_truth=gt,
+    res = run_exploration(world, strategy, seed, params=LockstepParams(max_sim_time_s=max_t),
+                          ground_truth=gt,
                           sim_params=sim_params_for(mount, nav_margin),
                           explorer_params=_EXPLORER_PARAMS,
                           observer=keep_last if picture else None)

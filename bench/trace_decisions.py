@@ -163,7 +163,7 @@ def trace_run(world_spec: str, strategy: str, seed: int, out_dir: Path,
     if max_sim_time_s is not None:
         limit = min(limit, max_sim_time_s)
     res = run_exploration(world, strategy, seed, ground_truth=gt, explorer_params=ep,
-                          params=lp, max_sim_time_s=limit,
+                          params=replace(lp, max_sim_time_s=float(limit)),
                           sim_params=sim_params_for(PAPER_CAMERA_MOUNT, None),
                           observer=observe)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -246,12 +246,7 @@ def coverage_tours(world: World, fractions: tuple[float, ...],
     reach = np.isfinite(distance_field(passable, s_rc, res))
     reach &= passable
     # 1. candidates on a lattice
-    k = max(1, int(round(p.candidate_spacing_m / res)))
-    lattice = np.zeros(geom.shape, dtype=bool)
-    lattice[k // 2::k, k // 2::k] = True
-    cand_rc = np.argwhere(reach & lattice)
-    if cand_rc.size == 0:
-        raise ValueError("no reachable viewpoint: the start is enclosed at this clearance")
+    cand_rc = _candidates(reach, p.candidate_spacing_m / res)
     cx, cy = geom.cells_to_world(cand_rc[:, 0], cand_rc[:, 1])
     # 2. visibility of targets
     st = p.target_stride_cells
@@ -274,14 +269,7 @@ def coverage_tours(world: World, fractions: tuple[float, ...],
     chosen = greedy_cover(sets, tflat.size)
     pts_rc = [s_rc] + [tuple(int(v) for v in cand_rc[i]) for i in chosen]
     # 4. geodesic distances and tour
-    n = len(pts_rc)
-    dist = np.zeros((n, n))
-    fields_ = []
-    for i, rc in enumerate(pts_rc):
-        f = distance_field(passable, rc, res)
-        fields_.append(f)
-        dist[i] = [f[q] for q in pts_rc]
-    dist = np.minimum(dist, dist.T)  # symmetric (start may sit in the inflated margin)
+    fields_, dist = _geodesics(passable, pts_rc, res)
 
     def target_ids(xy: tuple[float, float]) -> npt.NDArray[np.int64]:
         ids = tid[_visible_cells(lidar, xy, geom, p)]
@@ -306,6 +294,32 @@ def coverage_tours(world: World, fractions: tuple[float, ...],
             coverable_fraction=float(coverable.mean()) if coverable.size else 1.0,
             n_candidates=int(cand_rc.shape[0]), n_targets=int(tflat.size)))
     return results
+
+
+def _candidates(reach: npt.NDArray[np.bool_], spacing_cells: float) -> npt.NDArray[np.int64]:
+    """Reachable cells of a lattice with ``spacing_cells`` (rounded), shape (N, 2) (row,
+    col). Raises ValueError when there is none."""
+    k = max(1, int(round(spacing_cells)))
+    lattice = np.zeros(reach.shape, dtype=bool)
+    lattice[k // 2::k, k // 2::k] = True
+    cand_rc = np.argwhere(reach & lattice)
+    if cand_rc.size == 0:
+        raise ValueError("no reachable viewpoint: the start is enclosed at this clearance")
+    return cand_rc
+
+
+def _geodesics(passable: npt.NDArray[np.bool_], pts_rc: list[tuple[int, int]],
+               res: float) -> tuple[list[npt.NDArray[np.float64]], npt.NDArray[np.float64]]:
+    """The distance field of every point and the symmetric matrix of their geodesic
+    distances (the start may sit in the inflated margin: the shorter direction wins)."""
+    n = len(pts_rc)
+    dist = np.zeros((n, n))
+    fields_ = []
+    for i, rc in enumerate(pts_rc):
+        f = distance_field(passable, rc, res)
+        fields_.append(f)
+        dist[i] = [f[q] for q in pts_rc]
+    return fields_, np.minimum(dist, dist.T)
 
 
 def _pruned_tour(walker: _PathWalker, dist: npt.NDArray[np.float64], set_sizes: list[int],

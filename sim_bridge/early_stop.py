@@ -22,6 +22,7 @@ The run's ``cause`` is the cause of its largest gap.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any, Sequence
 
 import cv2
@@ -52,10 +53,20 @@ def frontier_reason(f: Frontier, dist_m: float, excluded: bool, cost: float) -> 
     return "selectable"
 
 
-def explain_stop(grid: GridMap, reference: CoverageReference, frontiers: Sequence[Frontier],
-                 dist_m: npt.ArrayLike | None, excluded: npt.ArrayLike | None,
-                 costs: npt.ArrayLike | None, params: FrontierParams,
-                 extra_obstacles: npt.NDArray[np.bool_] | None = None,
+@dataclass(frozen=True, eq=False)
+class FrontiersLeft:
+    """The frontiers of a run's last decision (on the final map or the one just before)
+    with their path lengths, blacklist mask and costs, each shape (N,) (None: unknown,
+    taken as inf / False / inf)."""
+
+    frontiers: Sequence[Frontier]
+    dist_m: npt.ArrayLike | None = None
+    excluded: npt.ArrayLike | None = None
+    costs: npt.ArrayLike | None = None
+
+
+def explain_stop(grid: GridMap, reference: CoverageReference, left: FrontiersLeft,
+                 params: FrontierParams, extra_obstacles: npt.NDArray[np.bool_] | None = None,
                  max_items: int = 10) -> dict[str, Any]:
     """The frontiers and unseen gaps at the end of a run (see the module docstring).
 
@@ -65,10 +76,8 @@ def explain_stop(grid: GridMap, reference: CoverageReference, frontiers: Sequenc
         The final map.
     reference : CoverageReference
         The ground-truth explorable cells.
-    frontiers : sequence of Frontier
-        The frontiers of the last decision (on ``grid`` or the map just before).
-    dist_m, excluded, costs : array_like, shape (N,), or None
-        Their path lengths, blacklist mask and costs (None: unknown, taken as inf / False).
+    left : FrontiersLeft
+        The frontiers of the last decision, their path lengths, blacklist mask and costs.
     params : FrontierParams
         Thresholds and ``min_group_size_cells`` of the detection.
     extra_obstacles : ndarray of bool, shape of ``grid``, optional
@@ -83,10 +92,11 @@ def explain_stop(grid: GridMap, reference: CoverageReference, frontiers: Sequenc
         ``frontier_xy_m`` of the frontier on it or None), ``n_gaps``, ``n_frontiers`` and
         ``frontiers`` (``xy_m``, ``size_cells``, ``dist_m``, ``reason``), JSON-able.
     """
+    frontiers = left.frontiers
     n = len(frontiers)
-    dist = _vec(dist_m, n, math.inf)
-    excl = _vec(excluded, n, 0.0) > 0
-    cost = _vec(costs, n, math.inf)
+    dist = _vec(left.dist_m, n, math.inf)
+    excl = _vec(left.excluded, n, 0.0) > 0
+    cost = _vec(left.costs, n, math.inf)
     reasons = [frontier_reason(f, dist[i], bool(excl[i]), cost[i]) for i, f in enumerate(frontiers)]
     # frontier id per map cell
     fid = np.full(grid.shape, -1, dtype=np.int32)

@@ -50,40 +50,35 @@ from __future__ import annotations
 
 import math
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.fields import param_meta
-from explore_seg.core.camera import CameraIntrinsics
-from explore_seg.core.detector import Detector, DetectorParams
 from explore_seg.core.explorer import Explorer, ExplorerStep
-from explore_seg.core.frontiers import Frontier, object_obstacles
+from explore_seg.core.frontiers import Frontier, FrontierParams, object_obstacles
 from explore_seg.core.grid import GridMap
-from explore_seg.core.objects import WALL_OCCUPIED_THRESHOLD, DepthFrame, ObjectMap, ObjectParams, \
-    WallMask, load_priors, process_frame, wall_mask
+from explore_seg.core.objects import ObjectMap
 from explore_seg.core.segmentation import IncrementalSegmenter
-from explore_seg.core.selection import Action, NavOutcome
+from explore_seg.core.selection import Action, NavOutcome, SelectionParams
 from sim_bridge import worlds
 from sim_bridge.contacts import classify_contact
-from sim_bridge.early_stop import explain_stop
+from sim_bridge.early_stop import FrontiersLeft, explain_stop
 from sim_bridge.engine import Collider, SimEngine, SimParams
 from sim_bridge.navigation import OutcomeFollower
+from sim_bridge.object_pipeline import ObjectPipeline
 from sim_bridge.explorer_params import (ExplorerParams, default_explorer_params_file,  # noqa: F401
                                         load_explorer_params)
 from sim_bridge.run_result import TIMING_KEYS, RunResult  # noqa: F401 (API)
 from sim_bridge.strategy_specs import (STRATEGIES, STRATEGY_SPECS, StrategySpec,  # noqa: F401 (API)
                                       strategy_spec)
-from sim_bridge.sensors import CLASS_IDS
 from sim_bridge.world import World
 
 #: Layer name of the object costmap in the navigation stand-in.
 OBJECT_LAYER = "object_costmap"
-#: One black pixel, broadcast to the image passed to the oracle detector (which reads
-#: only the semantic and instance images).
-_BLACK = np.zeros(3, dtype=np.uint8)
 
 
 @dataclass(frozen=True)
@@ -205,139 +200,57 @@ def perturbed_start(world: World, seed: int, params: LockstepParams,
     return (x0, y0, yaw)
 
 
-def scan_points_map(engine: SimEngine) -> npt.NDArray[np.float64]:
-    """Latest scan's returns in the map frame, shape (N, 2) (empty before the first)."""
-    scan = engine.latest_scan
-    if scan is None:
-        return np.zeros((0, 2))
-    g = engine.scan_geometry
-    r = np.asarray(scan.ranges, dtype=np.float64)
-    ang = g.angle_min_rad + g.angle_increment_rad * np.arange(r.shape[0])
-    ok = np.isfinite(r) & (r >= g.range_min_m) & (r < g.range_max_m)
-    x, y, yaw = scan.pose
-    mx = engine.params.lidar_mount_x_m
-    ox, oy = x + mx * math.cos(yaw), y + mx * math.sin(yaw)
-    a = yaw + ang[ok]
-    return np.column_stack([ox + r[ok] * np.cos(a), oy + r[ok] * np.sin(a)])
-
-
-def _sim_params(seed: int, spec: StrategySpec, p: LockstepParams,
+def _sim_params(seed: int, spec: StrategySpec, lockstep: LockstepParams,
                 base: SimParams | None) -> SimParams:
-    sp = base if base is not None else SimParams()
-    cam = sp.camera_params()
-    s = p.camera_scale
+    """``base`` (default :class:`SimParams`) with the run's seed and the camera the object
+    costmap gets: on with the strategy's objects, at its rate and ``camera_scale``."""
+    sim = base if base is not None else SimParams()
+    cam = sim.camera_params()
+    s = lockstep.camera_scale
     w, h = max(16, int(round(cam.width * s))), max(16, int(round(cam.height * s)))
     fx = cam.fx * w / cam.width
     fy = cam.fy * h / cam.height
-    return replace(sp, seed=int(seed), enable_camera=spec.use_objects,
-                   camera_rate_hz=1.0 / p.object_period_s,
+    return replace(sim, seed=int(seed), enable_camera=spec.use_objects,
+                   camera_rate_hz=1.0 / lockstep.object_period_s,
                    camera_width_px=w, camera_height_px=h, camera_fx_px=fx, camera_fy_px=fy,
                    camera_cx_px=(w - 1) / 2.0, camera_cy_px=(h - 1) / 2.0)
 
 
-class _ObjectPipeline:
-    """The object costmap node's work on one engine: oracle detections + depth + scan."""
+@dataclass(frozen=True)
+class _RunConfig:
+    """Every parameter of one run, the strategy's settings applied."""
 
-    def __init__(self, engine: SimEngine, params: ObjectParams, seed: int,
-                 lp: LockstepParams) -> None:
-        self.engine = engine
-        self.params = params
-        self.priors = load_priors(params.priors_path or None)
-        self.detector = Detector(DetectorParams(
-            backend="oracle", oracle_miss_prob=lp.oracle_miss_prob,
-            oracle_jitter_px=lp.oracle_jitter_px, oracle_seed=int(seed)),
-            sim_class_ids=CLASS_IDS)
-        self.map = ObjectMap(params, self.priors)
-        cp = engine.params.camera_params()
-        self.intrinsics: CameraIntrinsics = cp.intrinsics()
-        self.tolerance_m = lp.object_update_tolerance_m
-        self._last_stamp = -1.0
-        self._published: list[tuple[float, ...]] = []
-        self._published_depth = 0
-        self._walls: tuple[int, WallMask] | None = None   # (map version, its wall mask)
-        self._walls_occ: npt.NDArray[np.bool_] | None = None   # its occupied cells
+    spec: StrategySpec
+    #: Periods resolved (0 replaced by the nodes' rates).
+    lockstep: LockstepParams
+    explorer: ExplorerParams
+    #: ``explorer.selection`` / ``explorer.frontier`` with the strategy's fields set.
+    selection: SelectionParams
+    frontier: FrontierParams
+    sim: SimParams
 
-    def _wall_mask(self) -> WallMask:
-        """The wall mask of the engine's map, computed once per map version (as the node
-        computes it once per map message); a new version whose occupied cells are those
-        of the last computed one reuses its walls (they depend on nothing else)."""
-        version = self.engine.map_version
-        if self._walls is None or self._walls[0] != version:
-            grid = self.engine.map
-            occ = grid.data >= WALL_OCCUPIED_THRESHOLD
-            last = self._walls_occ
-            if (self._walls is not None and last is not None and last.shape == occ.shape
-                    and np.array_equal(last, occ)):
-                walls = self._walls[1].with_grid(grid)
-            else:
-                walls = wall_mask(grid, self.params, WALL_OCCUPIED_THRESHOLD)
-            self._walls, self._walls_occ = (version, walls), occ
-        return self._walls[1]
 
-    def update(self, timings: dict[str, list[float]]) -> bool:
-        """Process the newest camera frame if unseen; True when one was processed.
-
-        Appends the oracle detection time to ``timings["detection"]`` and the rest
-        (3D boxes, fusion; the layer is timed by the caller) to ``timings["objects"]``.
-        """
-        self.map.note_robot_position(*self.engine.pose[:2])
-        cam = self.engine.latest_camera
-        if cam is None or cam.stamp_s <= self._last_stamp:
-            return False
-        self._last_stamp = cam.stamp_s
-        fr = cam.frame
-        tf = np.eye(4)
-        tf[:3, :3] = fr.rotation
-        tf[:3, 3] = fr.translation
-        t0 = time.perf_counter()
-        # The oracle reads the semantic and instance images only: it gets a blank view of
-        # the image's shape, and the frame's colour image is never shaded.
-        rgb = (fr.rgb if self.detector.network is not None
-               else np.broadcast_to(_BLACK, fr.semantic.shape + (3,)))
-        dets = self.detector.detect(rgb, semantic=fr.semantic, instance=fr.instance)
-        t1 = time.perf_counter()
-        depth = DepthFrame(fr.depth_m, self.intrinsics, tf)
-        walls = self._wall_mask()
-        res = process_frame(depth, dets, self.priors, self.params, scan_points_map(self.engine),
-                            walls)
-        self.map.update(res.objects + res.unknown, depth, int(round(cam.stamp_s * 1e9)),
-                        robot_xy=self.engine.pose[:2], walls=walls)
-        timings["detection"].append((t1 - t0) * 1e3)
-        timings["objects"].append((time.perf_counter() - t1) * 1e3)
-        return True
-
-    def changed(self) -> bool:
-        """True when the depth obstacles changed or the boxes differ from the last
-        :meth:`mark_published` ones by more
-        than the tolerance (or their number changed)."""
-        cur = self._signature()
-        if self._depth_version() != self._published_depth:
-            return True
-        if len(cur) != len(self._published):
-            return True
-        if not cur:
-            return False
-        a, b = np.asarray(cur), np.asarray(self._published)
-        return bool(np.abs(a - b).max() > self.tolerance_m)
-
-    def mark_published(self) -> None:
-        self._published = self._signature()
-        self._published_depth = self._depth_version()
-
-    def _depth_version(self) -> int:
-        return self.map.depth.version if self.map.depth is not None else 0
-
-    def _signature(self) -> list[tuple[float, ...]]:
-        return [(o.center_xyz[0], o.center_xyz[1], o.size_xyz[0], o.size_xyz[1],
-                 math.sin(2 * o.yaw), math.cos(2 * o.yaw)) for _, o in self.map.boxes()]
+def _run_config(spec: StrategySpec, seed: int, params: LockstepParams | None,
+                sim_params: SimParams | None,
+                explorer_params: ExplorerParams | None) -> _RunConfig:
+    """The run's parameters: the defaults where none are given, the strategy's fields set
+    (see :func:`run_exploration`)."""
+    lockstep = params if params is not None else LockstepParams()
+    explorer = explorer_params if explorer_params is not None else load_explorer_params()
+    selection = replace(explorer.selection, strategy=spec.selection,
+                        use_regions=spec.use_regions)
+    frontier = replace(explorer.frontier, use_object_costmap=spec.use_objects)
+    lockstep = replace(
+        lockstep, decision_period_s=lockstep.decision_period_s or 1.0 / selection.rate_hz,
+        object_period_s=lockstep.object_period_s or 1.0 / explorer.objects.rate_hz)
+    sim = _sim_params(seed, spec, lockstep, sim_params)
+    return _RunConfig(spec, lockstep, explorer, selection, frontier, sim)
 
 
 # ------------------------------------------------------------------------------ run
 
 
 def run_exploration(world: World, strategy: str, seed: int, *,
-                    max_sim_time_s: float | None = None,
-                    decision_period_s: float | None = None,
                     params: LockstepParams | None = None,
                     sim_params: SimParams | None = None,
                     explorer_params: ExplorerParams | None = None,
@@ -353,9 +266,8 @@ def run_exploration(world: World, strategy: str, seed: int, *,
         One of :data:`STRATEGIES`.
     seed : int
         Seeds the start perturbation, the simulator noise and the oracle.
-    max_sim_time_s, decision_period_s : float, optional
-        Override the fields of ``params``.
     params : LockstepParams, optional
+        Rates, time limit (``max_sim_time_s``), stop rule, seeded perturbations.
     sim_params : SimParams, optional
         Base simulator parameters (seed, camera and world fields are set here).
     explorer_params : ExplorerParams, optional
@@ -377,149 +289,242 @@ def run_exploration(world: World, strategy: str, seed: int, *,
         On an unknown strategy or invalid parameters.
     """
     spec = strategy_spec(strategy)
-    p = params if params is not None else LockstepParams()
-    if max_sim_time_s is not None:
-        p = replace(p, max_sim_time_s=float(max_sim_time_s))
-    if decision_period_s is not None:
-        p = replace(p, decision_period_s=float(decision_period_s))
-    ep = explorer_params if explorer_params is not None else load_explorer_params()
-    sel_p = replace(ep.selection, strategy=spec.selection, use_regions=spec.use_regions)
-    fr_p = replace(ep.frontier, use_object_costmap=spec.use_objects)
-    obj_p = ep.objects
-    p = replace(p, decision_period_s=p.decision_period_s or 1.0 / sel_p.rate_hz,
-                object_period_s=p.object_period_s or 1.0 / obj_p.rate_hz)
-    sp = _sim_params(seed, spec, p, sim_params)
-    start = perturbed_start(world, seed, p, sp.robot_radius_m, sp.robot_height_m)
-    run_world = replace(world, start_pose=start)
-    if ground_truth is None and sp.compute_coverage:
-        ground_truth = worlds.ground_truth(run_world, resolution_m=sp.map_resolution_m)
-    engine = SimEngine(run_world, sp, ground_truth=ground_truth)
-    explorer = Explorer(fr_p, sel_p, replace(ep.rrt, seed=int(seed) & 0x7FFFFFFF))
-    segmenter = IncrementalSegmenter(ep.segmentation) if spec.use_regions else None
-    objects = (_ObjectPipeline(engine, obj_p, seed, p)
-               if spec.use_objects else None)
+    config = _run_config(spec, seed, params, sim_params, explorer_params)
+    run = _LockstepRun(world, strategy, seed, config, ground_truth, observer)
+    run.start()
+    while run.advance():
+        pass
+    return run.finish()
 
-    res = RunResult(world=world.name, strategy=strategy, seed=int(seed), start_pose=start,
-                    timings_ms={k: [] for k in TIMING_KEYS})
-    ref = engine.metrics.reference
-    res.explorable_area_m2 = ref.area_m2 if ref is not None else math.nan
-    milestones = sorted(p.milestones_pct)
-    res.time_to_s = {_key(m): math.nan for m in milestones}
-    res.path_to_m = {_key(m): math.nan for m in milestones}
-    tick = min(p.decision_period_s, p.object_period_s) if objects else p.decision_period_s
-    next_decision = 0.0
-    next_sample = 0.0
-    labels: npt.NDArray[np.int32] | None = None
-    seg_version = -1
-    layer: GridMap | None = None
-    follower = OutcomeFollower() if (p.nav_feedback or spec.nav_feedback) else None
-    last_step = None
-    # every contact classified against the map and the layer navigation had then
-    engine.on_collision(lambda ev: res.contacts.append(
-        classify_contact(ev, engine.collider, engine.map, layer)))
-    wall0 = time.perf_counter()
 
-    def record_coverage() -> float:
-        cov = engine.metrics.coverage_pct
+class _LockstepRun:
+    """One run's state: the engine, the nodes' core objects, the schedule and the result.
+
+    :meth:`start` gets the first scan; each :meth:`advance` is one tick (coverage and stop
+    checks, the object costmap, a decision when one is due, then the engine's step);
+    :meth:`finish` fills in the result.
+    """
+
+    def __init__(self, world: World, strategy: str, seed: int, config: _RunConfig,
+                 ground_truth: Any,
+                 observer: Callable[[LockstepState], None] | None) -> None:
+        spec, lockstep, sim = config.spec, config.lockstep, config.sim
+        self.config = config
+        self.observer = observer
+        start = perturbed_start(world, seed, lockstep, sim.robot_radius_m, sim.robot_height_m)
+        run_world = replace(world, start_pose=start)
+        if ground_truth is None and sim.compute_coverage:
+            ground_truth = worlds.ground_truth(run_world, resolution_m=sim.map_resolution_m)
+        self.engine = engine = SimEngine(run_world, sim, ground_truth=ground_truth)
+        self.explorer = Explorer(config.frontier, config.selection,
+                                 replace(config.explorer.rrt, seed=int(seed) & 0x7FFFFFFF))
+        self.segmenter = (IncrementalSegmenter(config.explorer.segmentation)
+                          if spec.use_regions else None)
+        self.objects = (ObjectPipeline(engine, config.explorer.objects, seed, lockstep)
+                        if spec.use_objects else None)
+        self.result = res = RunResult(world=world.name, strategy=strategy, seed=int(seed),
+                                      start_pose=start,
+                                      timings_ms={k: [] for k in TIMING_KEYS})
+        self.reference = engine.metrics.reference
+        res.explorable_area_m2 = (self.reference.area_m2 if self.reference is not None
+                                  else math.nan)
+        self.milestones = sorted(lockstep.milestones_pct)
+        res.time_to_s = {_key(m): math.nan for m in self.milestones}
+        res.path_to_m = {_key(m): math.nan for m in self.milestones}
+        self.tick_s = (min(lockstep.decision_period_s, lockstep.object_period_s)
+                       if self.objects else lockstep.decision_period_s)
+        self.next_decision_s = 0.0
+        self.next_sample_s = 0.0
+        self.labels: npt.NDArray[np.int32] | None = None
+        self.labels_map_version = -1
+        #: The object layer navigation has now (None before the first).
+        self.layer: GridMap | None = None
+        self.follower = (OutcomeFollower() if (lockstep.nav_feedback or spec.nav_feedback)
+                         else None)
+        self.last_step: ExplorerStep | None = None
+        engine.on_collision(self._record_contact)
+        self.wall_start_s = time.perf_counter()
+
+    # ------------------------------------------------------------------ bookkeeping
+
+    @contextmanager
+    def _timed(self, key: str, add_to_last: bool = False) -> Iterator[None]:
+        """Time the block into ``result.timings_ms[key]`` (ms), as a new entry or added to
+        the last one."""
+        t0 = time.perf_counter()
+        yield
+        ms = (time.perf_counter() - t0) * 1e3
+        if add_to_last:
+            self.result.timings_ms[key][-1] += ms
+        else:
+            self.result.timings_ms[key].append(ms)
+
+    def _record_contact(self, event: Any) -> None:
+        """Keep every contact, classified against the map and the layer navigation has."""
+        self.result.contacts.append(
+            classify_contact(event, self.engine.collider, self.engine.map, self.layer))
+
+    def _record_coverage(self) -> float:
+        """The coverage now; the time and path length of each milestone it reaches first."""
+        metrics = self.engine.metrics
+        cov = metrics.coverage_pct
         if not math.isfinite(cov):
             return cov
-        t = engine.metrics.sim_time_s
-        for m in milestones:
+        res = self.result
+        for m in self.milestones:
             k = _key(m)
             if cov >= m and not math.isfinite(res.time_to_s[k]):
-                res.time_to_s[k] = t
-                res.path_to_m[k] = engine.metrics.path_length_m
+                res.time_to_s[k] = metrics.sim_time_s
+                res.path_to_m[k] = metrics.path_length_m
         return cov
 
-    engine.step(0.0)
-    engine.run_until(lambda e: e.latest_scan is not None, 1.0)
-    while True:
-        now = engine.time_s
-        cov = record_coverage()
-        if now >= next_sample - 1e-9:
-            res.coverage_samples.append((now, cov, engine.metrics.path_length_m))
-            next_sample += p.sample_period_s
-        if math.isfinite(cov) and cov >= p.coverage_target_pct:
-            res.completed, res.stop_reason = True, "coverage"
-            break
-        if now >= p.max_sim_time_s - 1e-9:
-            res.stop_reason = "timeout"
-            break
-        if objects is not None and objects.update(res.timings_ms) and objects.changed():
-            t0 = time.perf_counter()
-            layer = objects.map.rasterize(engine.map)
-            engine.add_costmap_layer(OBJECT_LAYER, layer)
-            objects.mark_published()
-            res.timings_ms["objects"][-1] += (time.perf_counter() - t0) * 1e3
-        if now >= next_decision - 1e-9:
-            next_decision += p.decision_period_s
-            t_dec = time.perf_counter()
-            grid = engine.map
-            # --- segmentation node
-            if segmenter is not None and engine.map_version != seg_version:
-                t0 = time.perf_counter()
-                labels = segmenter.update(grid)
-                seg_version = engine.map_version
-                res.timings_ms["segmentation"].append((time.perf_counter() - t0) * 1e3)
-            # --- target_selector node (frontiers, distances, costs, goal)
-            use_labels = labels if (labels is not None and labels.shape == grid.shape) else None
-            ended = follower.poll(engine.nav_status) if follower is not None else None
-            if ended is not None:
-                explorer.report_navigation(*ended)
-            step = last_step = explorer.step(now, grid, engine.pose, layer, use_labels)
-            if step.detected:
-                res.timings_ms["frontier"].append(step.detect_s * 1e3)
-            res.timings_ms["selection"].append(step.select_s * 1e3)
-            # the decision core of the target_selector node: detection (when the map
-            # changed) + viewpoints, path lengths, tour and goal; segmentation is a node
-            # of its own, the lock step's "decision" adds it
-            res.timings_ms["core"].append((step.detect_s + step.select_s) * 1e3)
-            res.goals_blacklisted += step.blacklisted
-            res.goal_switches += int(step.switched)
-            if step.action is Action.NEW_GOAL and step.goal is not None:
-                gx, gy = step.goal.xy_m
-                try:
-                    engine.set_goal(gx, gy, step.goal.yaw_rad)
-                    res.goals_sent += 1
-                    res.goals.append((gx, gy))
-                    if follower is not None:
-                        follower.sent((gx, gy))
-                except ValueError:
-                    if follower is not None:
-                        explorer.report_navigation(NavOutcome.REJECTED, step.goal)
-                    else:
-                        explorer.manager.abandon_goal(blacklist=True)
-            res.timings_ms["decision"].append((time.perf_counter() - t_dec) * 1e3)
-            if observer is not None:
-                goal = explorer.goal
-                observer(LockstepState(engine, grid, step.frontiers, use_labels, layer,
-                                       objects.map if objects else None,
-                                       goal.xy_m if goal else None,
-                                       res.goals, step.action.value, step.reason, step))
-            if step.action is Action.DONE:
-                res.stop_reason = "done"
-                break
-        engine.step(tick)
+    def _sample_coverage(self, now: float, cov: float) -> None:
+        if now >= self.next_sample_s - 1e-9:
+            self.result.coverage_samples.append((now, cov, self.engine.metrics.path_length_m))
+            self.next_sample_s += self.config.lockstep.sample_period_s
 
-    res.sim_time_s = engine.time_s
-    res.wall_time_s = time.perf_counter() - wall0
-    res.coverage_pct = float(engine.metrics.coverage_pct)
-    res.path_length_m = engine.metrics.path_length_m
-    res.collisions = engine.metrics.n_collisions
-    res.collision_places = [(e.x_m, e.y_m, e.object or e.cls) for e in engine.metrics.collisions]
-    res.nav_aborts = engine.metrics.goals_aborted
-    res.n_objects = len(objects.map) if objects is not None else 0
-    if last_step is not None and ref is not None and not res.completed:
-        extra = (object_obstacles(layer, engine.map, fr_p.object_occupied_threshold)
-                 if fr_p.use_object_costmap else None)
-        res.early_stop = explain_stop(
-            engine.map, ref, last_step.frontiers, last_step.dist_m,
-            explorer.manager.excluded(last_step.frontiers),
-            last_step.selection.costs if last_step.selection is not None else None,
-            fr_p, extra)
-    if not res.coverage_samples or res.coverage_samples[-1][0] < engine.time_s:
-        res.coverage_samples.append((engine.time_s, res.coverage_pct, res.path_length_m))
-    return res
+    def _stop_reason(self, now: float, cov: float) -> str | None:
+        """"coverage" at the target coverage, "timeout" at the time limit, else None."""
+        lockstep = self.config.lockstep
+        if math.isfinite(cov) and cov >= lockstep.coverage_target_pct:
+            return "coverage"
+        if now >= lockstep.max_sim_time_s - 1e-9:
+            return "timeout"
+        return None
+
+    # ------------------------------------------------------------------ the loop
+
+    def start(self) -> None:
+        """Step the engine once and run it until the first scan."""
+        self.engine.step(0.0)
+        self.engine.run_until(lambda e: e.latest_scan is not None, 1.0)
+
+    def advance(self) -> bool:
+        """One tick; False when the run stops (its ``stop_reason`` set)."""
+        now = self.engine.time_s
+        cov = self._record_coverage()
+        self._sample_coverage(now, cov)
+        reason = self._stop_reason(now, cov)
+        if reason is not None:
+            self.result.completed = reason == "coverage"
+            self.result.stop_reason = reason
+            return False
+        self._update_object_layer()
+        if now >= self.next_decision_s - 1e-9:
+            self.next_decision_s += self.config.lockstep.decision_period_s
+            if self._decide(now) is Action.DONE:
+                self.result.stop_reason = "done"
+                return False
+        self.engine.step(self.tick_s)
+        return True
+
+    def _update_object_layer(self) -> None:
+        """The object costmap node: process a new camera frame; when the boxes changed,
+        rasterise them and give navigation the new layer."""
+        objects = self.objects
+        if objects is None or not (objects.update(self.result.timings_ms)
+                                   and objects.changed()):
+            return
+        with self._timed("objects", add_to_last=True):
+            self.layer = objects.map.rasterize(self.engine.map)
+            self.engine.add_costmap_layer(OBJECT_LAYER, self.layer)
+            objects.mark_published()
+
+    def _decide(self, now: float) -> Action:
+        """One decision: regions, the decision core's step, its goal sent; the observer
+        told."""
+        with self._timed("decision"):
+            grid = self.engine.map
+            self._update_regions(grid)
+            labels = (self.labels if (self.labels is not None
+                                      and self.labels.shape == grid.shape) else None)
+            step = self._explorer_step(now, grid, labels)
+            if step.action is Action.NEW_GOAL and step.goal is not None:
+                self._send_goal(step.goal)
+        if self.observer is not None:
+            goal = self.explorer.goal
+            self.observer(LockstepState(
+                self.engine, grid, step.frontiers, labels, self.layer,
+                self.objects.map if self.objects else None, goal.xy_m if goal else None,
+                self.result.goals, step.action.value, step.reason, step))
+        return step.action
+
+    def _update_regions(self, grid: GridMap) -> None:
+        """The segmentation node: new regions when the map changed."""
+        if self.segmenter is None or self.engine.map_version == self.labels_map_version:
+            return
+        with self._timed("segmentation"):
+            self.labels = self.segmenter.update(grid)
+            self.labels_map_version = self.engine.map_version
+
+    def _explorer_step(self, now: float, grid: GridMap,
+                       labels: npt.NDArray[np.int32] | None) -> ExplorerStep:
+        """The target_selector node: navigation's outcome reported, then frontiers,
+        distances, costs and goal; its timings and counters recorded."""
+        ended = self.follower.poll(self.engine.nav_status) if self.follower is not None else None
+        if ended is not None:
+            self.explorer.report_navigation(*ended)
+        step = self.last_step = self.explorer.step(now, grid, self.engine.pose, self.layer,
+                                                   labels)
+        timings, res = self.result.timings_ms, self.result
+        if step.detected:
+            timings["frontier"].append(step.detect_s * 1e3)
+        timings["selection"].append(step.select_s * 1e3)
+        # the decision core of the target_selector node: detection (when the map
+        # changed) + viewpoints, path lengths, tour and goal; segmentation is a node
+        # of its own, the lock step's "decision" adds it
+        timings["core"].append((step.detect_s + step.select_s) * 1e3)
+        res.goals_blacklisted += step.blacklisted
+        res.goal_switches += int(step.switched)
+        return step
+
+    def _send_goal(self, goal: Any) -> None:
+        """Give the goal to navigation (as a goal_pose message); a goal it rejects is
+        reported rejected (with feedback) or abandoned and blacklisted (without)."""
+        gx, gy = goal.xy_m
+        try:
+            self.engine.set_goal(gx, gy, goal.yaw_rad)
+            self.result.goals_sent += 1
+            self.result.goals.append((gx, gy))
+            if self.follower is not None:
+                self.follower.sent((gx, gy))
+        except ValueError:
+            if self.follower is not None:
+                self.explorer.report_navigation(NavOutcome.REJECTED, goal)
+            else:
+                self.explorer.manager.abandon_goal(blacklist=True)
+
+    # ------------------------------------------------------------------ the result
+
+    def finish(self) -> RunResult:
+        """The result: final coverage, path, collisions, objects, why an early stop
+        stopped, the last coverage sample."""
+        engine, res = self.engine, self.result
+        metrics = engine.metrics
+        res.sim_time_s = engine.time_s
+        res.wall_time_s = time.perf_counter() - self.wall_start_s
+        res.coverage_pct = float(metrics.coverage_pct)
+        res.path_length_m = metrics.path_length_m
+        res.collisions = metrics.n_collisions
+        res.collision_places = [(e.x_m, e.y_m, e.object or e.cls) for e in metrics.collisions]
+        res.nav_aborts = metrics.goals_aborted
+        res.n_objects = len(self.objects.map) if self.objects is not None else 0
+        if self.last_step is not None and self.reference is not None and not res.completed:
+            res.early_stop = self._explain_stop(self.last_step)
+        if not res.coverage_samples or res.coverage_samples[-1][0] < engine.time_s:
+            res.coverage_samples.append((engine.time_s, res.coverage_pct, res.path_length_m))
+        return res
+
+    def _explain_stop(self, step: ExplorerStep) -> Any:
+        """Why the run stopped short of the target, from the last decision's view."""
+        frontier = self.config.frontier
+        extra = (object_obstacles(self.layer, self.engine.map,
+                                  frontier.object_occupied_threshold)
+                 if frontier.use_object_costmap else None)
+        left = FrontiersLeft(step.frontiers, step.dist_m,
+                             self.explorer.manager.excluded(step.frontiers),
+                             step.selection.costs if step.selection is not None else None)
+        return explain_stop(self.engine.map, self.reference, left, frontier, extra)
 
 
 def _key(m: float) -> str:

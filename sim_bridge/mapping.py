@@ -196,6 +196,30 @@ class ScanMapper:
             rows, cols = rows[ok], cols[ok]
         return rows.astype(np.int64) * w + cols.astype(np.int64)
 
+    def _free_cells(self, x0: float, y0: float, length: npt.NDArray[np.float64],
+                    ca: npt.NDArray[np.float64], sa: npt.NDArray[np.float64]
+                    ) -> npt.NDArray[np.int64]:
+        """Flat indices of the free samples along every beam (from the sensor at (x0,
+        y0), direction (ca, sa), ``length`` metres), ragged and in float32 cell units
+        relative to the origin: beam b gets n_b samples at (k + 0.5) * step, all strictly
+        before its end (the end cell is handled as a hit, or left alone for a miss)."""
+        res = self.params.resolution_m
+        ox, oy = self._origin_cells
+        step = float(self.params.ray_step_cells)
+        len_cells = length / res
+        n_samples = np.floor(len_cells / step).astype(np.int64)
+        total = int(n_samples.sum())
+        if not total:
+            return np.zeros(0, dtype=np.int64)
+        first = np.cumsum(n_samples) - n_samples
+        k = np.arange(total, dtype=np.float32) - np.repeat(
+            first.astype(np.float32) - np.float32(0.5), n_samples)
+        fc = np.floor(np.float32(x0 / res - ox)
+                      + k * np.repeat((ca * step).astype(np.float32), n_samples))
+        fr = np.floor(np.float32(y0 / res - oy)
+                      + k * np.repeat((sa * step).astype(np.float32), n_samples))
+        return self._flat_index(fr, fc)
+
     def integrate_scan(self, pose: tuple[float, float, float],
                        ranges: npt.ArrayLike, angle_min_rad: float,
                        angle_increment_rad: float, range_max_m: float,
@@ -254,26 +278,7 @@ class ScanMapper:
                               max(int(ecx.max()), scx) + 1, max(int(ecy.max()), scy) + 1)
         ox, oy = self._origin_cells
 
-        # Free samples along every beam, ragged: beam b gets n_b samples strictly before
-        # its end (the end cell itself is handled as a hit or left alone for misses).
-        # Free samples along every beam, ragged and in float32 cell units relative to the
-        # origin: beam b gets n_b samples at (k + 0.5) * step, all strictly before its end
-        # (the end cell is handled as a hit, or left alone for a miss).
-        step = float(p.ray_step_cells)
-        len_cells = length / res
-        n_samples = np.floor(len_cells / step).astype(np.int64)
-        total = int(n_samples.sum())
-        if total:
-            first = np.cumsum(n_samples) - n_samples
-            k = np.arange(total, dtype=np.float32) - np.repeat(
-                first.astype(np.float32) - np.float32(0.5), n_samples)
-            fc = np.floor(np.float32(x0 / res - ox)
-                          + k * np.repeat((ca * step).astype(np.float32), n_samples))
-            fr = np.floor(np.float32(y0 / res - oy)
-                          + k * np.repeat((sa * step).astype(np.float32), n_samples))
-            free_idx = self._flat_index(fr, fc)
-        else:
-            free_idx = np.zeros(0, dtype=np.int64)
+        free_idx = self._free_cells(x0, y0, length, ca, sa)
         hit_idx = self._flat_index((ecy[hit] - oy).astype(np.float32),
                                    (ecx[hit] - ox).astype(np.float32))
 

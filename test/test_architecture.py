@@ -221,3 +221,83 @@ def test_package_and_simulator_never_import_bench_or_scripts(path):
     the reverse (function-level imports included)."""
     for mod in _all_imports(path):
         assert mod.split(".")[0] not in ("bench", "scripts"), f"{path} imports {mod}"
+
+
+# ------------------------------------------------------------------ function size and arity
+
+#: Longest function body, in lines from ``def`` to its end without the docstring.
+MAX_FUNCTION_LINES = 80
+#: Most parameters of a function (self/cls not counted; keyword-only, *args, **kwargs are).
+MAX_FUNCTION_PARAMS = 8
+#: Functions allowed over a limit, as "path::qualified name" (none: keep it that way).
+LONG_FUNCTION_ALLOWLIST: set[str] = set()
+
+
+def _functions(tree: ast.AST, prefix: str = ""):
+    """(qualified name, node) of every function in ``tree``, nested ones included."""
+    for node in ast.iter_child_nodes(tree):
+        if isinstance(node, ast.ClassDef):
+            yield from _functions(node, f"{prefix}{node.name}.")
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            yield f"{prefix}{node.name}", node
+            yield from _functions(node, f"{prefix}{node.name}.")
+        else:
+            yield from _functions(node, prefix)
+
+
+def _body_lines(fn: ast.FunctionDef | ast.AsyncFunctionDef) -> int:
+    """Lines from the ``def`` line to the function's end, less its docstring's."""
+    first = fn.body[0]
+    doc = (first.end_lineno - first.lineno + 1
+           if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant)
+           and isinstance(first.value.value, str) else 0)
+    return fn.end_lineno - fn.lineno + 1 - doc
+
+
+def _param_count(fn: ast.FunctionDef | ast.AsyncFunctionDef) -> int:
+    a = fn.args
+    names = [x.arg for x in a.posonlyargs + a.args + a.kwonlyargs]
+    n = len(names) + (a.vararg is not None) + (a.kwarg is not None)
+    return n - 1 if names and names[0] in ("self", "cls") else n
+
+
+def _oversized(paths: list[Path]) -> dict[str, str]:
+    """"path::name" -> what is over the limits, for every function over one."""
+    out = {}
+    for path in paths:
+        rel = path.relative_to(ROOT) if path.is_relative_to(ROOT) else path
+        for name, fn in _functions(ast.parse(path.read_text(), filename=str(path))):
+            lines, params = _body_lines(fn), _param_count(fn)
+            over = ([f"{lines} lines"] if lines > MAX_FUNCTION_LINES else []) + \
+                ([f"{params} parameters"] if params > MAX_FUNCTION_PARAMS else [])
+            if over:
+                out[f"{rel}::{name}"] = ", ".join(over)
+    return out
+
+
+def test_functions_stay_short_and_take_few_parameters():
+    found = _oversized(_files("explore_seg") + _files("sim_bridge"))
+    new = {k: v for k, v in found.items() if k not in LONG_FUNCTION_ALLOWLIST}
+    assert not new, ("functions over the limits (split them along their jobs; group "
+                     "parameters in a small frozen dataclass): "
+                     + "; ".join(f"{k} ({v})" for k, v in sorted(new.items())))
+    fixed = LONG_FUNCTION_ALLOWLIST - set(found)
+    assert not fixed, ("remove from LONG_FUNCTION_ALLOWLIST (within the limits now): "
+                       f"{sorted(fixed)}")
+
+
+def test_the_size_check_counts_lines_without_the_docstring_and_parameters_without_self(
+        tmp_path):
+    body = "\n".join(f"    x{i} = {i}" for i in range(MAX_FUNCTION_LINES - 1))
+    doc = '    """Doc\n\n    more doc.\n    """\n'
+    f = tmp_path / "m.py"
+    f.write_text(f"def fits():\n{doc}{body}\n\n\n"
+                 f"def too_long():\n{doc}{body}\n    x = 0\n\n\n"
+                 "def star(a, b, c, d, e, f, g, h, *args):\n    pass\n\n\n"
+                 "class C:\n    def m(self, a, b, c, d, e, f, g, *args):\n        pass\n\n"
+                 "    def n(self, a, b, c, d, e, f, g, *, h, **kw):\n"
+                 "        def inner(p, q, r, s, t, u, v, w, y):\n            pass\n")
+    assert _oversized([f]) == {f"{f}::too_long": f"{MAX_FUNCTION_LINES + 1} lines",
+                               f"{f}::star": "9 parameters",
+                               f"{f}::C.n": "9 parameters",
+                               f"{f}::C.n.inner": "9 parameters"}

@@ -12,7 +12,7 @@ from explore_seg.core.frontiers import FrontierParams, find_frontiers
 from explore_seg.core.grid import GridMap
 from sim_bridge.collision import Collider
 from sim_bridge.contacts import cause_counts, classify_contact, marked_near
-from sim_bridge.early_stop import explain_stop
+from sim_bridge.early_stop import FrontiersLeft, explain_stop
 from sim_bridge.engine import SimEngine, SimParams
 from sim_bridge.metrics import CollisionEvent, CoverageReference
 from sim_bridge.run_result import RunResult
@@ -93,19 +93,21 @@ def test_explain_stop_names_the_frontier_reason_and_no_frontier_causes():
     fp = FrontierParams(robot_radius_m=0.1)
     fr = find_frontiers(g, None, fp)
     assert len(fr) == 1
-    out = explain_stop(g, ref, fr, [np.inf], [True], [np.inf], fp)
+    out = explain_stop(g, ref, FrontiersLeft(fr, [np.inf], [True], [np.inf]), fp)
     assert out["cause"] == "blacklisted" and out["missing_m2"] == pytest.approx(2.0)
     assert out["frontiers"][0]["reason"] == "blacklisted"
-    assert explain_stop(g, ref, fr, [np.inf], [False], [np.inf], fp)["cause"] == "no path"
-    assert explain_stop(g, ref, fr, [3.0], [False], [np.inf], fp)["cause"] == "not selectable"
+    no_path = FrontiersLeft(fr, [np.inf], [False], [np.inf])
+    assert explain_stop(g, ref, no_path, fp)["cause"] == "no path"
+    not_selectable = FrontiersLeft(fr, [3.0], [False], [np.inf])
+    assert explain_stop(g, ref, not_selectable, fp)["cause"] == "not selectable"
     # no frontier: the object layer closes the border
     extra = np.zeros(g.shape, bool)
     extra[:, 38:40] = True
-    out = explain_stop(g, ref, [], None, None, None, fp, extra)
+    out = explain_stop(g, ref, FrontiersLeft([]), fp, extra)
     assert out["cause"] == "closed by object layer" and out["n_frontiers"] == 0
-    assert explain_stop(g, ref, [], None, None, None, fp)["cause"] == "frontier too small"
+    assert explain_stop(g, ref, FrontiersLeft([]), fp)["cause"] == "frontier too small"
     g.data[:, 39] = 100                  # a mapped wall closes it
-    assert explain_stop(g, ref, [], None, None, None, fp)["cause"] == "behind mapped obstacles"
+    assert explain_stop(g, ref, FrontiersLeft([]), fp)["cause"] == "behind mapped obstacles"
 
 
 def _record(**kw):
@@ -139,10 +141,11 @@ def test_cause_tables_read_new_and_old_records():
 
 
 def test_a_run_stopped_below_target_says_why():
-    from sim_bridge.lockstep import run_exploration
+    from sim_bridge.lockstep import LockstepParams, run_exploration
     from sim_bridge.worlds import default_world, ground_truth
     w = default_world("small_house")
-    r = run_exploration(w, "paper", 1, max_sim_time_s=15.0, ground_truth=ground_truth(w))
+    r = run_exploration(w, "paper", 1, params=LockstepParams(max_sim_time_s=15.0),
+                        ground_truth=ground_truth(w))
     assert r.stop_reason == "timeout" and not r.completed
     es = r.early_stop
     assert es is not None and es["missing_m2"] > 1.0 and es["n_gaps"] >= 1

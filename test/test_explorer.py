@@ -13,7 +13,7 @@ from explore_seg.core.explorer import (WARN_LABELS_SHAPE, WARN_LAYER_FRAME,
                                        detect_frontiers)
 from explore_seg.core.frontiers import find_frontiers
 from explore_seg.core.grid import GridMap, grid_from_ascii
-from explore_seg.core.selection import Action, GoalManager, PathGraphs
+from explore_seg.core.selection import Action, GoalManager, PathGraphs, StepInputs
 from selection_cases import BASE, RES, fig2, split_params
 
 
@@ -152,8 +152,8 @@ def test_blacklisted_reachable_frontier_does_not_hide_one_behind_unknown_cells()
     # Without the exclusion mask, the old behaviour: no candidate, DONE.
     m2 = GoalManager(sp)
     m2.add_to_blacklist(fr[top[0]].point_xy_m)
-    assert m2.step(0.0, (x, y), g, fr, graphs.distances(robot, fr), None, robot).action \
-        is Action.DONE
+    assert m2.step(0.0, (x, y), g, fr, graphs.distances(robot, fr),
+                   StepInputs(robot_rc=robot)).action is Action.DONE
 
 
 # -------------------------------------------------------------- the decision API itself

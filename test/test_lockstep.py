@@ -28,7 +28,8 @@ def small_house():
 def runs(small_house):
     """One run of every strategy on the small house (shared by the tests below)."""
     w, gt = small_house
-    return {s: run_exploration(w, s, SEED, max_sim_time_s=MAX_SIM_TIME_S, ground_truth=gt)
+    return {s: run_exploration(w, s, SEED, params=LockstepParams(max_sim_time_s=MAX_SIM_TIME_S),
+                               ground_truth=gt)
             for s in STRATEGIES}
 
 
@@ -69,8 +70,10 @@ def test_coverage_samples_are_monotone_in_time(runs):
 
 def test_same_seed_same_result(small_house):
     w, gt = small_house
-    a = run_exploration(w, "paper", 3, max_sim_time_s=40.0, ground_truth=gt).to_dict()
-    b = run_exploration(w, "paper", 3, max_sim_time_s=40.0, ground_truth=gt).to_dict()
+    a = run_exploration(w, "paper", 3, params=LockstepParams(max_sim_time_s=40.0),
+                        ground_truth=gt).to_dict()
+    b = run_exploration(w, "paper", 3, params=LockstepParams(max_sim_time_s=40.0),
+                        ground_truth=gt).to_dict()
     for d in (a, b):
         d.pop("wall_time_s")
         d.pop("timings_ms")

@@ -4,16 +4,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from explore_seg.core.objects import ObjectParams, wall_mask
+from explore_seg.core.objects import WALL_OCCUPIED_THRESHOLD, ObjectParams, wall_mask
 from sim_bridge.engine import SimEngine, SimParams
-from sim_bridge.lockstep import WALL_OCCUPIED_THRESHOLD, LockstepParams, _ObjectPipeline
+from sim_bridge.lockstep import LockstepParams
+from sim_bridge.object_pipeline import ObjectPipeline
 from sim_bridge.worlds import default_world
 
 
 def test_wall_mask_per_map_version_equals_a_fresh_one():
     eng = SimEngine(default_world("small_house"), SimParams(seed=2, enable_camera=True,
                                                              compute_coverage=False))
-    pipe = _ObjectPipeline(eng, ObjectParams(), 2, LockstepParams())
+    pipe = ObjectPipeline(eng, ObjectParams(), 2, LockstepParams())
     eng.set_cmd_vel(0.0, 0.6)                     # turn in place: walls seen again and again
     reused = computed = 0
     last = None

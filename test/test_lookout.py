@@ -128,7 +128,7 @@ def test_lookout_completes_a_run_whose_last_frontier_lies_in_a_corridor_narrower
     from sim_bridge import worlds as sim_worlds
     from sim_bridge.engine import SimParams
     from sim_bridge.explorer_params import load_explorer_params
-    from sim_bridge.lockstep import run_exploration
+    from sim_bridge.lockstep import LockstepParams, run_exploration
     from sim_bridge.observable import with_observable
     from sim_scenes import narrowing_corridor_world
     import dataclasses
@@ -142,7 +142,8 @@ def test_lookout_completes_a_run_whose_last_frontier_lies_in_a_corridor_narrower
     for on in (False, True):
         sel = dataclasses.replace(base.selection, lookout_goals=on)
         assert isinstance(sel, SelectionParams)
-        res = run_exploration(world, "paper", seed, max_sim_time_s=600.0, ground_truth=gt,
+        res = run_exploration(world, "paper", seed, params=LockstepParams(max_sim_time_s=600.0),
+                              ground_truth=gt,
                               sim_params=sim_params_for(PAPER_CAMERA_MOUNT),
                               explorer_params=dataclasses.replace(base, selection=sel))
         rows[on] = res

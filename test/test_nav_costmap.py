@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim_bridge.lockstep import run_exploration
+from sim_bridge.lockstep import LockstepParams, run_exploration
 from sim_bridge.navigation import costmap
 from sim_bridge.navigation.costmap import CostGridCache, influence_cells
 from sim_bridge.navigation.params import NavParams
@@ -85,5 +85,6 @@ def test_a_lock_step_run_plans_on_the_same_costmap_as_the_whole_map_rebuild(monk
         return out
 
     monkeypatch.setattr(CostGridCache, "cost", checked)
-    run_exploration(default_world("house_cluttered"), "paper", 0, max_sim_time_s=60.0)
+    run_exploration(default_world("house_cluttered"), "paper", 0,
+                    params=LockstepParams(max_sim_time_s=60.0))
     assert len(partial) >= 20 and np.mean(partial) > 0.3, (len(partial), np.mean(partial))

@@ -194,7 +194,7 @@ def test_explorer_finishes_a_closed_room():
 
 
 def test_lockstep_runs_rrt_exploration_deterministically():
-    from sim_bridge.lockstep import STRATEGY_SPECS, run_exploration
+    from sim_bridge.lockstep import STRATEGY_SPECS, LockstepParams, run_exploration
     from sim_bridge.worlds import default_world, ground_truth
 
     spec = STRATEGY_SPECS["rrt_exploration"]
@@ -202,7 +202,8 @@ def test_lockstep_runs_rrt_exploration_deterministically():
         and not spec.use_regions
     w = default_world("small_house")
     gt = ground_truth(w)
-    a, b = (run_exploration(w, "rrt_exploration", 3, max_sim_time_s=25.0, ground_truth=gt)
+    a, b = (run_exploration(w, "rrt_exploration", 3, params=LockstepParams(max_sim_time_s=25.0),
+                            ground_truth=gt)
             for _ in range(2))
     assert a.goals_sent >= 1 and a.coverage_pct > 10.0
     da, db = a.to_dict(), b.to_dict()

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.selection import Action, GoalManager, SelectionParams, goal_yaw
+from explore_seg.core.selection import Action, GoalManager, SelectionParams, StepInputs, \
+    goal_yaw
 from selection_cases import make_frontier, manager_world
 
 
@@ -295,10 +296,10 @@ def test_routed_goal_counts_as_reached_within_handover_m(strategy, handover_m, r
     m = GoalManager(SelectionParams(strategy=strategy, handover_m=handover_m,
                                     arrival_wait_s=0.0))
     cost = np.array([1.0, 3.0])
-    goal = m.step(0.0, (0.6, 2.0), g, fr, cost, tour_cost_m=cost).goal
+    goal = m.step(0.0, (0.6, 2.0), g, fr, cost, StepInputs(tour_cost_m=cost)).goal
     assert goal.xy_m == fr[0].point_xy_m
     near = (goal.xy_m[0] + 0.8, goal.xy_m[1])     # 0.8 m away, the frontier still there
-    res = m.step(1.0, near, g, fr, [0.8, 2.0], tour_cost_m=np.array([0.8, 2.0]))
+    res = m.step(1.0, near, g, fr, [0.8, 2.0], StepInputs(tour_cost_m=np.array([0.8, 2.0])))
     if reached:
         assert res.action is Action.NEW_GOAL and res.goal.xy_m == fr[1].point_xy_m
         assert "frontier remains" in res.reason and m.blacklist == (goal.xy_m,)
@@ -324,14 +325,14 @@ def test_reached_goal_whose_frontier_moved_on_is_not_blacklisted(strategy, fract
     extra = {} if fraction is None else {"reached_unknown_fraction": fraction}
     m = GoalManager(SelectionParams(strategy=strategy, arrival_wait_s=0.0, **extra))
     goal = m.step(0.0, (1.0, 2.0), g, [f0, far], [1.0, 3.0],
-                  tour_cost_m=np.array([1.0, 3.0])).goal
+                  StepInputs(tour_cost_m=np.array([1.0, 3.0]))).goal
     assert goal.xy_m == f0.point_xy_m
     after = GridMap(g.data.copy(), 0.05, (0.0, 0.0))
     if revealed:
         after.data[3:6] = 0                               # rows 3-5 seen: free
     on = make_frontier(0, [(2, c) for c in range(10, 20)], (3, 12), after)
     res = m.step(1.0, goal.xy_m, after, [on, far], [0.15, 2.5],
-                 tour_cost_m=np.array([0.15, 2.5]))
+                 StepInputs(tour_cost_m=np.array([0.15, 2.5])))
     assert m.blacklist == ((goal.xy_m,) if blacklisted else ())
     if blacklisted:
         assert "frontier remains" in res.reason
@@ -355,18 +356,18 @@ def test_revealed_arrivals_in_one_area_are_limited(limit, blacklisted):
                                     reached_unknown_fraction=0.5,
                                     revealed_arrivals_max=limit))
     first = m.step(0.0, (1.0, 2.0), g, [f0, far], [1.0, 3.0],
-                   tour_cost_m=np.array([1.0, 3.0])).goal
+                   StepInputs(tour_cost_m=np.array([1.0, 3.0]))).goal
     g1 = GridMap(g.data.copy(), 0.05, (0.0, 0.0))
     g1.data[3:6] = 0                                      # rows 3-5 revealed
     on1 = make_frontier(0, [(2, c) for c in range(10, 20)], (3, 12), g1)
     second = m.step(1.0, first.xy_m, g1, [on1, far], [0.15, 2.5],
-                    tour_cost_m=np.array([0.15, 2.5])).goal
+                    StepInputs(tour_cost_m=np.array([0.15, 2.5]))).goal
     assert second.xy_m == on1.point_xy_m and m.blacklist == ()
     g2 = GridMap(g1.data.copy(), 0.05, (0.0, 0.0))
     g2.data[1:3] = 0                                      # rows 1-2 revealed
     on2 = make_frontier(0, [(0, c) for c in range(10, 20)], (1, 12), g2)
     res = m.step(2.0, second.xy_m, g2, [on2, far], [0.1, 2.4],
-                 tour_cost_m=np.array([0.1, 2.4]))
+                 StepInputs(tour_cost_m=np.array([0.1, 2.4])))
     assert res.action is Action.NEW_GOAL
     if blacklisted:
         assert "area blacklisted" in res.reason and res.goal.xy_m == far.point_xy_m

@@ -17,7 +17,7 @@ from explore_seg.core.grid import grid_from_ascii
 from explore_seg.core.selection import (Action, GoalOptions, SelectionParams, Strategy,
                                         get_strategy, register, strategy_names, unregister)
 from explore_seg.core.selection.strategies import BUILTIN, COST_FUNCTIONS
-from sim_bridge.lockstep import STRATEGY_SPECS, run_exploration, strategy_spec
+from sim_bridge.lockstep import STRATEGY_SPECS, LockstepParams, run_exploration, strategy_spec
 from sim_bridge.worlds import default_world, ground_truth
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -69,7 +69,8 @@ def test_a_registered_strategy_runs_in_the_lock_step(toy):
     spec = strategy_spec(TOY)
     assert (spec.selection, spec.use_regions, spec.use_objects) == (TOY, False, False)
     w = default_world("small_house")
-    r = run_exploration(w, TOY, 0, max_sim_time_s=120.0, ground_truth=ground_truth(w))
+    r = run_exploration(w, TOY, 0, params=LockstepParams(max_sim_time_s=120.0),
+                        ground_truth=ground_truth(w))
     assert r.strategy == TOY
     assert r.goals_sent >= 1 and r.coverage_pct > 10.0
 

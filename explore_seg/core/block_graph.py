@@ -67,6 +67,61 @@ def _block_tables(k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return labels, count, centre
 
 
+def _block_edges(nid: npt.NDArray[np.int32], k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Edges (u, v) between the nodes of neighbouring blocks, each node pair once.
+
+    ``nid`` is (hb, wb, k*k): the node id of every block-local cell, -1 where blocked.
+    Horizontal and vertical neighbours link through their touching boundary cells;
+    diagonal neighbours through their touching corner cells when both side cells are
+    passable.
+    """
+    hb, wb = nid.shape[0], nid.shape[1]
+
+    def node_of(cell_idx: int, sl_r: slice, sl_c: slice) -> np.ndarray:
+        """Node id of block-local cell ``cell_idx`` for the blocks in (sl_r, sl_c)."""
+        return nid[sl_r, sl_c, cell_idx].ravel()
+
+    src: list[np.ndarray] = []
+    dst: list[np.ndarray] = []
+
+    def add_unique(pairs: list[tuple[np.ndarray, np.ndarray]]) -> None:
+        """Append the k boundary-cell pairs of each block pair, each node pair once."""
+        for i, (a, b) in enumerate(pairs):
+            ok = (a >= 0) & (b >= 0)
+            for a_prev, b_prev in pairs[:i]:
+                ok &= (a != a_prev) | (b != b_prev)
+            src.append(a[ok])
+            dst.append(b[ok])
+
+    full = slice(None)
+    r_lo, r_hi = slice(0, hb - 1), slice(1, hb)
+    c_lo, c_hi = slice(0, wb - 1), slice(1, wb)
+    last = k - 1
+    # Horizontal: right column of block (i, j) with the left column of (i, j+1).
+    add_unique([(node_of(i * k + last, full, c_lo), node_of(i * k, full, c_hi))
+                for i in range(k)])
+    # Vertical: top row of block (i, j) with the bottom row of (i+1, j).
+    add_unique([(node_of(last * k + j, r_lo, full), node_of(j, r_hi, full))
+                for j in range(k)])
+    # Diagonal: corner of A = (i, j) with the corner of B = (i+1, j+dj); the side
+    # cells lie in the blocks (i+1, j) and (i, j+dj). (A, B, side1, side2).
+    diagonals = (
+        ((r_lo, c_lo, last * k + last), (r_hi, c_hi, 0),
+         (r_hi, c_lo, last), (r_lo, c_hi, last * k)),
+        ((r_lo, c_hi, last * k), (r_hi, c_lo, last),
+         (r_hi, c_hi, 0), (r_lo, c_lo, last * k + last)),
+    )
+    for (ar, ac, acell), (br, bc, bcell), (s1r, s1c, s1cell), (s2r, s2c, s2cell) \
+            in diagonals:
+        a = node_of(acell, ar, ac)
+        b = node_of(bcell, br, bc)
+        ok = (node_of(s1cell, s1r, s1c) >= 0) & (node_of(s2cell, s2r, s2c) >= 0)
+        ok &= (a >= 0) & (b >= 0)
+        src.append(a[ok])
+        dst.append(b[ok])
+    return np.concatenate(src), np.concatenate(dst)
+
+
 class BlockGraph:
     """Coarse graph of a passability mask for fast one-sweep path lengths.
 
@@ -166,50 +221,7 @@ class BlockGraph:
         nid = base.astype(np.int32)[:, :, None] + lab             # node ids ...
         nid[lab == 0] = -1                                        # ... -1 where blocked
 
-        def node_of(cell_idx: int, sl_r: slice, sl_c: slice) -> np.ndarray:
-            """Node id of block-local cell ``cell_idx`` for the blocks in (sl_r, sl_c)."""
-            return nid[sl_r, sl_c, cell_idx].ravel()
-
-        src: list[np.ndarray] = []
-        dst: list[np.ndarray] = []
-
-        def add_unique(pairs: list[tuple[np.ndarray, np.ndarray]]) -> None:
-            """Append the k boundary-cell pairs of each block pair, each node pair once."""
-            for i, (a, b) in enumerate(pairs):
-                ok = (a >= 0) & (b >= 0)
-                for a_prev, b_prev in pairs[:i]:
-                    ok &= (a != a_prev) | (b != b_prev)
-                src.append(a[ok])
-                dst.append(b[ok])
-
-        full = slice(None)
-        r_lo, r_hi = slice(0, hb - 1), slice(1, hb)
-        c_lo, c_hi = slice(0, wb - 1), slice(1, wb)
-        last = k - 1
-        # Horizontal: right column of block (i, j) with the left column of (i, j+1).
-        add_unique([(node_of(i * k + last, full, c_lo), node_of(i * k, full, c_hi))
-                    for i in range(k)])
-        # Vertical: top row of block (i, j) with the bottom row of (i+1, j).
-        add_unique([(node_of(last * k + j, r_lo, full), node_of(j, r_hi, full))
-                    for j in range(k)])
-        # Diagonal: corner of A = (i, j) with the corner of B = (i+1, j+dj); the side
-        # cells lie in the blocks (i+1, j) and (i, j+dj). (A, B, side1, side2).
-        diagonals = (
-            ((r_lo, c_lo, last * k + last), (r_hi, c_hi, 0),
-             (r_hi, c_lo, last), (r_lo, c_hi, last * k)),
-            ((r_lo, c_hi, last * k), (r_hi, c_lo, last),
-             (r_hi, c_hi, 0), (r_lo, c_lo, last * k + last)),
-        )
-        for (ar, ac, acell), (br, bc, bcell), (s1r, s1c, s1cell), (s2r, s2c, s2cell) \
-                in diagonals:
-            a = node_of(acell, ar, ac)
-            b = node_of(bcell, br, bc)
-            ok = (node_of(s1cell, s1r, s1c) >= 0) & (node_of(s2cell, s2r, s2c) >= 0)
-            ok &= (a >= 0) & (b >= 0)
-            src.append(a[ok])
-            dst.append(b[ok])
-        u = np.concatenate(src)
-        v = np.concatenate(dst)
+        u, v = _block_edges(nid, k)
         wt = np.hypot(pos_r[u] - pos_r[v], pos_c[u] - pos_c[v]) * self.resolution_m
         self._graph = csr_matrix((np.concatenate([wt, wt]),
                                   (np.concatenate([u, v]), np.concatenate([v, u]))),

@@ -52,8 +52,8 @@ from explore_seg.core.frontiers import (Frontier, FrontierCache, FrontierParams,
 from explore_seg.core.grid import GridMap, metres_to_cells
 from explore_seg.core.rrt import RrtFrontierDetector, RrtParams
 from explore_seg.core.selection import (Action, Goal, GoalManager, NavOutcome, PathGraphs,
-                                        Selection, SelectionParams)
-from explore_seg.core.selection.lookout import lookouts
+                                        Selection, SelectionParams, StepInputs)
+from explore_seg.core.selection.lookout import Reach, lookouts
 from explore_seg.core.selection.router import TourPlan
 from explore_seg.core.selection.strategies import Planner, Strategy, get_strategy
 
@@ -171,9 +171,9 @@ class Explorer:
     def __init__(self, frontier: FrontierParams = FrontierParams(),
                  selection: SelectionParams = SelectionParams(),
                  rrt: RrtParams = RrtParams()) -> None:
-        self._fp = frontier
-        self._sp = selection
-        self._rp = rrt
+        self._frontier_params = frontier
+        self._selection_params = selection
+        self._rrt_params = rrt
         self._rrt: RrtFrontierDetector | None = None
         self._det: Detection | None = None
         self.manager = GoalManager(selection)
@@ -190,17 +190,17 @@ class Explorer:
     @property
     def frontier_params(self) -> FrontierParams:
         """Current detection parameters."""
-        return self._fp
+        return self._frontier_params
 
     @property
     def selection_params(self) -> SelectionParams:
         """Current selection parameters."""
-        return self._sp
+        return self._selection_params
 
     @property
     def rrt_params(self) -> RrtParams:
         """Current RRT detector parameters."""
-        return self._rp
+        return self._rrt_params
 
     @property
     def rrt_detector(self) -> RrtFrontierDetector | None:
@@ -228,22 +228,22 @@ class Explorer:
         """Apply new parameters; frontiers and paths are recomputed at the next step (new
         RRT or detection parameters restart the RRT detector: new trees, no points)."""
         if frontier is not None:
-            self._fp = frontier
+            self._frontier_params = frontier
             self._rrt = None
         if selection is not None:
-            self._sp = selection
+            self._selection_params = selection
             self.manager.set_params(selection)
         if rrt is not None:
-            self._rp = rrt
+            self._rrt_params = rrt
             self._rrt = None
-        self._strategy = get_strategy(self._sp.strategy)
+        self._strategy = get_strategy(self._selection_params.strategy)
         self._planner = self._make_planner()
         self._fcache.reset()
         self._key = None
 
     def _make_planner(self) -> Planner | None:
         make = self._strategy.make_planner
-        return make(self._fp, self._sp) if make is not None else None
+        return make(self._frontier_params, self._selection_params) if make is not None else None
 
     @property
     def strategy(self) -> Strategy:
@@ -294,15 +294,16 @@ class Explorer:
     # ------------------------------------------------------------------- step
     def _detect(self, grid: GridMap, layer: GridMap | None) -> None:
         self._fcache.start(grid)
-        det = detect_frontiers(grid, layer, self._fp,
+        det = detect_frontiers(grid, layer, self._frontier_params,
                                groups=self._strategy.candidates == "groups",
                                cache=self._fcache)
         self._det = det
         self._layer_warning = det.layer_warning
         self._frontiers = (det.frontiers if self._planner is None else split_frontiers(
-            grid, det.frontiers, self._sp.frontier_split_m, self._fp, det.extra_obstacles,
-            det.passable, self._fcache))
-        self._graph = PathGraphs(grid, det.extra_obstacles, self._fp, self._sp, det.passable)
+            grid, det.frontiers, self._selection_params.frontier_split_m,
+            self._frontier_params, det.extra_obstacles, det.passable, self._fcache))
+        self._graph = PathGraphs(grid, det.extra_obstacles, self._frontier_params,
+                                 self._selection_params, det.passable)
         self._key = (grid, layer)
 
     def _detect_rrt(self, grid: GridMap, xy: tuple[float, float]) -> None:
@@ -310,7 +311,7 @@ class Explorer:
         det = self._det
         assert det is not None
         if self._rrt is None:
-            self._rrt = RrtFrontierDetector(self._rp, self._fp)
+            self._rrt = RrtFrontierDetector(self._rrt_params, self._frontier_params)
         self._frontiers = self._rrt.update(grid, xy, det.passable, det.extra_obstacles)
 
     def step(self, now_s: float, grid: GridMap, pose: tuple[float, float, float],
@@ -366,29 +367,29 @@ class Explorer:
             frontiers = planner.viewpoints(grid, frontiers, self._graph, start,
                                           self._det.passable)
         dist, excluded = self._distances(start, robot_rc, frontiers)
-        if (self._sp.lookout_goals and dist is not None and len(dist)
+        if (self._selection_params.lookout_goals and dist is not None and len(dist)
                 and not (np.isfinite(dist) & ~excluded).any()):
             # No selectable frontier: look at the unreachable ones (lookout.py).
             assert start is not None and self._det is not None and self._graph is not None
             hop = math.hypot(start[0] - robot_rc[0], start[1] - robot_rc[1]) * grid.resolution_m
-            frontiers, dist = lookouts(grid, frontiers, dist, self._graph.graph, start,
-                                       self._det.passable, self._sp,
-                                       self._fp.occupied_threshold, excluded, hop)
+            reach = Reach(self._graph.graph, start, self._det.passable, hop)
+            frontiers, dist = lookouts(grid, frontiers, dist, reach, self._selection_params,
+                                       self._frontier_params.occupied_threshold, excluded)
             excluded = manager.excluded(frontiers)
         if planner is not None and dist is not None:
             tour = planner.tour_costs(grid, frontiers, dist, excluded, self._graph, robot_rc,
                                      labels, manager.goal_frontier(grid, frontiers))
         old_goal = manager.goal
         added = manager.blacklist_added
-        res = manager.step(now_s, (x, y), grid, frontiers, dist, labels, robot_rc, excluded,
-                           tour.tour_cost_m if tour is not None else None)
+        res = manager.step(now_s, (x, y), grid, frontiers, dist, StepInputs(
+            labels, robot_rc, excluded, tour.tour_cost_m if tour is not None else None))
         blacklisted = manager.blacklist_added - added + self._reported_blacklisted
         self._reported_blacklisted = 0
         switched = (res.action is Action.NEW_GOAL and res.goal is not None
                     and old_goal is not None and not old_goal.is_return and not blacklisted
                     and res.selection is not None
                     and _frontier_alive(grid, frontiers, res.selection.costs, old_goal.xy_m,
-                                        self._sp.frontier_match_radius_m))
+                                        self._selection_params.frontier_match_radius_m))
         return ExplorerStep(res.action, res.goal, res.reason, res.selection, frontiers, dist,
                             robot_rc, detected, blacklisted, switched, tuple(warnings),
                             t1 - t0, time.perf_counter() - t1, tour,
@@ -404,7 +405,7 @@ class Explorer:
             warnings.append((WARN_ROBOT_OUTSIDE,
                              f"robot at ({xy[0]:.2f}, {xy[1]:.2f}) lies outside the map"))
             return None
-        radius = metres_to_cells(self._sp.start_search_radius_m, grid.resolution_m)
+        radius = metres_to_cells(self._selection_params.start_search_radius_m, grid.resolution_m)
         start = graph.graph.nearest_passable(robot_rc, radius)
         if start is None:
             warnings.append((WARN_ROBOT_BLOCKED, f"robot cell {robot_rc} is not passable and "

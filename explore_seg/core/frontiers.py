@@ -452,32 +452,44 @@ def group_frontiers(grid: GridMap, frontier_mask: npt.NDArray[np.bool_],
 
     if pas is None:
         pas = traversable_mask(grid, extra, params)
-    radius_cells = metres_to_cells(params.cpoint_search_radius_m, grid.resolution_m)
+    search = _CpointSearch(grid, pas, extra, params, cache)
     out: list[Frontier] = []
     for gid, k in enumerate(keep):
         a, b = int(starts[k]), int(starts[k + 1])
         cells = np.stack([rr[a:b], cc[a:b]], axis=1).astype(np.int64)
-        out.append(_group(gid, cells, (float(mean_r[k]), float(mean_c[k])), grid, pas, extra,
-                          params.occupied_threshold, radius_cells, cache))
+        out.append(_group(gid, cells, (float(mean_r[k]), float(mean_c[k])), search))
     return out
 
 
+@dataclass(frozen=True, eq=False)
+class _CpointSearch:
+    """A group's cPoint search on one map: :func:`_cpoint` (or the cache's) with these."""
+
+    grid: GridMap
+    passable: npt.NDArray[np.bool_]
+    extra: npt.NDArray[np.bool_] | None
+    params: FrontierParams
+    cache: FrontierCache | None
+
+    def near(self, rep_rc: tuple[int, int]) -> tuple[int, int] | None:
+        find = _cpoint if self.cache is None else self.cache.cpoint
+        radius = metres_to_cells(self.params.cpoint_search_radius_m, self.grid.resolution_m)
+        return find(rep_rc, self.passable, self.grid, self.extra,
+                    self.params.occupied_threshold, radius)
+
+
 def _group(gid: int, cells: npt.NDArray[np.int64], centroid_rc: tuple[float, float],
-           grid: GridMap, passable: npt.NDArray[np.bool_], extra: npt.NDArray[np.bool_] | None,
-           occupied_threshold: int, radius_cells: int,
-           cache: FrontierCache | None = None) -> Frontier:
+           search: _CpointSearch) -> Frontier:
     """The group of ``cells``: its cPoint is the passable cell in sight nearest to the
     cell nearest to the centroid (that cell itself, not passable, when there is none)."""
+    grid = search.grid
     cy, cx = centroid_rc
     d2 = (cells[:, 0] - cy) ** 2 + (cells[:, 1] - cx) ** 2
     j = int(np.argmin(d2))
     rep = (int(cells[j, 0]), int(cells[j, 1]))
-    pt = (_cpoint(rep, passable, grid, extra, occupied_threshold, radius_cells)
-          if cache is None else
-          cache.cpoint(rep, passable, grid, extra, occupied_threshold, radius_cells))
-    ok = pt is not None
-    if pt is None:
-        pt = rep
+    found = search.near(rep)
+    ok = found is not None
+    pt = found if found is not None else rep
     px, py = grid.cell_to_world(pt[0], pt[1])
     gx, gy = grid.cells_to_world(np.asarray([cy]), np.asarray([cx]))
     n = int(cells.shape[0])
@@ -538,7 +550,7 @@ def split_frontiers(grid: GridMap, frontiers: Sequence[Frontier], max_extent_m: 
     pas = _check_layer(grid, passable, "passable")
     if pas is None:
         pas = traversable_mask(grid, extra, params)
-    radius_cells = metres_to_cells(params.cpoint_search_radius_m, grid.resolution_m)
+    search = _CpointSearch(grid, pas, extra, params, cache)
     max_cells = max_extent_m / grid.resolution_m
     out: list[Frontier] = []
     for f in frontiers:
@@ -549,8 +561,7 @@ def split_frontiers(grid: GridMap, frontiers: Sequence[Frontier], max_extent_m: 
             continue
         for cells in parts:
             mean = cells.astype(np.float64).mean(axis=0)
-            out.append(_group(len(out), cells, (float(mean[0]), float(mean[1])), grid, pas,
-                              extra, params.occupied_threshold, radius_cells, cache))
+            out.append(_group(len(out), cells, (float(mean[0]), float(mean[1])), search))
     return out
 
 

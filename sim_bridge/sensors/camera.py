@@ -279,24 +279,8 @@ class DepthCamera:
         p = self.params
         h, w = int(p.height), int(p.width)
         rot, t = camera_pose_in_world(pose, p)
-        rf = rot.astype(np.float32)
-        a = self._a[None, :]
-        b = self._b[:, None]
-        # World ray directions (optical z component 1, so a ray's t is the depth). The
-        # camera has no roll, so the optical x axis is horizontal: dz depends on the row
-        # only, and with zero pitch dx, dy depend on the column only. Arrays keep the
-        # smallest broadcastable shape and every per-pixel expression broadcasts.
-        dz = rf[2, 1] * b + rf[2, 2]                                    # (h, 1)
-        if abs(rf[0, 1]) > 0 or abs(rf[1, 1]) > 0:
-            dx = rf[0, 0] * a + rf[0, 1] * b + rf[0, 2]                 # (h, w)
-            dy = rf[1, 0] * a + rf[1, 1] * b + rf[1, 2]
-        else:
-            dx = rf[0, 0] * a + rf[0, 2]                                # (1, w)
-            dy = rf[1, 0] * a + rf[1, 2]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            inv_x = np.float32(1.0) / dx
-            inv_y = np.float32(1.0) / dy
-            inv_z = np.float32(1.0) / dz
+        rays = self._rays(rot.astype(np.float32))
+        dx, dy, dz, inv_z = rays.dx, rays.dy, rays.dz, rays.inv_z
         tz = np.float32(t[2])
         near = np.float32(p.range_min_m)
         if tz > 0:
@@ -323,36 +307,7 @@ class DepthCamera:
             tfar = np.maximum(z0, z1)
             px, py = ox - self._xy[k, 0], oy - self._xy[k, 1]
             with np.errstate(invalid="ignore", divide="ignore"):
-                if self._is_box[k]:
-                    if self._aligned[k]:
-                        hx, hy = self._half_world[k]
-                        ix, iy = _cut(inv_x, rs, cs), _cut(inv_y, rs, cs)
-                    else:
-                        c, s = self._cos[k], self._sin[k]
-                        px, py = c * px + s * py, -s * px + c * py
-                        hx, hy = self._half[k]
-                        ddx, ddy = _cut(dx, rs, cs), _cut(dy, rs, cs)
-                        ix = np.float32(1.0) / (np.float32(c) * ddx + np.float32(s) * ddy)
-                        iy = np.float32(1.0) / (np.float32(-s) * ddx + np.float32(c) * ddy)
-                    x0 = np.float32(-hx - px) * ix
-                    x1 = np.float32(hx - px) * ix
-                    y0 = np.float32(-hy - py) * iy
-                    y1 = np.float32(hy - py) * iy
-                    txn = np.minimum(x0, x1)
-                    tyn = np.minimum(y0, y1)
-                    side_far = np.minimum(np.maximum(x0, x1), np.maximum(y0, y1))
-                    side = np.maximum(txn, tyn)
-                    side_face = np.where(txn >= tyn, np.uint8(0), np.uint8(1))
-                else:
-                    r = self._half[k, 0]
-                    ddx, ddy = _cut(dx, rs, cs), _cut(dy, rs, cs)
-                    qa = ddx * ddx + ddy * ddy
-                    qb = np.float32(px) * ddx + np.float32(py) * ddy
-                    qc = np.float32(px * px + py * py - r * r)
-                    root = np.sqrt(qb * qb - qa * qc)
-                    side = (-qb - root) / qa
-                    side_far = (-qb + root) / qa
-                    side_face = np.uint8(0)
+                side, side_far, side_face = self._side_hits(k, (px, py), rays, rs, cs)
                 tnear = np.maximum(tn, side)
                 hit = tnear <= np.minimum(tfar, side_far)
                 hit &= tnear > near
@@ -375,6 +330,64 @@ class DepthCamera:
         sem_c, t_c = sem.copy(), t.copy()
         return CameraFrame(depth, sem, inst, rot, t,
                            lambda: self._colour(zbuf, valid, sem_c, face, dx, dy, t_c))
+
+    def _rays(self, rf: npt.NDArray[np.float32]) -> _Rays:
+        """World ray directions (optical z component 1, so a ray's t is the depth) of a
+        camera turned by ``rf``. The camera has no roll, so the optical x axis is
+        horizontal: dz depends on the row only, and with zero pitch dx, dy depend on the
+        column only. Arrays keep the smallest broadcastable shape and every per-pixel
+        expression broadcasts."""
+        a = self._a[None, :]
+        b = self._b[:, None]
+        dz = rf[2, 1] * b + rf[2, 2]                                    # (h, 1)
+        if abs(rf[0, 1]) > 0 or abs(rf[1, 1]) > 0:
+            dx = rf[0, 0] * a + rf[0, 1] * b + rf[0, 2]                 # (h, w)
+            dy = rf[1, 0] * a + rf[1, 1] * b + rf[1, 2]
+        else:
+            dx = rf[0, 0] * a + rf[0, 2]                                # (1, w)
+            dy = rf[1, 0] * a + rf[1, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv_x = np.float32(1.0) / dx
+            inv_y = np.float32(1.0) / dy
+            inv_z = np.float32(1.0) / dz
+        return _Rays(dx, dy, dz, inv_x, inv_y, inv_z)
+
+    def _side_hits(self, k: int, rel_xy: tuple[float, float], rays: _Rays, rs: slice,
+                   cs: slice) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32],
+                                       npt.NDArray[np.uint8] | np.uint8]:
+        """Where the rays of the pixels (rs, cs) enter and leave the side walls of solid
+        ``k`` (a box's slabs, a cylinder's mantle), and the entered face (0: a box's x
+        side or a cylinder, 1: a box's y side). ``rel_xy`` is the camera relative to the
+        solid's centre."""
+        px, py = rel_xy
+        dx, dy = rays.dx, rays.dy
+        if self._is_box[k]:
+            if self._aligned[k]:
+                hx, hy = self._half_world[k]
+                ix, iy = _cut(rays.inv_x, rs, cs), _cut(rays.inv_y, rs, cs)
+            else:
+                c, s = self._cos[k], self._sin[k]
+                px, py = c * px + s * py, -s * px + c * py
+                hx, hy = self._half[k]
+                ddx, ddy = _cut(dx, rs, cs), _cut(dy, rs, cs)
+                ix = np.float32(1.0) / (np.float32(c) * ddx + np.float32(s) * ddy)
+                iy = np.float32(1.0) / (np.float32(-s) * ddx + np.float32(c) * ddy)
+            x0 = np.float32(-hx - px) * ix
+            x1 = np.float32(hx - px) * ix
+            y0 = np.float32(-hy - py) * iy
+            y1 = np.float32(hy - py) * iy
+            txn = np.minimum(x0, x1)
+            tyn = np.minimum(y0, y1)
+            side_far = np.minimum(np.maximum(x0, x1), np.maximum(y0, y1))
+            side = np.maximum(txn, tyn)
+            return side, side_far, np.where(txn >= tyn, np.uint8(0), np.uint8(1))
+        r = self._half[k, 0]
+        ddx, ddy = _cut(dx, rs, cs), _cut(dy, rs, cs)
+        qa = ddx * ddx + ddy * ddy
+        qb = np.float32(px) * ddx + np.float32(py) * ddy
+        qc = np.float32(px * px + py * py - r * r)
+        root = np.sqrt(qb * qb - qa * qc)
+        return (-qb - root) / qa, (-qb + root) / qa, np.uint8(0)
 
     def _colour(self, zbuf: npt.NDArray[np.float32], valid: npt.NDArray[np.bool_],
                 sem: npt.NDArray[np.uint8], face: npt.NDArray[np.uint8],
@@ -400,6 +413,19 @@ class DepthCamera:
             (levels - 1) * 0.5 / p.range_max_m)
         q = (np.float32(levels - 1) - fade).astype(np.uint8)      # 0..levels-1
         return self._lut[ci, face, q]
+
+
+@dataclass(frozen=True, eq=False)
+class _Rays:
+    """A frame's world ray directions (float32, optical z component 1) and their
+    inverses, each in its smallest broadcastable shape ((h, 1), (1, w) or (h, w))."""
+
+    dx: npt.NDArray[np.float32]
+    dy: npt.NDArray[np.float32]
+    dz: npt.NDArray[np.float32]
+    inv_x: npt.NDArray[np.float32]
+    inv_y: npt.NDArray[np.float32]
+    inv_z: npt.NDArray[np.float32]
 
 
 def _cut(arr: npt.NDArray[np.float32], rs: slice, cs: slice) -> npt.NDArray[np.float32]:

@@ -23,6 +23,11 @@ from explore_seg.core.fields import param_meta
 from sim_bridge.sensors.common import require_positive
 from sim_bridge.world import World
 
+#: Candidate beams of primitives: (first beam, beam count, primitive row in its table,
+#: is a circle), one entry per primitive.
+_Spans = tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int64],
+               npt.NDArray[np.bool_]]
+
 
 @dataclass(frozen=True)
 class LidarParams:
@@ -150,6 +155,81 @@ class Lidar:
         """
         return self.scan_with_hits(pose, rng)[0]
 
+    def _segment_spans(self, ox: float, oy: float, a0: float) -> _Spans | None:
+        """Wall segments within range of the sensor at (ox, oy) and the beams (beam 0 at
+        angle ``a0``) their angular extent covers; None when there is none."""
+        p = self.params
+        n, inc, two_pi = p.num_beams, p.angle_increment_rad, 2.0 * math.pi
+        if not self._seg.shape[0]:
+            return None
+        dmx = self._seg_mid[:, 0] - ox
+        dmy = self._seg_mid[:, 1] - oy
+        near = np.flatnonzero(dmx * dmx + dmy * dmy < (p.range_max_m + self._seg_half) ** 2)
+        if not near.size:
+            return None
+        sg = self._seg[near]
+        wx, wy = sg[:, 0] - ox, sg[:, 1] - oy
+        t0 = np.arctan2(wy, wx)
+        t1 = np.arctan2(wy + sg[:, 3], wx + sg[:, 2])
+        d = np.mod(t1 - t0 + math.pi, two_pi) - math.pi
+        lo = np.mod(np.where(d >= 0, t0, t1) - a0, two_pi)
+        k0 = np.floor(lo / inc).astype(np.int64)
+        k1 = np.floor((lo + np.abs(d)) / inc).astype(np.int64) + 1
+        return k0, np.minimum(k1 - k0 + 1, n), near, np.zeros(near.size, bool)
+
+    def _circle_spans(self, ox: float, oy: float, a0: float) -> _Spans | None:
+        """Circles (posts, legs) within range of the sensor at (ox, oy) and the beams
+        (beam 0 at angle ``a0``) their angular extent covers; None when there is none."""
+        p = self.params
+        n, inc, two_pi = p.num_beams, p.angle_increment_rad, 2.0 * math.pi
+        if not self._circ.shape[0]:
+            return None
+        cx = self._circ[:, 0] - ox
+        cy = self._circ[:, 1] - oy
+        r = self._circ[:, 2]
+        dist = np.hypot(cx, cy)
+        near = np.flatnonzero(dist < p.range_max_m + r)
+        if not near.size:
+            return None
+        dn, rn = dist[near], r[near]
+        half = np.where(dn > rn, np.arcsin(np.minimum(rn / np.maximum(dn, 1e-12), 1.0)),
+                        math.pi)
+        lo = np.mod(np.arctan2(cy[near], cx[near]) - half - a0, two_pi)
+        k0 = np.floor(lo / inc).astype(np.int64)
+        k1 = np.floor((lo + 2 * half) / inc).astype(np.int64) + 1
+        return k0, np.minimum(k1 - k0 + 1, n), near, np.ones(near.size, bool)
+
+    def _segment_hits(self, s_id: npt.NDArray[np.int64], bx: npt.NDArray[np.float64],
+                      by: npt.NDArray[np.float64], ox: float, oy: float
+                      ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]:
+        """Range along each beam (direction (bx, by) from (ox, oy)) to its segment
+        ``s_id`` (inf: missed) and the segment's primitive."""
+        sg = self._seg[s_id]
+        wx, wy = sg[:, 0] - ox, sg[:, 1] - oy
+        ex, ey = sg[:, 2], sg[:, 3]
+        den = bx * ey - by * ex
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tt = (wx * ey - wy * ex) / den
+            ss = (wx * by - wy * bx) / den
+        ok = (den != 0) & (ss >= 0.0) & (ss <= 1.0) & (tt >= 0.0)
+        return np.where(ok, tt, np.inf), self._seg_prim[s_id]
+
+    def _circle_hits(self, c_id: npt.NDArray[np.int64], bx: npt.NDArray[np.float64],
+                     by: npt.NDArray[np.float64], ox: float, oy: float
+                     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]:
+        """Range along each beam (direction (bx, by) from (ox, oy)) to its circle
+        ``c_id`` (the far side when the sensor is inside; inf: missed) and the circle's
+        primitive."""
+        cc = self._circ[c_id]
+        wx, wy = cc[:, 0] - ox, cc[:, 1] - oy
+        b = wx * bx + wy * by
+        disc = b * b - (wx * wx + wy * wy - cc[:, 2] ** 2)
+        root = np.sqrt(np.maximum(disc, 0.0))
+        tin = b - root
+        tt = np.where(tin >= 0.0, tin, b + root)
+        ok = (disc >= 0.0) & (tt >= 0.0)
+        return np.where(ok, tt, np.inf), self._circ_prim[c_id]
+
     def scan_with_hits(self, pose: tuple[float, float, float],
                        rng: np.random.Generator | None = None
                        ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.int64]]:
@@ -168,50 +248,13 @@ class Lidar:
         yaw = float(pose[2])
         a0 = yaw + p.angle_min_rad
         rmax = p.range_max_m
-        two_pi = 2.0 * math.pi
         # ---- candidate (primitive, beam) pairs from the angular extents
-        firsts, counts, kinds, ids = [], [], [], []
-        if self._seg.shape[0]:
-            dmx = self._seg_mid[:, 0] - ox
-            dmy = self._seg_mid[:, 1] - oy
-            near = np.flatnonzero(dmx * dmx + dmy * dmy < (rmax + self._seg_half) ** 2)
-            if near.size:
-                sg = self._seg[near]
-                wx, wy = sg[:, 0] - ox, sg[:, 1] - oy
-                t0 = np.arctan2(wy, wx)
-                t1 = np.arctan2(wy + sg[:, 3], wx + sg[:, 2])
-                d = np.mod(t1 - t0 + math.pi, two_pi) - math.pi
-                lo = np.mod(np.where(d >= 0, t0, t1) - a0, two_pi)
-                k0 = np.floor(lo / inc).astype(np.int64)
-                k1 = np.floor((lo + np.abs(d)) / inc).astype(np.int64) + 1
-                firsts.append(k0)
-                counts.append(np.minimum(k1 - k0 + 1, n))
-                ids.append(near)
-                kinds.append(np.zeros(near.size, bool))
-        if self._circ.shape[0]:
-            cx = self._circ[:, 0] - ox
-            cy = self._circ[:, 1] - oy
-            r = self._circ[:, 2]
-            dist = np.hypot(cx, cy)
-            near = np.flatnonzero(dist < rmax + r)
-            if near.size:
-                dn, rn = dist[near], r[near]
-                half = np.where(dn > rn, np.arcsin(np.minimum(rn / np.maximum(dn, 1e-12), 1.0)),
-                                math.pi)
-                lo = np.mod(np.arctan2(cy[near], cx[near]) - half - a0, two_pi)
-                k0 = np.floor(lo / inc).astype(np.int64)
-                k1 = np.floor((lo + 2 * half) / inc).astype(np.int64) + 1
-                firsts.append(k0)
-                counts.append(np.minimum(k1 - k0 + 1, n))
-                ids.append(near)
-                kinds.append(np.ones(near.size, bool))
+        spans = [sp for sp in (self._segment_spans(ox, oy, a0), self._circle_spans(ox, oy, a0))
+                 if sp is not None]
         ranges = np.full(n, np.inf)
         hit = np.full(n, -1, np.int64)
-        if firsts:
-            k0 = np.concatenate(firsts)
-            cnt = np.concatenate(counts)
-            idx = np.concatenate(ids)
-            is_circ = np.concatenate(kinds)
+        if spans:
+            k0, cnt, idx, is_circ = (np.concatenate(col) for col in zip(*spans))
             total = int(cnt.sum())
             starts = np.cumsum(cnt) - cnt
             owner = np.repeat(np.arange(cnt.size), cnt)
@@ -223,31 +266,10 @@ class Lidar:
             seg_pairs = ~is_circ[owner]
             if seg_pairs.any():
                 sel = np.flatnonzero(seg_pairs)
-                s_id = idx[owner[sel]]
-                sg = self._seg[s_id]
-                wx, wy = sg[:, 0] - ox, sg[:, 1] - oy
-                ex, ey = sg[:, 2], sg[:, 3]
-                bx, by = dx[sel], dy[sel]
-                den = bx * ey - by * ex
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    tt = (wx * ey - wy * ex) / den
-                    ss = (wx * by - wy * bx) / den
-                ok = (den != 0) & (ss >= 0.0) & (ss <= 1.0) & (tt >= 0.0)
-                t[sel] = np.where(ok, tt, np.inf)
-                prim[sel] = self._seg_prim[s_id]
+                t[sel], prim[sel] = self._segment_hits(idx[owner[sel]], dx[sel], dy[sel], ox, oy)
             if (~seg_pairs).any():
                 sel = np.flatnonzero(~seg_pairs)
-                c_id = idx[owner[sel]]
-                cc = self._circ[c_id]
-                wx, wy = cc[:, 0] - ox, cc[:, 1] - oy
-                b = wx * dx[sel] + wy * dy[sel]
-                disc = b * b - (wx * wx + wy * wy - cc[:, 2] ** 2)
-                root = np.sqrt(np.maximum(disc, 0.0))
-                tin = b - root
-                tt = np.where(tin >= 0.0, tin, b + root)
-                ok = (disc >= 0.0) & (tt >= 0.0)
-                t[sel] = np.where(ok, tt, np.inf)
-                prim[sel] = self._circ_prim[c_id]
+                t[sel], prim[sel] = self._circle_hits(idx[owner[sel]], dx[sel], dy[sel], ox, oy)
             np.minimum.at(ranges, beam, t)
             win = np.isfinite(t) & (t == ranges[beam])
             hit[beam[win]] = prim[win]

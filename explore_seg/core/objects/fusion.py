@@ -47,6 +47,27 @@ def _fuse_side(a: float, a_open: bool, b: float, b_open: bool, w_a: float, w_b: 
     return (a * w_a + b * w_b) / (w_a + w_b), False
 
 
+def _open_sides_along(new: Object3D, axes: tuple[np.ndarray, np.ndarray]) -> list[bool]:
+    """Open flags of ``new``'s sides, per fused axis (low side, high side): each fused
+    side takes the flag of the side of ``new`` whose outward normal is nearest to it."""
+    cn, sn = math.cos(new.yaw), math.sin(new.yaw)
+    normals = [(-cn, -sn), (cn, sn), (sn, -cn), (-sn, cn)]
+    open_new = []
+    for ax in axes:
+        for sign in (-1.0, 1.0):
+            k = int(np.argmax([sign * (nx * ax[0] + ny * ax[1]) for nx, ny in normals]))
+            open_new.append(new.open_sides[k])
+    return open_new
+
+
+def _fused_surface(old: Object3D, new: Object3D, params: ObjectParams) -> np.ndarray | None:
+    """Both boxes' surface points, thinned; the newest view first: when the union is
+    thinned, the latest points stay densest."""
+    surfaces = [o.surface for o in (new, old) if o.surface is not None]
+    return (surface_points(np.vstack(surfaces), params.miss_sample_spacing_m)
+            if surfaces else None)
+
+
 def fuse_boxes(old: Object3D, new: Object3D, params: ObjectParams,
                prior: SizePrior | None = None) -> Object3D:
     """Fuse a re-detection into a tracked box.
@@ -101,14 +122,7 @@ def fuse_boxes(old: Object3D, new: Object3D, params: ObjectParams,
     m_old = [(float(np.dot(mo[:2], ax)), mo[2 + i]) for i, ax in enumerate(axes)]
     m_new = [(float(np.dot(mn[:2], ax)), mn[3 - i] if swap else mn[2 + i])
              for i, ax in enumerate(axes)]
-    # Open flags of the new box's sides, by the fused side their outward normal is nearest.
-    cn, sn = math.cos(new.yaw), math.sin(new.yaw)
-    normals = [(-cn, -sn), (cn, sn), (sn, -cn), (-sn, cn)]
-    open_new = []
-    for ax in axes:
-        for sign in (-1.0, 1.0):
-            k = int(np.argmax([sign * (nx * ax[0] + ny * ax[1]) for nx, ny in normals]))
-            open_new.append(new.open_sides[k])
+    open_new = _open_sides_along(new, axes)
     g, margin = params.merge_growth_max, params.merge_extend_margin_m
     centre_xy = np.zeros(2)
     meas_xy = np.zeros(2)
@@ -158,10 +172,7 @@ def fuse_boxes(old: Object3D, new: Object3D, params: ObjectParams,
         sz = min(sz, prior.max_z_m)
     cz = 0.5 * sz if params.boxes_on_floor else \
         (old.center_xyz[2] * w_old + new.center_xyz[2] * w_new) / (w_old + w_new)
-    surfaces = [o.surface for o in (new, old) if o.surface is not None]
-    # The newest view first: when the union is thinned, the latest points stay densest.
-    surface = (surface_points(np.vstack(surfaces), params.miss_sample_spacing_m)
-               if surfaces else None)
+    surface = _fused_surface(old, new, params)
     return Object3D(cls, max(old.score, new.score),
                     (float(centre_xy[0]), float(centre_xy[1]), float(cz)),
                     (float(size_xy[0]), float(size_xy[1]), float(sz)), yaw,

@@ -264,6 +264,13 @@ class ObjectParams:
         "Most voxels kept (the oldest are dropped first)", range=(1, 2**31 - 1)))
 
     def __post_init__(self) -> None:
+        self._check_field_groups()
+        self._check_bounds()
+        self._check_orders()
+        self._check_choices()
+
+    def _check_field_groups(self) -> None:
+        """Fields checked by kind: > 0, >= 0, finite, fractions, integers >= 1."""
         positive = ("max_depth_m", "ceiling_height_m", "cluster_tolerance_m",
                     "merge_distance_m", "miss_sample_spacing_m", "cloud_spacing_m",
                     "leg_cluster_gap_m", "leg_max_width_m", "leg_isolation_m",
@@ -304,6 +311,9 @@ class ObjectParams:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
+
+    def _check_bounds(self) -> None:
+        """Fields with a bound of their own."""
         if not (self.prior_reject_factor == 0 or self.prior_reject_factor >= 1.0):
             raise ValueError(f"prior_reject_factor must be 0 or >= 1, got {self.prior_reject_factor}")
         if not self.wall_margin_m >= 0:
@@ -326,6 +336,9 @@ class ObjectParams:
         if not 0.0 < self.min_grazing_angle_rad <= 0.5 * math.pi:
             raise ValueError(f"min_grazing_angle_rad must be in (0, pi/2], "
                              f"got {self.min_grazing_angle_rad}")
+
+    def _check_orders(self) -> None:
+        """Lower limits below their upper ones."""
         if self.floor_height_m >= self.ceiling_height_m:
             raise ValueError(
                 f"floor_height_m ({self.floor_height_m}) must be below ceiling_height_m "
@@ -344,6 +357,9 @@ class ObjectParams:
             raise ValueError(
                 f"leg_min_width_m ({self.leg_min_width_m}) must not exceed leg_max_width_m "
                 f"({self.leg_max_width_m})")
+
+    def _check_choices(self) -> None:
+        """The orientation method and the cost values."""
         if self.orientation_method not in ORIENTATION_METHODS:
             raise ValueError(f"orientation_method must be one of {ORIENTATION_METHODS}, "
                              f"got {self.orientation_method!r}")

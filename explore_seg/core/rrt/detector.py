@@ -56,7 +56,7 @@ class RrtFrontierDetector:
     def __init__(self, params: RrtParams = RrtParams(),
                  frontier: FrontierParams = FrontierParams()) -> None:
         self.params = params
-        self._fp = frontier
+        self._frontier_params = frontier
         self._rng = np.random.default_rng([params.seed, _STREAM])
         self._global: RrtTree | None = None
         self._local: RrtTree | None = None
@@ -79,7 +79,8 @@ class RrtFrontierDetector:
     def _classes(self, grid: GridMap, extra: npt.NDArray[np.bool_] | None) -> CellClasses:
         if self._cells is None or self._cells_key is None or self._cells_key[0] is not grid \
                 or self._cells_key[1] is not extra:
-            self._cells = CellClasses.from_grid(grid, self._fp.occupied_threshold, extra)
+            self._cells = CellClasses.from_grid(grid, self._frontier_params.occupied_threshold,
+                                                extra)
             self._cells_key = (grid, extra)
         return self._cells
 
@@ -138,12 +139,12 @@ class RrtFrontierDetector:
         r, c = grid.world_to_cells(pts[:, 0], pts[:, 1])
         fr, fc = grid.world_to_cell_float(pts[:, 0], pts[:, 1])
         counts, cells = unknown_within(grid, np.stack([r, c], axis=1), self.params.info_radius_m)
-        radius = metres_to_cells(self._fp.cpoint_search_radius_m, res)
+        radius = metres_to_cells(self._frontier_params.cpoint_search_radius_m, res)
         out: list[Frontier] = []
         for i in np.flatnonzero(counts > 0):
             rc = (int(r[i]), int(c[i]))
             pt = passable_in_sight(rc, passable, grid, extra_obstacles,
-                                   self._fp.occupied_threshold, radius)
+                                   self._frontier_params.occupied_threshold, radius)
             ok = pt is not None
             if pt is None:
                 pt = rc

@@ -257,94 +257,112 @@ def far_ends(v: Notch, vi: int, notches: list[Notch], rings: list[Ring],
 
 
 def cut_sets(notches: list[Notch], rings: list[Ring], vis: npt.NDArray[np.bool_],
-              border: npt.NDArray[np.bool_], st: DudeSettings) -> list[CutSet]:
+             border: npt.NDArray[np.bool_], st: DudeSettings) -> list[CutSet]:
     """Cut sets of every notch with their weights (§8.2)."""
-    tau = st.tau_px
     sets: list[CutSet] = []
+    for vi, vis_ends in enumerate(_visible_ends(notches, rings, vis, border, st)):
+        if vis_ends:
+            sets += _notch_cut_sets(vi, notches, vis_ends, st.tau_px)
+    return sets
+
+
+def _visible_ends(notches: list[Notch], rings: list[Ring], vis: npt.NDArray[np.bool_],
+                  border: npt.NDArray[np.bool_], st: DudeSettings) -> list[list[End]]:
+    """Per notch, the far ends of its cuts (to notches, then tips) whose cut is clear:
+    the far ends of every notch, then one raster test of all their cuts."""
     bd = _Boundary(rings)
     nt = _NotchTable(notches, rings, bd, st)
-    # far ends of every notch, then one raster test of all their cuts
     all_ends = []
     for vi, v in enumerate(notches):
         notch_ends, tips = far_ends(v, vi, notches, rings, bd, st, nt)
         all_ends.append(notch_ends + tips)
     counts = [len(e) for e in all_ends]
     if sum(counts) == 0:
-        return sets
+        return [[] for _ in notches]
     P1 = np.array([e.pt for ends in all_ends for e in ends])
     P0 = np.repeat(nt.pts, counts, axis=0)
     code = vis.astype(np.uint8) | (border.astype(np.uint8) << 1)
     clear_all = segments_clear(vis, border, P0, P1, 1.5, code).tolist()
+    out: list[list[End]] = []
     first = 0
-    for vi, v in enumerate(notches):
-        ends = all_ends[vi]
+    for ends in all_ends:
         clear = clear_all[first:first + len(ends)]
         first += len(ends)
-        if not ends:
-            continue
-        vis_ends = [e for e, c in zip(ends, clear) if c]
-        if not vis_ends:
-            continue
+        out.append([e for e, c in zip(ends, clear) if c])
+    return out
 
-        def weight_of(cut_ends: list[End], res_v: bool) -> tuple[set[int], float]:
-            resolved = {vi} if res_v else set()
-            total = v.conc if res_v else 0.5 * v.conc
-            length = 0.0
-            for e in cut_ends:
-                length += max(e.length, 1.0)
-                if e.notch >= 0:
-                    u = notches[e.notch]
-                    if resolves(u, [v.pt], tau):
-                        resolved.add(e.notch)
-                        total += u.conc
-                    else:
-                        total += 0.5 * u.conc
-            return resolved, total / length
 
-        singles_res = [(resolves(v, [e.pt], tau), e) for e in vis_ends]
-        best_tip = None
-        any_res = False
-        for res, e in singles_res:
-            if e.notch >= 0:
-                resolved, w = weight_of([e], res)
-                sets.append(CutSet(vi, [(v.pt, e.pt)], resolved, w, {e.notch}))
-                any_res |= res
-            elif res and (best_tip is None or e.length < best_tip.length):
-                best_tip = e
-        if best_tip is not None:
-            resolved, w = weight_of([best_tip], True)
-            sets.append(CutSet(vi, [(v.pt, best_tip.pt)], resolved, w))
-            any_res = True
-        if any_res:
-            continue
-        # pairs of cuts: the shortest pair that resolves v jointly
-        short = sorted(vis_ends, key=lambda e: e.length)[:8]
-        best_pair = None
-        for i in range(len(short)):
-            for j in range(i + 1, len(short)):
-                e1, e2 = short[i], short[j]
-                tot = e1.length + e2.length
-                if best_pair is not None and tot >= best_pair[0]:
-                    continue
-                if resolves(v, [e1.pt, e2.pt], tau):
-                    best_pair = (tot, e1, e2)
-        if best_pair is not None:
-            resolved, w = weight_of([best_pair[1], best_pair[2]], True)
-            far = {e.notch for e in best_pair[1:] if e.notch >= 0}
-            sets.append(CutSet(vi, [(v.pt, best_pair[1].pt), (v.pt, best_pair[2].pt)],
-                                resolved, w, far))
-            continue
-        # nothing resolves v: keep the single cut with the best weight anyway (a cut to a
-        # notch is in ``sets`` already, with this weight: every single resolved nothing)
-        best, best_end = None, None
-        for res, e in singles_res:
-            resolved, w = weight_of([e], False)
-            if best is None or w > best.weight:
-                best = CutSet(vi, [(v.pt, e.pt)], resolved, w,
-                               {e.notch} if e.notch >= 0 else set())
-                best_end = e
-        if best is not None and best_end is not None and best_end.notch < 0:
-            sets.append(best)
+def _cut_weight(vi: int, notches: list[Notch], cut_ends: list[End], res_v: bool,
+                tau: float) -> tuple[set[int], float]:
+    """The notches a cut set of notch ``vi`` resolves and its weight: the resolved
+    notches' concavity (half for one not resolved) per length of its cuts."""
+    v = notches[vi]
+    resolved = {vi} if res_v else set()
+    total = v.conc if res_v else 0.5 * v.conc
+    length = 0.0
+    for e in cut_ends:
+        length += max(e.length, 1.0)
+        if e.notch >= 0:
+            u = notches[e.notch]
+            if resolves(u, [v.pt], tau):
+                resolved.add(e.notch)
+                total += u.conc
+            else:
+                total += 0.5 * u.conc
+    return resolved, total / length
+
+
+def _notch_cut_sets(vi: int, notches: list[Notch], vis_ends: list[End], tau: float
+                    ) -> list[CutSet]:
+    """The cut sets of notch ``vi`` over its clear cuts: every single cut to a notch and
+    the shortest resolving cut to a tip; else the shortest pair that resolves it jointly;
+    else the single cut with the best weight."""
+    v = notches[vi]
+    sets: list[CutSet] = []
+    singles_res = [(resolves(v, [e.pt], tau), e) for e in vis_ends]
+    best_tip = None
+    any_res = False
+    for res, e in singles_res:
+        if e.notch >= 0:
+            resolved, w = _cut_weight(vi, notches, [e], res, tau)
+            sets.append(CutSet(vi, [(v.pt, e.pt)], resolved, w, {e.notch}))
+            any_res |= res
+        elif res and (best_tip is None or e.length < best_tip.length):
+            best_tip = e
+    if best_tip is not None:
+        resolved, w = _cut_weight(vi, notches, [best_tip], True, tau)
+        sets.append(CutSet(vi, [(v.pt, best_tip.pt)], resolved, w))
+        any_res = True
+    if any_res:
+        return sets
+    # pairs of cuts: the shortest pair that resolves v jointly
+    short = sorted(vis_ends, key=lambda e: e.length)[:8]
+    best_pair = None
+    for i in range(len(short)):
+        for j in range(i + 1, len(short)):
+            e1, e2 = short[i], short[j]
+            tot = e1.length + e2.length
+            if best_pair is not None and tot >= best_pair[0]:
+                continue
+            if resolves(v, [e1.pt, e2.pt], tau):
+                best_pair = (tot, e1, e2)
+    if best_pair is not None:
+        resolved, w = _cut_weight(vi, notches, [best_pair[1], best_pair[2]], True, tau)
+        far = {e.notch for e in best_pair[1:] if e.notch >= 0}
+        sets.append(CutSet(vi, [(v.pt, best_pair[1].pt), (v.pt, best_pair[2].pt)],
+                           resolved, w, far))
+        return sets
+    # nothing resolves v: keep the single cut with the best weight anyway (a cut to a
+    # notch is in ``sets`` already, with this weight: every single resolved nothing)
+    best, best_end = None, None
+    for res, e in singles_res:
+        resolved, w = _cut_weight(vi, notches, [e], False, tau)
+        if best is None or w > best.weight:
+            best = CutSet(vi, [(v.pt, e.pt)], resolved, w,
+                          {e.notch} if e.notch >= 0 else set())
+            best_end = e
+    if best is not None and best_end is not None and best_end.notch < 0:
+        sets.append(best)
     return sets
 
 

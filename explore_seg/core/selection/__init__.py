@@ -27,7 +27,7 @@ from explore_seg.core.selection import strategies  # noqa: I001
 from explore_seg.core.selection.costs import Selection, compute_costs, select_goal
 from explore_seg.core.selection.distances import PathGraphs, frontier_distances
 from explore_seg.core.selection.goals import (Action, Goal, GoalManager, NavOutcome,
-                                              StepResult, goal_yaw)
+                                              StepInputs, StepResult, goal_yaw)
 from explore_seg.core.selection.params import (POSE_TOPIC_TYPES, SelectionParams,
                                                SelectorNodeParams)
 from explore_seg.core.selection.regions import frontier_regions, region_at
@@ -41,7 +41,7 @@ __all__ = [
     "Action", "COST_FUNCTIONS", "CostInputs", "Goal", "GoalManager", "NavOutcome", "POSE_TOPIC_TYPES",
     "PathGraphs", "REGION_STRATEGIES", "RRT_STRATEGIES", "Router", "TourPlan", "STRATEGIES",
     "Selection", "SelectionParams",
-    "SelectorNodeParams", "StepResult", "compute_costs", "frontier_distances",
+    "SelectorNodeParams", "StepInputs", "StepResult", "compute_costs", "frontier_distances",
     "frontier_regions", "goal_yaw", "region_at", "select_goal",
     "GoalOptions", "Strategy", "get_strategy", "register", "strategy_names", "unregister",
 ]

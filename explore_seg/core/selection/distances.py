@@ -96,7 +96,7 @@ class PathGraphs:
                  frontier_params: FrontierParams, params: SelectionParams,
                  passable: npt.NDArray[np.bool_] | None = None) -> None:
         self._grid, self._extra, self._params = grid, extra_obstacles, params
-        self._fp = frontier_params
+        self._frontier_params = frontier_params
         if passable is None:
             passable = traversable_mask(grid, extra_obstacles, frontier_params)
         self.graph = BlockGraph(passable, grid.resolution_m, params.path_block_cells)
@@ -105,7 +105,7 @@ class PathGraphs:
     def fallback(self) -> BlockGraph:
         """The graph over free-or-unknown cells (built on first use)."""
         if self._fallback is None:
-            mask = traversable_mask(self._grid, self._extra, self._fp,
+            mask = traversable_mask(self._grid, self._extra, self._frontier_params,
                                     allow_unknown=True)
             self._fallback = BlockGraph(mask, self._grid.resolution_m,
                                         self._params.path_block_cells)

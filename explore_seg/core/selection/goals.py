@@ -70,6 +70,22 @@ class StepResult:
     selection: Selection | None = None
 
 
+@dataclass(frozen=True, eq=False)
+class StepInputs:
+    """What the caller of :meth:`GoalManager.step` already has for a decision (each
+    optional)."""
+
+    #: Region labels aligned with the grid, shape (H, W).
+    labels: npt.NDArray[np.integer] | None = None
+    #: Robot cell (computed from the robot position when None).
+    robot_rc: tuple[int, int] | None = None
+    #: :meth:`GoalManager.excluded` of the frontiers computed by the caller before the
+    #: call (for the path distances), shape (N,); recomputed when the blacklist changed.
+    excluded: npt.NDArray[np.bool_] | None = None
+    #: The ``routed`` strategy's tour costs (:class:`~.router.Router`), shape (N,).
+    tour_cost_m: npt.NDArray[np.float64] | None = None
+
+
 def goal_yaw(frontier: Frontier, robot_xy_m: tuple[float, float]) -> float:
     """Heading at a frontier's cPoint toward the unknown side: cPoint -> group centroid
     (robot -> cPoint when the two coincide)."""
@@ -335,10 +351,7 @@ class GoalManager:
 
     def step(self, now_s: float, robot_xy_m: tuple[float, float], grid: GridMap,
              frontiers: Sequence[Frontier], dist_m: npt.ArrayLike | None,
-             labels: npt.NDArray[np.integer] | None = None,
-             robot_rc: tuple[int, int] | None = None,
-             excluded: npt.NDArray[np.bool_] | None = None,
-             tour_cost_m: npt.NDArray[np.float64] | None = None) -> StepResult:
+             known: StepInputs | None = None) -> StepResult:
         """One decision: progress on the current goal, then candidates, then keep or switch.
 
         Parameters
@@ -353,20 +366,16 @@ class GoalManager:
         dist_m : array_like of float, shape (N,), or None
             Path lengths robot -> cPoints; None when they could not be computed (robot
             outside the map or enclosed): only progress is checked, no selection.
-        labels : ndarray of int, shape (H, W), optional
-            Region labels aligned with ``grid``.
-        robot_rc : (int, int), optional
-            Robot cell (computed from ``robot_xy_m`` when None).
-        excluded : ndarray of bool, shape (N,), optional
-            :meth:`excluded` of ``frontiers`` computed by the caller before this call (for
-            the path distances); recomputed here when the blacklist changed since.
-        tour_cost_m : ndarray of float64, shape (N,), optional
-            The ``routed`` strategy's tour costs (:class:`~.router.Router`).
+        known : StepInputs, optional
+            What the caller already has: region labels, robot cell, excluded frontiers,
+            tour costs (see :class:`StepInputs`).
 
         Returns
         -------
         StepResult
         """
+        known = known if known is not None else StepInputs()
+        labels, robot_rc, excluded = known.labels, known.robot_rc, known.excluded
         if self.done:
             reason, self._outcome_reason = self._outcome_reason or "exploration done", ""
             return StepResult(Action.DONE, None, reason)
@@ -387,7 +396,7 @@ class GoalManager:
         if excluded is None or self._blacklist_version != version:
             excluded = self.excluded(frontiers)
         sel = select_goal(frontiers, dist_m, labels, robot_rc, self.params, grid.resolution_m,
-                          excluded, tour_cost_m)
+                          excluded, known.tour_cost_m)
         if sel.index is None:
             return self._no_candidate(now_s, robot_xy_m, grid, reason, sel)
         self._empty_ticks = 0
@@ -397,63 +406,105 @@ class GoalManager:
     def _check_progress(self, now_s: float, robot_xy_m: tuple[float, float], grid: GridMap,
                         frontiers: Sequence[Frontier], dist_m: npt.ArrayLike | None
                         ) -> tuple[StepResult | None, str]:
-        """Progress and arrival on the current goal: (a final result or None, reason)."""
-        p = self.params
+        """Progress and arrival on the current goal: (a final result or None, reason).
+
+        In order: progress toward the goal (straight line, then along the path), arrival
+        (within reach, or navigation succeeded), the progress timeout.
+        """
         if self.goal is None:
             return None, ""
         d_goal = math.hypot(robot_xy_m[0] - self.goal.xy_m[0],
                             robot_xy_m[1] - self.goal.xy_m[1])
-        if d_goal <= self._best_dist - p.progress_min_m:
+        self._note_straight_progress(now_s, d_goal)
+        self._note_path_progress(now_s, grid, frontiers, dist_m)
+        if self._within_reach(d_goal) or self._nav_succeeded:
+            return self._on_arrival(now_s, grid, frontiers)
+        if now_s - self._last_progress_s > self.params.progress_timeout_s:
+            return self._on_no_progress()
+        return None, ""
+
+    def _note_straight_progress(self, now_s: float, d_goal: float) -> None:
+        """Progress: the robot-goal distance fell by ``progress_min_m`` below its best."""
+        if d_goal <= self._best_dist - self.params.progress_min_m:
             self._best_dist = d_goal
             self._last_progress_s = now_s
-        # Progress along the path counts too: the way to a goal often leads away
-        # from it first (around a wall, through a corridor).
+
+    def _note_path_progress(self, now_s: float, grid: GridMap, frontiers: Sequence[Frontier],
+                            dist_m: npt.ArrayLike | None) -> None:
+        """Progress along the path counts too: the way to a goal often leads away from it
+        first (around a wall, through a corridor)."""
+        assert self.goal is not None
         cur_goal = (self._matching(grid, frontiers)
                     if dist_m is not None and not self.goal.is_return else None)
         if cur_goal is not None and np.isfinite(dist_m[cur_goal]):
             d_path = float(dist_m[cur_goal])
-            if d_path <= self._best_path_dist - p.progress_min_m:
+            if d_path <= self._best_path_dist - self.params.progress_min_m:
                 if math.isfinite(self._best_path_dist):
                     self._last_progress_s = now_s
                 self._best_path_dist = d_path
+
+    def _within_reach(self, d_goal: float) -> bool:
+        """The goal counts as reached at ``goal_reached_tolerance_m`` (at ``handover_m``
+        for a strategy that hands over, except a return to start)."""
+        assert self.goal is not None
+        p = self.params
         reached_m = p.goal_reached_tolerance_m
-        options = get_strategy(p.strategy).goals
-        if options.handover and not self.goal.is_return:
+        if get_strategy(p.strategy).goals.handover and not self.goal.is_return:
             reached_m = max(reached_m, p.handover_m)
-        if d_goal <= reached_m or self._nav_succeeded:
-            if self.goal.is_return:
-                self.goal = None
-                self.done = True
-                return StepResult(Action.DONE, None, "returned to start"), ""
-            if self._arrived_s is None:
-                self._arrived_s, self._arrived_stamp_ns = now_s, grid.stamp_ns
-            if (grid.stamp_ns == self._arrived_stamp_ns
-                    and now_s - self._arrived_s < p.arrival_wait_s):
-                return StepResult(Action.KEEP, self.goal,
-                                  "goal reached: waiting for the map to update"), ""
-            self._arrived_s = None
-            if self._matching(grid, frontiers) is not None:
-                if (not options.reveal_on_arrival
-                        or self._still_unknown(grid) >= p.reached_unknown_fraction):
-                    self.abandon_goal(blacklist=True)
-                    return None, "goal reached but its frontier remains: blacklisted"
-                if self._note_revealed(self.goal.xy_m):   # blacklists the area's goals
-                    self.goal = None
-                    return None, (f"goal reached, its frontier's cells revealed "
-                                  f"{p.revealed_arrivals_max} times here and it remains: "
-                                  "area blacklisted")
-                self.goal = None
-                return None, "goal reached: its frontier's cells were revealed, the space goes on"
+        return d_goal <= reached_m
+
+    def _on_arrival(self, now_s: float, grid: GridMap, frontiers: Sequence[Frontier]
+                    ) -> tuple[StepResult | None, str]:
+        """The goal is reached: a return to start ends exploration; otherwise wait for a
+        newer map (or ``arrival_wait_s``), then judge the goal's frontier."""
+        assert self.goal is not None
+        if self.goal.is_return:
             self.goal = None
-            return None, "goal reached"
-        if now_s - self._last_progress_s > p.progress_timeout_s:
-            if self.goal.is_return:
-                self.goal = None
-                self.done = True
-                return StepResult(Action.DONE, None, "no progress returning to start"), ""
+            self.done = True
+            return StepResult(Action.DONE, None, "returned to start"), ""
+        if self._waiting_for_map(now_s, grid):
+            return StepResult(Action.KEEP, self.goal,
+                              "goal reached: waiting for the map to update"), ""
+        self._arrived_s = None
+        return None, self._judge_reached_frontier(grid, frontiers)
+
+    def _waiting_for_map(self, now_s: float, grid: GridMap) -> bool:
+        """True while the map is the one of the arrival and ``arrival_wait_s`` runs."""
+        if self._arrived_s is None:
+            self._arrived_s, self._arrived_stamp_ns = now_s, grid.stamp_ns
+        return (grid.stamp_ns == self._arrived_stamp_ns
+                and now_s - self._arrived_s < self.params.arrival_wait_s)
+
+    def _judge_reached_frontier(self, grid: GridMap, frontiers: Sequence[Frontier]) -> str:
+        """Drop the reached goal; blacklist it when its frontier remains (unless the
+        strategy reveals on arrival and the visit revealed the frontier's cells, at most
+        ``revealed_arrivals_max`` - 1 times per area). Returns the reason."""
+        assert self.goal is not None
+        p = self.params
+        if self._matching(grid, frontiers) is None:
+            self.goal = None
+            return "goal reached"
+        if (not get_strategy(p.strategy).goals.reveal_on_arrival
+                or self._still_unknown(grid) >= p.reached_unknown_fraction):
             self.abandon_goal(blacklist=True)
-            return None, f"no progress for {p.progress_timeout_s:.0f} s: blacklisted"
-        return None, ""
+            return "goal reached but its frontier remains: blacklisted"
+        if self._note_revealed(self.goal.xy_m):   # blacklists the area's goals
+            self.goal = None
+            return (f"goal reached, its frontier's cells revealed "
+                    f"{p.revealed_arrivals_max} times here and it remains: area blacklisted")
+        self.goal = None
+        return "goal reached: its frontier's cells were revealed, the space goes on"
+
+    def _on_no_progress(self) -> tuple[StepResult | None, str]:
+        """No progress for ``progress_timeout_s``: give up a return to start (DONE),
+        blacklist any other goal."""
+        assert self.goal is not None
+        if self.goal.is_return:
+            self.goal = None
+            self.done = True
+            return StepResult(Action.DONE, None, "no progress returning to start"), ""
+        self.abandon_goal(blacklist=True)
+        return None, f"no progress for {self.params.progress_timeout_s:.0f} s: blacklisted"
 
     def _no_candidate(self, now_s: float, robot_xy_m: tuple[float, float], grid: GridMap,
                       reason: str, sel: Selection) -> StepResult:

@@ -36,11 +36,12 @@ Examples
 ...              g.cell_to_world(49, 29.5),
 ...              np.array([[49, 28], [49, 29], [49, 30], [49, 31]]))
 >>> graph = BlockGraph(passable, 0.05, 1)
->>> new, d = lookouts(g, [f], np.array([np.inf]), graph, (15, 15), passable,
+>>> reach = Reach(graph, (15, 15), passable)
+>>> new, d = lookouts(g, [f], np.array([np.inf]), reach,
 ...                   SelectionParams(sensor_range_m=3.0, min_gain_m2=0.01), 65)
 >>> new[0].point_rc, round(float(d[0]), 2)      # in line with the corridor
 ((12, 30), 0.81)
->>> new, d = lookouts(g, [f], np.array([np.inf]), graph, (15, 15), passable,
+>>> new, d = lookouts(g, [f], np.array([np.inf]), reach,
 ...                   SelectionParams(sensor_range_m=3.0, min_gain_m2=1.0), 65)
 >>> new[0].point_rc, float(d[0])                # too little to see: unchanged
 ((49, 30), inf)
@@ -49,7 +50,7 @@ Examples
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Sequence
 
 import numpy as np
@@ -98,11 +99,23 @@ def sees_any(blocked: npt.NDArray[np.bool_], origins_rc: npt.NDArray[np.int64],
     return seen
 
 
+@dataclass(frozen=True, eq=False)
+class Reach:
+    """Where the robot can drive: path lengths from its start cell on a passable graph."""
+
+    #: The passable graph the distances were computed on.
+    graph: BlockGraph
+    #: The robot's passable start cell.
+    start_rc: tuple[int, int]
+    #: Passable cells (lookout candidates), shape (H, W).
+    passable: npt.NDArray[np.bool_]
+    #: Added to every path length (the robot's hop to ``start_rc``), metres.
+    hop_m: float = 0.0
+
+
 def lookouts(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray[np.float64],
-             graph: BlockGraph, start_rc: tuple[int, int],
-             passable: npt.NDArray[np.bool_], params: SelectionParams,
-             occupied_threshold: int,
-             excluded: npt.NDArray[np.bool_] | None = None, hop_m: float = 0.0
+             reach: Reach, params: SelectionParams, occupied_threshold: int,
+             excluded: npt.NDArray[np.bool_] | None = None
              ) -> tuple[list[Frontier], npt.NDArray[np.float64]]:
     """The frontiers with a lookout instead of their unreachable cPoint (module docstring).
 
@@ -112,12 +125,8 @@ def lookouts(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray[n
     frontiers : sequence of Frontier
     dist_m : ndarray of float64, shape (N,)
         Path lengths robot -> cPoints (inf: no path).
-    graph : BlockGraph
-        The passable graph the distances were computed on.
-    start_rc : (int, int)
-        The robot's passable start cell.
-    passable : ndarray of bool, shape (H, W)
-        Passable cells (lookout candidates).
+    reach : Reach
+        The graph, start cell and passable cells the distances were computed on.
     params : SelectionParams
         ``sensor_range_m``, ``viewpoint_step_m``, ``gain_rays``, ``min_gain_m2``,
         ``viewpoint_gain_tolerance``.
@@ -125,8 +134,6 @@ def lookouts(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray[n
         Map values >= this block the view.
     excluded : ndarray of bool, shape (N,), optional
         Blacklisted frontiers (left as they are).
-    hop_m : float
-        Added to every path length (the robot's hop to ``start_rc``).
 
     Returns
     -------
@@ -146,13 +153,13 @@ def lookouts(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray[n
     step = max(1, metres_to_cells(params.viewpoint_step_m, res))
     blocked = grid.data >= occupied_threshold
     codes = coarse_codes(grid, occupied_threshold)
-    cands = [candidate_cells(frontiers[i].cells, frontiers[i].point_rc, passable, radius,
-                             step)[1:] for i in todo]
+    cands = [candidate_cells(frontiers[i].cells, frontiers[i].point_rc, reach.passable,
+                             radius, step)[1:] for i in todo]
     counts = [len(c) for c in cands]
     if not sum(counts):
         return out, d_out
     # One Dijkstra sweep for the candidates of every frontier.
-    dist_all = graph.distances(start_rc, np.concatenate(cands)) + hop_m
+    dist_all = reach.graph.distances(reach.start_rc, np.concatenate(cands)) + reach.hop_m
     bounds = np.concatenate([[0], np.cumsum(counts)])
     for j, i in enumerate(todo):
         f = frontiers[i]
@@ -181,4 +188,4 @@ def lookouts(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray[n
     return out, d_out
 
 
-__all__ = ["MAX_TARGET_CELLS", "lookouts", "sees_any"]
+__all__ = ["MAX_TARGET_CELLS", "Reach", "lookouts", "sees_any"]

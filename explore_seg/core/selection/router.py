@@ -119,7 +119,7 @@ class Router:
     """
 
     def __init__(self, frontier_params: FrontierParams, params: SelectionParams) -> None:
-        self._fp = frontier_params
+        self._frontier_params = frontier_params
         self._p = params
         self._gains_kept = GainCache(params.sensor_range_m, params.gain_rays,
                                      frontier_params.occupied_threshold)
@@ -234,16 +234,38 @@ class Router:
         rad = metres_to_cells(p.region_search_radius_m, grid.resolution_m)
         regions = frontier_regions(frontiers, use, rad)
         robot_region = region_at(use, robot_rc, rad) if use is not None else 0
-        sel = np.isfinite(np.asarray(dist_m, dtype=np.float64))
-        sel &= np.asarray([f.point_passable for f in frontiers], dtype=bool)
         # The last viewpoints' gains, when they belong to these groups.
         have_gains = len(self.gain_m2) == n
         gains = self.gain_m2.copy() if have_gains else np.zeros(n)
-        if have_gains:
+        sel = self._selectable(frontiers, dist_m, excluded, gains if have_gains else None)
+        idx = np.flatnonzero(sel)
+        if idx.size == 0:
+            self.tour_s = time.perf_counter() - t0
+            return TourPlan(cost_out, idx.astype(np.int64), 0.0, regions, robot_region, gains)
+        node_regions = (np.concatenate([[robot_region], regions[idx]])
+                        if p.region_switch_m > 0 and use is not None else None)
+        cost = self._cost_matrix(grid, frontiers, dist_m, idx, graphs, node_regions)
+        front, order, best_len = self._tour(cost, idx, sel, goal_index)
+        cost_out[idx] = front[1:] - p.gain_weight_m_per_m2 * gains[idx]
+        self.tour_s = time.perf_counter() - t0
+        return TourPlan(cost_out, idx[order - 1].astype(np.int64), float(best_len), regions,
+                        robot_region, gains, self._pairs.swept)
+
+    def _selectable(self, frontiers: Sequence[Frontier], dist_m: npt.NDArray[np.float64],
+                    excluded: npt.NDArray[np.bool_] | None,
+                    gains: npt.NDArray[np.float64] | None) -> npt.NDArray[np.bool_]:
+        """The groups the tour visits: reachable at a passable viewpoint, not excluded,
+        with at least ``min_gain_m2`` of view; leftovers (small views) only while no
+        bigger one remains. ``gains`` None: the viewpoints' gains are unknown (not used).
+        """
+        p = self._p
+        sel = np.isfinite(np.asarray(dist_m, dtype=np.float64))
+        sel &= np.asarray([f.point_passable for f in frontiers], dtype=bool)
+        if gains is not None:
             sel &= gains >= p.min_gain_m2
         if excluded is not None:
             sel &= ~np.asarray(excluded, dtype=bool)
-        if have_gains:
+        if gains is not None:
             # Leftovers last: small views wait while a bigger one remains.
             big = gains >= p.leftover_gain_m2
             if p.leftover_max_length_m > 0:
@@ -251,10 +273,17 @@ class Router:
             big &= sel
             if big.any():
                 sel = big
-        idx = np.flatnonzero(sel)
-        if idx.size == 0:
-            self.tour_s = time.perf_counter() - t0
-            return TourPlan(cost_out, idx.astype(np.int64), 0.0, regions, robot_region, gains)
+        return sel
+
+    def _cost_matrix(self, grid: GridMap, frontiers: Sequence[Frontier],
+                     dist_m: npt.NDArray[np.float64], idx: npt.NDArray[np.int64],
+                     graphs: PathGraphs, node_regions: npt.NDArray[np.int64] | None
+                     ) -> npt.NDArray[np.float64]:
+        """Open-tour cost matrix over node 0 (the robot) and the groups ``idx``: path
+        lengths (straight line x ``unknown_path_factor`` where only unknown space links
+        two viewpoints), plus ``region_switch_m`` between different regions
+        (``node_regions``: per node, None = no penalty); returning to node 0 is free."""
+        p = self._p
         pts = np.asarray([frontiers[i].point_rc for i in idx], dtype=np.int64)
         m = idx.size + 1
         cost = np.zeros((m, m))
@@ -268,12 +297,21 @@ class Router:
             straight = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1])
             pair = np.where(bad, straight * p.unknown_path_factor, pair)
         cost[1:, 1:] = pair
-        if p.region_switch_m > 0 and use is not None:
-            reg = np.concatenate([[robot_region], regions[idx]])
+        if node_regions is not None:
+            reg = node_regions
             differ = (reg[:, None] > 0) & (reg[None, :] > 0) & (reg[:, None] != reg[None, :])
             cost += np.where(differ, p.region_switch_m, 0.0)
         cost[:, 0] = 0.0
         np.fill_diagonal(cost, 0.0)
+        return cost
+
+    @staticmethod
+    def _tour(cost: npt.NDArray[np.float64], idx: npt.NDArray[np.int64],
+              sel: npt.NDArray[np.bool_], goal_index: int | None
+              ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], float]:
+        """Solve the tour: (each node's cost of the best tour that visits it first, the
+        tour's node order, its length); the current goal's group (``goal_index``, when
+        selectable) gets its own tour solved with it first."""
         tour = solve_tour(cost)
         front = front_costs(cost, tour)
         best_len, order = tour.length_m, tour.order
@@ -284,10 +322,7 @@ class Router:
                 front[node] = min(front[node], own.length_m)
                 if own.length_m < best_len:
                     best_len, order = own.length_m, own.order
-        cost_out[idx] = front[1:] - p.gain_weight_m_per_m2 * gains[idx]
-        self.tour_s = time.perf_counter() - t0
-        return TourPlan(cost_out, idx[order - 1].astype(np.int64), float(best_len), regions,
-                        robot_region, gains, self._pairs.swept)
+        return front, order, best_len
 
 
 __all__ = ["Router", "TourPlan"]
