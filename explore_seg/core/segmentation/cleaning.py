@@ -13,6 +13,7 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap
+from explore_seg.core.segmentation.furniture import fill_furniture, furniture_reach_cells
 from explore_seg.core.segmentation.params import SegmentationParams
 
 
@@ -72,7 +73,8 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
     grown = cv2.dilate(free_raw.astype(np.uint8), _square(r_close)) if r_close > 0 \
         else free_raw.astype(np.uint8)
     free_clean = (grown > 0) & (obst == 0)
-    return free_raw, fill_clutter_holes(free_clean, occ_u8, params, res, occ_cc)
+    free_clean = fill_clutter_holes(free_clean, occ_u8, params, res, occ_cc)
+    return free_raw, fill_furniture(free_clean, occ_u8, params, res)
 
 
 def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8],
@@ -126,5 +128,6 @@ def clean_influence_cells(params: SegmentationParams, res: float) -> int:
     speck = int(math.ceil(params.obstacle_speck_area_m2 / (res * res)))
     return max(length_to_cells(params.obstacle_inflation_m, res),
                length_to_cells(params.free_close_m, res),
-               int(math.ceil(params.clutter_max_extent_m / res)) + 1) + speck + 2
+               int(math.ceil(params.clutter_max_extent_m / res)) + 1,
+               furniture_reach_cells(params, res)) + speck + 2
 

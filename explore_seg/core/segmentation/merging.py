@@ -9,6 +9,7 @@ import numpy.typing as npt
 
 from explore_seg.core.segmentation.labels import apply_mapping, label_counts, pair_counts
 from explore_seg.core.segmentation.params import SegmentationParams
+from explore_seg.core.segmentation.passages import merge_passages
 
 
 def max_concavity(mask: npt.NDArray[np.uint8]) -> float:
@@ -115,6 +116,7 @@ def merge_regions(labels: npt.NDArray[np.int32], out_mask: npt.NDArray[np.bool_]
         mg.merge(k, into)
         if mg.area[into] >= min_area:
             thin.discard(into)
+    merge_passages(labels, mg, cand, params, res)
     if params.corridor_merge:
         _corridor_merge(labels, mg, cand, params, res)
     lut_keys = [k for k in mg.parent if mg.root(k) != k or k in dropped]

@@ -55,6 +55,19 @@ class SegmentationParams:
         "a hole holding an occupied component whose bounding-box diagonal exceeds this "
         "(a wall piece, a long sofa) is structure, never filled as clutter", "m",
         range=(0.0, math.inf)))
+    furniture_min_thickness_m: float = field(default=0.7, metadata=param_meta(
+        "obstacle bulges at least this thick (a disk of this diameter fits in them) and "
+        "thinner than furniture_max_thickness_m are furniture against a wall (a pillar, "
+        "a shelf, a desk): filled before decomposing when at most furniture_max_extent_m "
+        "wide and the free space along it is one stretch; walls must be thinner; 0 "
+        "disables", "m", range=(0.0, math.inf)))
+    furniture_max_extent_m: float = field(default=2.5, metadata=param_meta(
+        "furniture bulges wider or higher than this are structure, never filled", "m",
+        range=(0.0, math.inf)))
+    furniture_max_thickness_m: float = field(default=2.0, metadata=param_meta(
+        "obstacles this thick (the outside of the building, a courtyard block) are "
+        "structure, and so are bulges of them thinner than furniture_min_thickness_m",
+        "m", range=(0.0, math.inf)))
     simplify_epsilon_m: float = field(default=0.075, metadata=param_meta(
         "Douglas-Peucker tolerance applied to traced contours", "m", range=(0.0, math.inf)))
     min_region_area_m2: float = field(default=1.0, metadata=param_meta(
@@ -68,8 +81,14 @@ class SegmentationParams:
         "merge two adjacent regions whose shared border is longer than "
         "max_door_width_m and whose union stays convex enough (DuDe spec "
         "shared/docs/dude.md §15)"))
+    passage_merge_ratio: float = field(default=0.7, metadata=param_meta(
+        "two neighbouring regions whose shared border is longer than max_door_width_m "
+        "and at least this times the larger one's inscribed diameter are parts of one "
+        "passage (a corridor round a corner or a block) and are merged; 0 disables",
+        range=(0.0, math.inf)))
     max_door_width_m: float = field(default=1.2, metadata=param_meta(
-        "corridor merge: borders at most this long are doors and never merged", "m",
+        "passage and corridor merges: borders at most this long are doors and never "
+        "merged", "m",
         range=(0.0, math.inf)))
     merge_concavity_factor: float = field(default=2.0, metadata=param_meta(
         "corridor merge: the union's deepest concavity must stay below this times tau",
@@ -99,7 +118,10 @@ class SegmentationParams:
         pos = ("tau_m", "max_door_width_m", "merge_concavity_factor")
         nonneg = ("obstacle_inflation_m", "free_close_m", "obstacle_speck_area_m2",
                   "min_component_area_m2", "min_hole_area_m2", "clutter_max_extent_m",
-                  "clutter_max_area_m2", "clutter_max_object_m", "simplify_epsilon_m",
+                  "clutter_max_area_m2", "clutter_max_object_m",
+                  "furniture_min_thickness_m", "furniture_max_thickness_m",
+                  "furniture_max_extent_m", "simplify_epsilon_m",
+                  "passage_merge_ratio",
                   "min_region_area_m2", "min_region_width_m", "inc_min_blob_m2")
         for name in pos:
             v = getattr(self, name)

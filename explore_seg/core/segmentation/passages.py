@@ -1,0 +1,137 @@
+"""Passage merge: neighbouring regions that are two parts of one passage become one
+region (issue #53).
+
+DuDe cuts a corridor that turns a corner or runs round a block (a ring corridor, the
+free space round a table block) into several pieces, though each is one room. Such a
+cut crosses the whole width of the passage on both sides: the border between the two
+pieces is about as long as both pieces are wide (their inscribed diameter). A doorway
+is narrow against the space on at least one side; a room open to a corridor is wider
+than the opening. Two regions are merged when their shared border is longer than a
+door (``max_door_width_m``) and at least ``passage_merge_ratio`` times the larger of
+their inscribed diameters.
+"""
+
+from __future__ import annotations
+
+import heapq
+from typing import TYPE_CHECKING
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.segmentation.params import SegmentationParams
+
+if TYPE_CHECKING:
+    from explore_seg.core.segmentation.merging import _Merger
+
+
+def border_spans(labels: npt.NDArray[np.int32]) -> dict[tuple[int, int], float]:
+    """Length (cells) of the border between every two neighbouring regions: the
+    diagonal of the bounding box of the cell pairs (4-neighbours) where they meet.
+
+    >>> lab = np.array([[1, 1, 2, 2], [1, 1, 2, 2], [1, 1, 2, 2]], dtype=np.int32)
+    >>> border_spans(lab)
+    {(1, 2): 3.0}
+    """
+    rows: list[npt.NDArray[np.int64]] = []
+    cols: list[npt.NDArray[np.int64]] = []
+    keys: list[npt.NDArray[np.int64]] = []
+    for a, b, dr, dc in ((labels[:, :-1], labels[:, 1:], 0, 1),
+                         (labels[:-1, :], labels[1:, :], 1, 0)):
+        m = (a != b) & (a > 0) & (b > 0)
+        if not m.any():
+            continue
+        r, c = np.nonzero(m)
+        lo = np.minimum(a[m], b[m]).astype(np.int64)
+        hi = np.maximum(a[m], b[m]).astype(np.int64)
+        # the point between the two cells of a pair
+        rows.append(2 * r + dr)
+        cols.append(2 * c + dc)
+        keys.append(lo * (1 << 32) + hi)
+    if not keys:
+        return {}
+    k = np.concatenate(keys)
+    r = np.concatenate(rows)
+    c = np.concatenate(cols)
+    uk, inv = np.unique(k, return_inverse=True)
+    n = len(uk)
+    big = np.iinfo(np.int64).max
+    rmin = np.full(n, big)
+    rmax = np.full(n, -1)
+    cmin = np.full(n, big)
+    cmax = np.full(n, -1)
+    np.minimum.at(rmin, inv, r)
+    np.maximum.at(rmax, inv, r)
+    np.minimum.at(cmin, inv, c)
+    np.maximum.at(cmax, inv, c)
+    # half-cell units; a border of n cells spans n - 1 steps plus one cell
+    span = np.hypot((rmax - rmin) / 2 + 1, (cmax - cmin) / 2 + 1)
+    span = np.where((rmax == rmin) | (cmax == cmin),
+                    np.maximum(rmax - rmin, cmax - cmin) / 2 + 1, span)
+    return {(int(x >> 32), int(x & 0xFFFFFFFF)): float(s)
+            for x, s in zip(uk.tolist(), span.tolist())}
+
+
+def inscribed_diameters(labels: npt.NDArray[np.int32]) -> dict[int, float]:
+    """Twice the largest distance (cells) from a cell of each region to its edge (other
+    regions and non-region cells alike)."""
+    edge = np.zeros(labels.shape, dtype=bool)
+    ne = labels[:, :-1] != labels[:, 1:]
+    edge[:, :-1] |= ne
+    edge[:, 1:] |= ne
+    ne = labels[:-1, :] != labels[1:, :]
+    edge[:-1, :] |= ne
+    edge[1:, :] |= ne
+    inner = ((labels > 0) & ~edge).astype(np.uint8)
+    dd = cv2.distanceTransform(np.pad(inner, 1), cv2.DIST_L2, 3)[1:-1, 1:-1]
+    top = int(labels.max()) if labels.size else 0
+    best = np.zeros(top + 1, dtype=np.float64)
+    # a region's largest distance is at one of the local maxima (few cells)
+    m = (dd > 0) & (dd >= cv2.dilate(dd, np.ones((3, 3), np.uint8)))
+    np.maximum.at(best, labels[m], dd[m])
+    return {int(k): 2.0 * float(best[k]) + 1.0 for k in np.flatnonzero(best > 0)}
+
+
+def merge_passages(labels: npt.NDArray[np.int32], mg: _Merger, cand: set[int],
+                   params: SegmentationParams, res: float) -> None:
+    """Merge neighbouring parts of one passage in the union-find ``mg`` (see the module
+    docstring); one of each pair is in ``cand``. The part outside ``cand`` (an old,
+    kept region) keeps its id, else the larger one."""
+    ratio = params.passage_merge_ratio
+    if ratio <= 0 or not cand:
+        return
+    door = params.max_door_width_m / res
+    width = inscribed_diameters(labels)
+    # best ratio first; a popped pair is checked against the merges done since (widths
+    # only grow, so a pair's ratio only falls)
+    heap: list[tuple[float, int, int]] = []
+    for (a, b), s in border_spans(labels).items():
+        if s > door and (a in cand or b in cand):
+            q = s / max(width.get(a, 0.0), width.get(b, 0.0), 1.0)
+            if q >= ratio:
+                heap.append((-q, a, b))
+    heapq.heapify(heap)
+    span = {(a, b): -q * max(width.get(a, 0.0), width.get(b, 0.0), 1.0)
+            for q, a, b in heap}
+    while heap:
+        negq, a, b = heapq.heappop(heap)
+        ra, rb = mg.root(a), mg.root(b)
+        if ra == rb or not (ra in cand or rb in cand):
+            continue
+        q = span[(a, b)] / max(width.get(ra, 0.0), width.get(rb, 0.0), 1.0)
+        if q < ratio:
+            continue
+        if q < -negq - 1e-9:
+            heapq.heappush(heap, (-q, a, b))
+            continue
+        if ra in cand and rb not in cand:
+            small, into = ra, rb
+        elif rb in cand and ra not in cand:
+            small, into = rb, ra
+        else:
+            small, into = (ra, rb) if (mg.area[ra], -ra) < (mg.area[rb], -rb) else (rb, ra)
+        width[into] = max(width.get(ra, 0.0), width.get(rb, 0.0))
+        mg.merge(small, into)
+        if small in cand:
+            cand.add(into)
