@@ -32,9 +32,9 @@ def _open(mask: npt.NDArray[np.bool_], d_cells: int,
     distance transform of ``mask``, when the caller has it."""
     r = 0.5 * d_cells
     if dist is None:
-        dist = cv2.distanceTransform(mask.view(np.uint8), cv2.DIST_L2, 5)
+        dist = cv2.distanceTransform(mask.view(np.uint8), cv2.DIST_L2, 3)
     core = dist > r
-    back = cv2.distanceTransform((~core).view(np.uint8), cv2.DIST_L2, 5)
+    back = cv2.distanceTransform((~core).view(np.uint8), cv2.DIST_L2, 3)
     return back <= r
 
 
@@ -62,9 +62,13 @@ def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res:
     if d_min < 2 or d_max <= d_min or not occ.any():
         return np.zeros(occ.shape, dtype=bool)
     # the array border counts as obstacle (unknown outside the map)
+    # no obstacle thicker than d_min (thin walls only): no bulge, one distance transform
+    inner = cv2.distanceTransform((occ > 0).view(np.uint8), cv2.DIST_L2, 3)
+    if not (inner > 0.5 * d_min).any():
+        return np.zeros(occ.shape, dtype=bool)
     pad = int(d_max) + 2
     o = np.pad(occ > 0, pad, constant_values=True)
-    dist = cv2.distanceTransform(o.view(np.uint8), cv2.DIST_L2, 5)
+    dist = cv2.distanceTransform(o.view(np.uint8), cv2.DIST_L2, 3)
     thick = _open(o, d_min, dist)
     deep = _open(o, d_max, dist)
     # bulges: thick but not deep, opened again so that the rounded-off corners of deep
@@ -73,7 +77,7 @@ def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res:
     if not bulge.any():
         return bulge
     rest = (occ > 0) & ~bulge
-    to_rest = cv2.distanceTransform((~rest).view(np.uint8), cv2.DIST_L2, 5)
+    to_rest = cv2.distanceTransform((~rest).view(np.uint8), cv2.DIST_L2, 3)
     return bulge & (to_rest > 0.5 * d_min)
 
 

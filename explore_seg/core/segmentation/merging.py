@@ -116,7 +116,8 @@ def merge_regions(labels: npt.NDArray[np.int32], out_mask: npt.NDArray[np.bool_]
         mg.merge(k, into)
         if mg.area[into] >= min_area:
             thin.discard(into)
-    merge_passages(labels, mg, cand, params, res)
+    # in an update, only new pieces join: an old region stays as it was (§11.7)
+    merge_passages(labels, mg, cand, params, res, both=candidates is not None)
     if params.corridor_merge:
         _corridor_merge(labels, mg, cand, params, res)
     lut_keys = [k for k in mg.parent if mg.root(k) != k or k in dropped]

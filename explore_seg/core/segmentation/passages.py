@@ -94,10 +94,10 @@ def inscribed_diameters(labels: npt.NDArray[np.int32]) -> dict[int, float]:
 
 
 def merge_passages(labels: npt.NDArray[np.int32], mg: _Merger, cand: set[int],
-                   params: SegmentationParams, res: float) -> None:
+                   params: SegmentationParams, res: float, both: bool = False) -> None:
     """Merge neighbouring parts of one passage in the union-find ``mg`` (see the module
-    docstring); one of each pair is in ``cand``. The part outside ``cand`` (an old,
-    kept region) keeps its id, else the larger one."""
+    docstring); one of each pair is in ``cand`` (with ``both``: the two). The part
+    outside ``cand`` (an old, kept region) keeps its id, else the larger one."""
     ratio = params.passage_merge_ratio
     if ratio <= 0 or not cand:
         return
@@ -107,7 +107,7 @@ def merge_passages(labels: npt.NDArray[np.int32], mg: _Merger, cand: set[int],
     # only grow, so a pair's ratio only falls)
     heap: list[tuple[float, int, int]] = []
     for (a, b), s in border_spans(labels).items():
-        if s > door and (a in cand or b in cand):
+        if s > door and ((a in cand and b in cand) if both else (a in cand or b in cand)):
             q = s / max(width.get(a, 0.0), width.get(b, 0.0), 1.0)
             if q >= ratio:
                 heap.append((-q, a, b))
@@ -117,7 +117,8 @@ def merge_passages(labels: npt.NDArray[np.int32], mg: _Merger, cand: set[int],
     while heap:
         negq, a, b = heapq.heappop(heap)
         ra, rb = mg.root(a), mg.root(b)
-        if ra == rb or not (ra in cand or rb in cand):
+        if ra == rb or not ((ra in cand and rb in cand) if both
+                            else (ra in cand or rb in cand)):
             continue
         q = span[(a, b)] / max(width.get(ra, 0.0), width.get(rb, 0.0), 1.0)
         if q < ratio:
