@@ -4,11 +4,13 @@ region (issue #53).
 DuDe cuts a corridor that turns a corner or runs round a block (a ring corridor, the
 free space round a table block) into several pieces, though each is one room. Such a
 cut crosses the whole width of the passage on both sides: the border between the two
-pieces is about as long as both pieces are wide (their inscribed diameter). A doorway
-is narrow against the space on at least one side; a room open to a corridor is wider
-than the opening. Two regions are merged when their shared border is longer than a
-door (``max_door_width_m``) and at least ``passage_merge_ratio`` times the larger of
-their inscribed diameters.
+pieces is about as long as both pieces are wide (their inscribed diameter), and so is
+the free space across it. A doorway is narrow against the space on at least one side;
+a room open to a corridor is wider than the opening; a cut along a wall that ends at a
+door runs along the door's narrow gap. Two regions are merged when their shared border
+is longer than a door (``max_door_width_m``) and both the border and the free width
+across it (twice the largest distance from a border cell to an obstacle) are at least
+``passage_merge_ratio`` times the larger of their inscribed diameters.
 """
 
 from __future__ import annotations
@@ -26,17 +28,21 @@ if TYPE_CHECKING:
     from explore_seg.core.segmentation.merging import _Merger
 
 
-def border_spans(labels: npt.NDArray[np.int32]) -> dict[tuple[int, int], float]:
-    """Length (cells) of the border between every two neighbouring regions: the
-    diagonal of the bounding box of the cell pairs (4-neighbours) where they meet.
+def border_spans(labels: npt.NDArray[np.int32],
+                 clearance: npt.NDArray[np.float32] | None = None
+                 ) -> dict[tuple[int, int], tuple[float, float]]:
+    """Length (cells) of the border between every two neighbouring regions, the
+    diagonal of the bounding box of the cell pairs (4-neighbours) where they meet, and
+    the largest ``clearance`` (0 without) of those cells.
 
     >>> lab = np.array([[1, 1, 2, 2], [1, 1, 2, 2], [1, 1, 2, 2]], dtype=np.int32)
     >>> border_spans(lab)
-    {(1, 2): 3.0}
+    {(1, 2): (3.0, 0.0)}
     """
     rows: list[npt.NDArray[np.int64]] = []
     cols: list[npt.NDArray[np.int64]] = []
     keys: list[npt.NDArray[np.int64]] = []
+    clear: list[npt.NDArray[np.float32]] = []
     for a, b, dr, dc in ((labels[:, :-1], labels[:, 1:], 0, 1),
                          (labels[:-1, :], labels[1:, :], 1, 0)):
         m = (a != b) & (a > 0) & (b > 0)
@@ -49,6 +55,8 @@ def border_spans(labels: npt.NDArray[np.int32]) -> dict[tuple[int, int], float]:
         rows.append(2 * r + dr)
         cols.append(2 * c + dc)
         keys.append(lo * (1 << 32) + hi)
+        if clearance is not None:
+            clear.append(np.maximum(clearance[r, c], clearance[r + dr, c + dc]))
     if not keys:
         return {}
     k = np.concatenate(keys)
@@ -65,12 +73,15 @@ def border_spans(labels: npt.NDArray[np.int32]) -> dict[tuple[int, int], float]:
     np.maximum.at(rmax, inv, r)
     np.minimum.at(cmin, inv, c)
     np.maximum.at(cmax, inv, c)
+    cl = np.zeros(n, dtype=np.float64)
+    if clear:
+        np.maximum.at(cl, inv, np.concatenate(clear))
     # half-cell units; a border of n cells spans n - 1 steps plus one cell
     span = np.hypot((rmax - rmin) / 2 + 1, (cmax - cmin) / 2 + 1)
     span = np.where((rmax == rmin) | (cmax == cmin),
                     np.maximum(rmax - rmin, cmax - cmin) / 2 + 1, span)
-    return {(int(x >> 32), int(x & 0xFFFFFFFF)): float(s)
-            for x, s in zip(uk.tolist(), span.tolist())}
+    return {(int(x >> 32), int(x & 0xFFFFFFFF)): (float(s), float(q))
+            for x, s, q in zip(uk.tolist(), span.tolist(), cl.tolist())}
 
 
 def inscribed_diameters(labels: npt.NDArray[np.int32]) -> dict[int, float]:
@@ -103,17 +114,22 @@ def merge_passages(labels: npt.NDArray[np.int32], mg: _Merger, cand: set[int],
         return
     door = params.max_door_width_m / res
     width = inscribed_diameters(labels)
+    # the free space's own width where two regions meet (region borders do not count):
+    # twice the largest distance to an obstacle along the border
+    clearance = cv2.distanceTransform(np.pad((labels > 0).view(np.uint8), 1), cv2.DIST_L2,
+                                      3)[1:-1, 1:-1]
     # best ratio first; a popped pair is checked against the merges done since (widths
     # only grow, so a pair's ratio only falls)
     heap: list[tuple[float, int, int]] = []
-    for (a, b), s in border_spans(labels).items():
+    span: dict[tuple[int, int], float] = {}
+    for (a, b), (s, cl) in border_spans(labels, clearance).items():
         if s > door and ((a in cand and b in cand) if both else (a in cand or b in cand)):
-            q = s / max(width.get(a, 0.0), width.get(b, 0.0), 1.0)
+            # the narrower of the cut's length and the free width across it
+            span[(a, b)] = min(s, 2.0 * cl + 1.0)
+            q = span[(a, b)] / max(width.get(a, 0.0), width.get(b, 0.0), 1.0)
             if q >= ratio:
                 heap.append((-q, a, b))
     heapq.heapify(heap)
-    span = {(a, b): -q * max(width.get(a, 0.0), width.get(b, 0.0), 1.0)
-            for q, a, b in heap}
     while heap:
         negq, a, b = heapq.heappop(heap)
         ra, rb = mg.root(a), mg.root(b)
