@@ -28,6 +28,11 @@ if TYPE_CHECKING:
     from explore_seg.core.segmentation.merging import _Merger
 
 
+#: The free width across a border must be at least this share of the border length the
+#: ratio asks for (a corridor's cut at a corner is longer than the corridor is wide).
+_FREE_WIDTH_SHARE = 0.6
+
+
 def border_spans(labels: npt.NDArray[np.int32],
                  clearance: npt.NDArray[np.float32] | None = None
                  ) -> dict[tuple[int, int], tuple[float, float]]:
@@ -125,7 +130,7 @@ def merge_passages(labels: npt.NDArray[np.int32], mg: _Merger, cand: set[int],
     for (a, b), (s, cl) in border_spans(labels, clearance).items():
         if s > door and ((a in cand and b in cand) if both else (a in cand or b in cand)):
             # the narrower of the cut's length and the free width across it
-            span[(a, b)] = min(s, 2.0 * cl + 1.0)
+            span[(a, b)] = min(s, (2.0 * cl + 1.0) / _FREE_WIDTH_SHARE)
             q = span[(a, b)] / max(width.get(a, 0.0), width.get(b, 0.0), 1.0)
             if q >= ratio:
                 heap.append((-q, a, b))
