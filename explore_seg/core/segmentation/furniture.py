@@ -53,9 +53,7 @@ def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res:
     Returns
     -------
     ndarray of bool, shape (H, W)
-        True on the cells of the bulges, less the cells within half
-        ``furniture_min_thickness_m`` of the thin walls (where walls meet, those keep
-        the walls closed); all False when the rule is disabled.
+        True on the cells of the bulges; all False when the rule is disabled.
     """
     d_min = params.furniture_min_thickness_m / res
     d_max = params.furniture_max_thickness_m / res
@@ -73,12 +71,7 @@ def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res:
     deep = _open(o, d_max, dist)
     # bulges: thick but not deep, opened again so that the rounded-off corners of deep
     # blocks (slivers thinner than d_min) are no bulges
-    bulge = _open(thick & ~deep, d_min)[pad:-pad, pad:-pad]
-    if not bulge.any():
-        return bulge
-    rest = (occ > 0) & ~bulge
-    to_rest = cv2.distanceTransform((~rest).view(np.uint8), cv2.DIST_L2, 3)
-    return bulge & (to_rest > 0.5 * d_min)
+    return _open(thick & ~deep, d_min)[pad:-pad, pad:-pad]
 
 
 def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8],
@@ -106,45 +99,82 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
         return free_clean
     ext = params.furniture_max_extent_m / res
     r_inf = int(round(params.obstacle_inflation_m / res))
-    rest = ((occ > 0) & ~bulge).view(np.uint8)
     k_inf = np.ones((2 * r_inf + 1, 2 * r_inf + 1), np.uint8)
-    n, lab, stats, _ = cv2.connectedComponentsWithStats(bulge.astype(np.uint8),
+    r_door = _door_cells(params, res)
+    # a bulge where thick walls meet (a pillar at a T-junction) takes the junction
+    # along: its cells within half furniture_min_thickness_m of the thin walls keep the
+    # walls closed when the whole bulge would open them
+    occ_b = occ > 0
+    to_thin = cv2.distanceTransform((~(occ_b & ~bulge)).view(np.uint8), cv2.DIST_L2, 3)
+    front = bulge & (to_thin > 0.5 * params.furniture_min_thickness_m / res)
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(bulge.view(np.uint8),
                                                         connectivity=8)
     h, w = occ.shape
-    m = int(round(params.furniture_max_thickness_m / res)) + r_inf + 2
+    m = int(round(params.furniture_max_thickness_m / res)) + r_inf + r_door + 4
+    r_c = int(math.ceil(0.25 * params.furniture_min_thickness_m / res))
+    k_corner = np.ones((2 * r_c + 1, 2 * r_c + 1), np.uint8)
     out = free_clean.copy()
     for k in range(1, n):
-        x, y, bw, bh, area = (int(v) for v in stats[k])
+        x, y, bw, bh, _area = (int(v) for v in stats[k])
         if max(bw, bh) > ext:
             continue
-        r0, r1 = max(0, y - m), min(h, y + bh + m)
-        c0, c1 = max(0, x - m), min(w, x + bw + m)
-        blob = lab[r0:r1, c0:c1] == k
-        # cells the blob's inflation alone took from the free space
-        grown = cv2.dilate(blob.astype(np.uint8), k_inf) > 0
-        keep = cv2.dilate(rest[r0:r1, c0:c1], k_inf) > 0
-        fill = grown & ~keep & ~free_clean[r0:r1, c0:c1]
-        if not fill.any():
-            continue
-        # the free cells along the filled footprint: one stretch for furniture in
-        # front of a wall, two or more for a wall piece between two free areas
-        fu8 = fill.astype(np.uint8)
-        contact = (cv2.dilate(fu8, np.ones((3, 3), np.uint8)) > 0) & ~fill \
-            & free_clean[r0:r1, c0:c1]
-        if cv2.connectedComponents(contact.astype(np.uint8), connectivity=8)[0] != 2:
-            continue
-        out[r0:r1, c0:c1] |= fill
+        box = (slice(max(0, y - m), min(h, y + bh + m)),
+               slice(max(0, x - m), min(w, x + bw + m)))
+        blob = lab[box] == k
+        # the opening rounds the bulge's corners off: the occupied cells near it are
+        # the furniture's footprint
+        whole = (cv2.dilate(blob.view(np.uint8), k_corner) > 0) & occ_b[box]
+        for cells in (whole, blob & front[box]):
+            fill = _footprint(cells, occ_b[box], free_clean[box], k_inf, r_door)
+            if fill is not None:
+                out[box] |= fill
+                break
     return out
+
+
+def _footprint(cells: npt.NDArray[np.bool_], occ: npt.NDArray[np.bool_],
+               free_clean: npt.NDArray[np.bool_], k_inf: npt.NDArray[np.uint8],
+               r_door: int) -> npt.NDArray[np.bool_] | None:
+    """The cells that obstacle ``cells`` alone keep out of the free space (their
+    inflation less the other obstacles'), or None when nothing or when they stand
+    between two free areas (a wall).
+
+    The free areas are the cleaned free space less every passage up to a door wide
+    (eroded by ``r_door`` cells); around the filled footprint there must be exactly one of them:
+    furniture stands in one room, a wall piece between two, even when a door next to
+    it joins them."""
+    if not cells.any():
+        return None
+    grown = cv2.dilate(cells.view(np.uint8), k_inf) > 0
+    keep = cv2.dilate((occ & ~cells).view(np.uint8), k_inf) > 0
+    fill = grown & ~keep & ~free_clean
+    if not fill.any():
+        return None
+    k_door = np.ones((2 * r_door + 1, 2 * r_door + 1), np.uint8)
+    areas = cv2.erode(free_clean.view(np.uint8), k_door, borderValue=0)
+    k_band = np.ones((2 * r_door + 5, 2 * r_door + 5), np.uint8)
+    band = (cv2.dilate(fill.view(np.uint8), k_band) > 0) & (areas > 0)
+    if cv2.connectedComponents(band.view(np.uint8), connectivity=8)[0] != 2:
+        return None
+    return fill
+
+
+def _door_cells(params: SegmentationParams, res: float) -> int:
+    """Half the widest door in the cleaned free space (the door less the inflation on
+    both sides), plus one cell (cells)."""
+    return int(math.ceil((0.5 * params.max_door_width_m - params.obstacle_inflation_m)
+                         / res)) + 1
 
 
 def furniture_reach_cells(params: SegmentationParams, res: float) -> int:
     """How far (cells) a changed obstacle cell can change the furniture fill: the deep
-    opening's disk, the second opening and the shave, the largest bulge, its inflation
-    and the contact ring."""
+    opening's disk, the second opening and the junction trim, the largest bulge, its
+    inflation and the contact ring."""
     if params.furniture_min_thickness_m <= 0:
         return 0
     d_min = int(math.ceil(params.furniture_min_thickness_m / res))
     d_max = int(math.ceil(params.furniture_max_thickness_m / res))
     ext = int(math.ceil(params.furniture_max_extent_m / res))
     r_inf = int(round(params.obstacle_inflation_m / res))
-    return d_max + 2 * d_min + ext + r_inf + 4
+    r_door = _door_cells(params, res)
+    return d_max + 2 * d_min + ext + r_inf + 2 * r_door + 6
