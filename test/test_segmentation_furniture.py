@@ -1,0 +1,145 @@
+"""Furniture against walls and passages (issue #53): wall-standing furniture does not cut
+a room, a door between two rooms still does, a corridor round a block is one region, and
+the ids stay stable while such a map is revealed."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from explore_seg.core.grid import GridMap
+from explore_seg.core.segmentation import IncrementalSegmenter, SegmentationParams, segment
+from explore_seg.core.segmentation.cleaning import clean_masks
+from explore_seg.core.segmentation.eval import evaluate
+from explore_seg.core.segmentation.furniture import furniture_cells
+from explore_seg.core.segmentation.passages import border_spans, inscribed_diameters
+from test_segmentation import RES, Canvas, assert_coverage, region_ids, two_rooms
+
+
+def desk_room() -> GridMap:
+    """An 8 x 4 m room with a 1.6 x 0.8 m desk against the middle of its bottom wall."""
+    c = Canvas(9.0, 5.0).room(0.5, 0.5, 8.5, 4.5)
+    return c.fill(3.7, 0.5, 5.3, 1.3, 100).grid()
+
+
+def thick_wall_rooms(t: float = 0.8) -> GridMap:
+    """Two 5 x 5 m rooms separated by a ``t`` m thick wall with a 0.9 m door."""
+    c = Canvas(11.0 + t, 6.0).room(0.3, 0.3, 5.3, 5.3).room(5.3 + t, 0.3, 10.3 + t, 5.3)
+    c.fill(5.3, 0.3, 5.3 + t, 5.3, 100)
+    return c.door(5.3, 2.35, 5.3 + t, 3.25).grid()
+
+
+def ring_with_rooms() -> GridMap:
+    """A 1.5 m corridor round a 6 x 6 m block, four rooms off it behind 0.9 m doors."""
+    c = Canvas(16.0, 16.0).room(3.5, 3.5, 12.5, 12.5)
+    c.fill(5.0, 5.0, 11.0, 11.0, 100)
+    c.room(3.5, 12.7, 7.5, 15.5).door(5.0, 12.5, 5.9, 12.7)
+    c.room(8.5, 12.7, 12.5, 15.5).door(10.0, 12.5, 10.9, 12.7)
+    c.room(0.5, 3.5, 3.3, 7.5).door(3.3, 5.0, 3.5, 5.9)
+    c.room(12.7, 8.5, 15.5, 12.5).door(12.5, 10.0, 12.7, 10.9)
+    return c.grid()
+
+
+def _at(labels: np.ndarray, x_m: float, y_m: float) -> int:
+    return int(labels[round(y_m / RES), round(x_m / RES)])
+
+
+def test_desk_against_a_wall_does_not_cut_the_room():
+    """At tau 0.8 m the desk's corners (1 m deep with the inflation) cut the room in
+    three without the furniture fill; with it the room is one region."""
+    p = SegmentationParams(tau_m=0.8, passage_merge_ratio=0.0)
+    assert len(region_ids(segment(desk_room(), p))) == 1
+    off = SegmentationParams(tau_m=0.8, passage_merge_ratio=0.0,
+                             furniture_min_thickness_m=0.0)
+    assert len(region_ids(segment(desk_room(), off))) == 3
+    assert_coverage(desk_room(), segment(desk_room(), p), p)
+
+
+def test_desk_is_a_bulge_and_thin_walls_are_not():
+    g = desk_room()
+    occ = (g.data > 90).astype(np.uint8)
+    bulge = furniture_cells(occ, SegmentationParams(), RES)
+    rows, cols = np.nonzero(bulge)
+    assert rows.size > 0
+    # inside the desk's footprint (x 3.7..5.3 m), nowhere along the thin walls
+    assert cols.min() * RES >= 3.7 - 0.05 and (cols.max() + 1) * RES <= 5.3 + 0.05
+    assert not bulge[:, : round(3.0 / RES)].any()
+    assert not furniture_cells(occ, SegmentationParams(furniture_min_thickness_m=0.0),
+                               RES).any()
+
+
+def test_door_between_two_rooms_still_cuts():
+    for door_at_end in (True, False):
+        lab = segment(two_rooms(door_at_end))
+        assert len(region_ids(lab)) == 2
+        assert _at(lab, 2.8, 2.8) != _at(lab, 8.0, 2.8)
+
+
+def test_thick_wall_beside_a_door_is_not_opened():
+    """A 0.8 m wall is a bulge (thicker than furniture_min_thickness_m) with a room on
+    either side and a door beside it: it is never filled, the door still cuts."""
+    g = thick_wall_rooms()
+    p = SegmentationParams()
+    _raw, filled = clean_masks(g.data, p, RES)
+    _raw, plain = clean_masks(g.data, SegmentationParams(furniture_min_thickness_m=0.0), RES)
+    assert np.array_equal(filled, plain)
+    lab = segment(g, p)
+    assert len(region_ids(lab)) == 2
+    assert _at(lab, 2.8, 2.8) != _at(lab, 8.8, 2.8)
+
+
+def test_ring_corridor_is_one_region_and_its_rooms_stay_apart():
+    g = ring_with_rooms()
+    for ratio, ring_parts in ((0.0, 4), (SegmentationParams().passage_merge_ratio, 1)):
+        lab = segment(g, SegmentationParams(passage_merge_ratio=ratio))
+        ring = {_at(lab, x, y) for x, y in ((4.2, 8.0), (11.8, 8.0), (8.0, 4.2), (8.0, 11.8),
+                                            (4.2, 4.2), (11.8, 11.8), (4.2, 11.8))}
+        rooms = [_at(lab, 5.5, 14.0), _at(lab, 10.5, 14.0), _at(lab, 1.9, 5.5),
+                 _at(lab, 14.1, 10.5)]
+        assert 0 not in ring and 0 not in rooms
+        assert len(ring) >= ring_parts if ratio == 0.0 else len(ring) == ring_parts
+        assert len(set(rooms)) == 4 and not set(rooms) & ring
+
+
+def test_border_spans_and_inscribed_diameters():
+    lab = np.zeros((12, 20), np.int32)
+    lab[1:11, 1:10] = 1
+    lab[1:11, 10:19] = 2
+    spans = border_spans(lab, np.full(lab.shape, 2.0, np.float32))
+    assert spans == {(1, 2): (10.0, 2.0)}
+    w = inscribed_diameters(lab)
+    assert 8.0 <= w[1] <= 10.0 and 8.0 <= w[2] <= 10.0
+
+
+def _reveal(grid: GridMap, y_max_m: float) -> GridMap:
+    data = grid.data.copy()
+    data[round(y_max_m / grid.resolution_m):, :] = -1
+    return grid.with_data(data)
+
+
+def test_ids_stay_stable_while_a_furnished_ring_is_revealed():
+    """Reveal the ring map from the bottom up, with a desk against a wall of the left
+    room: a room seen completely keeps its id, the final labels match the batch run."""
+    full = ring_with_rooms()
+    data = full.data.copy()
+    data[round(3.5 / RES):round(4.3 / RES), round(0.5 / RES):round(2.0 / RES)] = 100  # desk
+    full = full.with_data(data)
+    p = SegmentationParams()
+    seg = IncrementalSegmenter(p)
+    seen: dict[str, int] = {}
+    modes = []
+    labels = None
+    for step in range(1, 9):
+        y_max = 2.0 * step
+        labels = seg.update(_reveal(full, y_max))
+        modes.append(seg.last_update_info.mode)
+        for name, (x, y, top) in {"left": (1.9, 5.5, 7.7), "right": (14.1, 10.5, 12.7),
+                                  "top_left": (5.5, 14.0, 15.7)}.items():
+            if y_max > top:
+                rid = _at(labels, x, y)
+                assert rid > 0
+                assert seen.setdefault(name, rid) == rid, f"{name} changed id"
+    assert "incremental" in modes
+    assert len(seen) == 3
+    e = evaluate(labels, segment(full, p))
+    assert e["recall"] >= 0.9 and e["precision"] >= 0.9, (e["recall"], e["precision"])
+    assert_coverage(full, labels, p)
