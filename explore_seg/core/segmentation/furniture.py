@@ -25,15 +25,18 @@ import numpy.typing as npt
 from explore_seg.core.segmentation.params import SegmentationParams
 
 
-def _open(mask: npt.NDArray[np.bool_], d_cells: int,
+def _open(mask: npt.NDArray[np.bool_], d_cells: float,
           dist: npt.NDArray[np.float32] | None = None) -> npt.NDArray[np.bool_]:
     """Morphological opening of ``mask`` by a disk of diameter ``d_cells``, by two
     distance transforms (their cost does not grow with the disk). ``dist``: the
-    distance transform of ``mask``, when the caller has it."""
+    distance transform of ``mask``, when the caller has it. OpenCV's transform counts
+    the array's outside as part of ``mask``."""
     r = 0.5 * d_cells
     if dist is None:
         dist = cv2.distanceTransform(mask.view(np.uint8), cv2.DIST_L2, 3)
     core = dist > r
+    if not core.any():
+        return core
     back = cv2.distanceTransform((~core).view(np.uint8), cv2.DIST_L2, 3)
     return back <= r
 
@@ -45,7 +48,8 @@ def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res:
     Parameters
     ----------
     occ : ndarray of uint8, shape (H, W)
-        1 on the obstacle cells (scan specks already removed).
+        1 on the obstacle cells (scan specks already removed); the array's outside
+        counts as obstacle (unknown beyond the map).
     params : SegmentationParams
     res : float
         Metres per cell.
@@ -55,23 +59,28 @@ def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res:
     ndarray of bool, shape (H, W)
         True on the cells of the bulges; all False when the rule is disabled.
     """
+    out = np.zeros(occ.shape, dtype=bool)
     d_min = params.furniture_min_thickness_m / res
     d_max = params.furniture_max_thickness_m / res
     if d_min < 2 or d_max <= d_min or not occ.any():
-        return np.zeros(occ.shape, dtype=bool)
-    # the array border counts as obstacle (unknown outside the map)
-    # no obstacle thicker than d_min (thin walls only): no bulge, one distance transform
-    inner = cv2.distanceTransform((occ > 0).view(np.uint8), cv2.DIST_L2, 3)
-    if not (inner > 0.5 * d_min).any():
-        return np.zeros(occ.shape, dtype=bool)
-    pad = int(d_max) + 2
-    o = np.pad(occ > 0, pad, constant_values=True)
+        return out
+    o = occ > 0
     dist = cv2.distanceTransform(o.view(np.uint8), cv2.DIST_L2, 3)
-    thick = _open(o, d_min, dist)
-    deep = _open(o, d_max, dist)
-    # bulges: thick but not deep, opened again so that the rounded-off corners of deep
-    # blocks (slivers thinner than d_min) are no bulges
-    return _open(thick & ~deep, d_min)[pad:-pad, pad:-pad]
+    if not (dist > 0.5 * d_min).any():
+        return out                    # thin walls only
+    cand = _open(o, d_min, dist) & ~_open(o, d_max, dist)
+    # opened again so that the rounded-off corners of deep blocks (slivers thinner
+    # than d_min) are no bulges; only around the candidates
+    rows = np.flatnonzero(cand.any(axis=1))
+    if rows.size == 0:
+        return out
+    cols = np.flatnonzero(cand.any(axis=0))
+    m = int(math.ceil(d_min)) + 2
+    h, w = occ.shape
+    box = (slice(max(0, rows[0] - m), min(h, rows[-1] + 1 + m)),
+           slice(max(0, cols[0] - m), min(w, cols[-1] + 1 + m)))
+    out[box] = _open(np.pad(cand[box], m), d_min)[m:-m, m:-m]
+    return out
 
 
 def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8],
