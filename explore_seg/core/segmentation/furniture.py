@@ -35,10 +35,27 @@ def _open(mask: npt.NDArray[np.bool_], d_cells: float,
     if dist is None:
         dist = cv2.distanceTransform(mask.view(np.uint8), cv2.DIST_L2, 3)
     core = dist > r
-    if not core.any():
+    box = _bbox(core, int(math.ceil(r)) + 2)
+    if box is None:
         return core
-    back = cv2.distanceTransform((~core).view(np.uint8), cv2.DIST_L2, 3)
-    return back <= r
+    out = np.zeros(core.shape, dtype=bool)
+    sub = core[box]
+    # the array's outside is no core here: pad so that OpenCV does not count it
+    pad = np.pad(~sub, 1, constant_values=True)
+    back = cv2.distanceTransform(pad.view(np.uint8), cv2.DIST_L2, 3)[1:-1, 1:-1]
+    out[box] = back <= r
+    return out
+
+
+def _bbox(mask: npt.NDArray[np.bool_], margin: int) -> tuple[slice, slice] | None:
+    """Bounding box of the true cells grown by ``margin`` (clipped), or None."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(mask.any(axis=0))
+    h, w = mask.shape
+    return (slice(max(0, rows[0] - margin), min(h, rows[-1] + 1 + margin)),
+            slice(max(0, cols[0] - margin), min(w, cols[-1] + 1 + margin)))
 
 
 def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res: float
@@ -71,14 +88,10 @@ def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res:
     cand = _open(o, d_min, dist) & ~_open(o, d_max, dist)
     # opened again so that the rounded-off corners of deep blocks (slivers thinner
     # than d_min) are no bulges; only around the candidates
-    rows = np.flatnonzero(cand.any(axis=1))
-    if rows.size == 0:
-        return out
-    cols = np.flatnonzero(cand.any(axis=0))
     m = int(math.ceil(d_min)) + 2
-    h, w = occ.shape
-    box = (slice(max(0, rows[0] - m), min(h, rows[-1] + 1 + m)),
-           slice(max(0, cols[0] - m), min(w, cols[-1] + 1 + m)))
+    box = _bbox(cand, m)
+    if box is None:
+        return out
     out[box] = _open(np.pad(cand[box], m), d_min)[m:-m, m:-m]
     return out
 
@@ -114,10 +127,15 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
     # along: its cells within half furniture_min_thickness_m of the thin walls keep the
     # walls closed when the whole bulge would open them
     occ_b = occ > 0
-    to_thin = cv2.distanceTransform((~(occ_b & ~bulge)).view(np.uint8), cv2.DIST_L2, 3)
-    front = bulge & (to_thin > 0.5 * params.furniture_min_thickness_m / res)
-    n, lab, stats, _ = cv2.connectedComponentsWithStats(bulge.view(np.uint8),
-                                                        connectivity=8)
+    half_min = 0.5 * params.furniture_min_thickness_m / res
+    # components of the bulges, in the bulges' bounding box
+    bb = _bbox(bulge, 0)
+    assert bb is not None
+    lab = np.zeros(occ.shape, dtype=np.int32)
+    n, lab[bb], stats, _ = cv2.connectedComponentsWithStats(bulge[bb].view(np.uint8),
+                                                            connectivity=8)
+    stats[:, 0] += bb[1].start
+    stats[:, 1] += bb[0].start
     h, w = occ.shape
     m = int(round(params.furniture_max_thickness_m / res)) + r_inf + r_door + 4
     r_c = int(math.ceil(0.25 * params.furniture_min_thickness_m / res))
@@ -133,11 +151,14 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
         # the opening rounds the bulge's corners off: the occupied cells near it are
         # the furniture's footprint
         whole = (cv2.dilate(blob.view(np.uint8), k_corner) > 0) & occ_b[box]
-        for cells in (whole, blob & front[box]):
-            fill = _footprint(cells, occ_b[box], free_clean[box], k_inf, r_door)
-            if fill is not None:
-                out[box] |= fill
-                break
+        fill = _footprint(whole, occ_b[box], free_clean[box], k_inf, r_door)
+        if fill is None:
+            thin = occ_b[box] & ~(lab[box] > 0)
+            to_thin = cv2.distanceTransform((~thin).view(np.uint8), cv2.DIST_L2, 3)
+            fill = _footprint(blob & (to_thin > half_min), occ_b[box], free_clean[box],
+                              k_inf, r_door)
+        if fill is not None:
+            out[box] |= fill
     return out
 
 
