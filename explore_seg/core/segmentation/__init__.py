@@ -15,10 +15,11 @@ cells) carries a label; the published labels are the domain labels restricted to
 free cells. Keeping the F margin labelled (F reaches ``free_close_m`` into unknown space
 at frontiers) is what lets the incremental update tell newly seen space from old.
 
-Modules: :mod:`.params` (parameters), :mod:`.cleaning` (grid -> free-space masks),
-:mod:`.dude` (decomposition of a mask, with :mod:`.polygon`, :mod:`.rings` and
-:mod:`.cuts`), :mod:`.labels` (label-image helpers), :mod:`.merging` (small, thin and
-corridor regions), :mod:`.incremental` (the stateful segmenter, :func:`segment`) and
+Modules: :mod:`.params` (parameters), :mod:`.cleaning` (grid -> free-space masks, with
+:mod:`.furniture`: furniture against walls), :mod:`.dude` (decomposition of a mask, with
+:mod:`.polygon`, :mod:`.rings` and :mod:`.cuts`), :mod:`.labels` (label-image helpers),
+:mod:`.merging` (small, thin and corridor regions, with :mod:`.passages`: parts of one
+passage), :mod:`.incremental` (the stateful segmenter, :func:`segment`) and
 :mod:`.eval` (recall / precision against ground-truth rooms).
 """
 

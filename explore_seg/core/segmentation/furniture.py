@@ -8,10 +8,12 @@ inflated footprints touch the wall). Walls are thin; the space outside the build
 and large blocks (a courtyard, a stairwell) are deep. A bulge is the part of the
 obstacles that a disk of ``furniture_min_thickness_m`` fits in but a disk of
 ``furniture_max_thickness_m`` does not (two morphological openings). A bulge is
-filled (its cells count as free space for the decomposition) when it is at most
-``furniture_max_extent_m`` wide and high and the free space along its filled footprint
-is one stretch (furniture in front of a wall), so a thick wall piece between two free
-areas is never opened.
+filled (the cells its inflation took count as free space for the decomposition) when
+it is at most ``furniture_max_extent_m`` wide and high and one free area lies along its
+footprint: the free space less every passage up to a door wide (``max_door_width_m``),
+so a thick wall piece between two rooms is never opened, even beside a door. Where a
+bulge takes a junction of thick walls along (a pillar at a T-junction), only its cells
+farther than half ``furniture_min_thickness_m`` from the thin walls are tried next.
 """
 
 from __future__ import annotations
@@ -113,8 +115,8 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
     -------
     ndarray of bool, shape (H, W)
         ``free_clean`` plus, for every bulge (:func:`furniture_cells`) at most
-        ``furniture_max_extent_m`` wide and high whose filled footprint borders the free
-        space along one stretch, the cells the bulge's inflation took from it.
+        ``furniture_max_extent_m`` wide and high that stands in one free area, the
+        cells its inflation took from the free space.
     """
     bulge = furniture_cells(occ, params, res)
     if not bulge.any():

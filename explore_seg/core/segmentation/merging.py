@@ -1,5 +1,6 @@
-"""Merging of regions: too small or too thin ones into a neighbour, and optionally
-corridor parts whose union stays nearly convex (DuDe spec shared/docs/dude.md §10, §15)."""
+"""Merging of regions: too small or too thin ones into a neighbour, parts of one passage
+(:mod:`.passages`), and optionally corridor parts whose union stays nearly convex (DuDe
+spec shared/docs/dude.md §10, §15)."""
 
 from __future__ import annotations
 
@@ -62,7 +63,8 @@ class _Merger:
 def merge_regions(labels: npt.NDArray[np.int32], out_mask: npt.NDArray[np.bool_],
                    candidates: set[int] | None, params: SegmentationParams,
                    res: float) -> None:
-    """Merge too small or too thin regions (and optionally corridor parts), in place.
+    """Merge too small or too thin regions, parts of one passage (and optionally corridor
+    parts), in place.
 
     Parameters
     ----------
