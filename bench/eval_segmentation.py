@@ -148,6 +148,32 @@ def run_furnished(n_maps: int, first_seed: int, params: SegmentationParams,
         for k, a in acc.items()}
 
 
+def parse_overrides(items: list[str]) -> dict[str, float | int | bool]:
+    """``["name=value", ...]`` -> {name: value} for SegmentationParams (numbers, true/false).
+
+    Raises
+    ------
+    ValueError
+        When an item is not ``name=value`` or names no field.
+    """
+    import dataclasses
+
+    fields = {f.name: f for f in dataclasses.fields(SegmentationParams)}
+    out: dict[str, float | int | bool] = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        if not sep or name not in fields:
+            raise ValueError(f"expected NAME=VALUE with a SegmentationParams field, got {item!r}")
+        default = fields[name].default
+        if isinstance(default, bool):
+            out[name] = text.strip().lower() in ("1", "true", "yes", "on")
+        elif isinstance(default, int):
+            out[name] = int(text)
+        else:
+            out[name] = float(text)
+    return out
+
+
 IPA_DEV_MAPS = ("office_a", "office_h", "lab_ipa", "Freiburg79_scan", "lab_c_scan")
 
 
@@ -231,6 +257,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cluttered", action="store_true", help="furnished houses")
     ap.add_argument("--size", type=float, default=20.0, help="house side (m)")
     ap.add_argument("--corridor-merge", action="store_true", help="enable corridor merge")
+    ap.add_argument("--seg", action="append", default=[], metavar="NAME=VALUE",
+                    help="set a SegmentationParams field (repeatable), e.g. "
+                         "--seg furniture_min_thickness_m=0.7 --seg passage_merge_ratio=0.7")
     ap.add_argument("--pred", help="predicted label PNG (pair mode)")
     ap.add_argument("--gt", help="ground-truth label PNG (pair mode)")
     ap.add_argument("--gt-connected", action="store_true",
@@ -268,7 +297,11 @@ def main(argv: list[str] | None = None) -> int:
         return 0
 
     taus = [float(t) for t in args.tau.split(",") if t]
-    base = SegmentationParams(corridor_merge=args.corridor_merge)
+    try:
+        base = SegmentationParams(corridor_merge=args.corridor_merge,
+                                  **parse_overrides(args.seg))
+    except (TypeError, ValueError) as err:
+        ap.error(f"--seg: {err}")
     if args.set == "ipa_dev":
         params = SegmentationParams(**{**base.__dict__, "tau_m": taus[0]})
         folder = args.ipa_dir or ipa_dev_dir()

@@ -61,3 +61,13 @@ def test_ipa_dev_names_a_missing_file(tmp_path, capsys):
     assert eval_segmentation.main(["--set", "ipa_dev", "--ipa-dir", str(tmp_path)]) == 1
     err = capsys.readouterr().err
     assert "office_a.pgm is missing" in err
+
+
+def test_seg_overrides_set_segmentation_fields_and_name_a_bad_one():
+    out = eval_segmentation.parse_overrides(["passage_merge_ratio=0.7", "corridor_merge=true",
+                                             "max_rounds=3"])
+    assert out == {"passage_merge_ratio": 0.7, "corridor_merge": True, "max_rounds": 3}
+    with pytest.raises(ValueError, match="'tau=1'"):
+        eval_segmentation.parse_overrides(["tau=1"])
+    with pytest.raises(SystemExit):
+        eval_segmentation.main(["--seg", "passage_merge_ratio=-1"])

@@ -144,8 +144,8 @@ def test_corridor_with_side_rooms_gives_five_regions_and_one_corridor():
 @pytest.mark.parametrize("merge, passage, expected",
                          [(False, 0.0, 2), (True, 0.0, 1), (False, 0.7, 1)])
 def test_l_corridor_is_over_segmented_unless_merged(merge, passage, expected):
-    """DuDe cuts the corner of an L corridor; the corridor merge or the passage merge
-    (the default) join the two legs."""
+    """DuDe cuts the corner of an L corridor; the corridor merge or the passage merge join
+    the two legs."""
     lab = segment(l_corridor(), SegmentationParams(tau_m=2.5, corridor_merge=merge,
                                                    passage_merge_ratio=passage))
     assert len(region_ids(lab)) == expected
@@ -157,7 +157,8 @@ def test_pillar_is_noise_and_a_big_block_is_bridged():
     assert len(region_ids(segment(room_with_block(0.4), SegmentationParams(tau_m=2.5)))) == 1
     no_merge = SegmentationParams(tau_m=2.5, passage_merge_ratio=0.0)
     assert len(region_ids(segment(room_with_block(4.0), no_merge))) >= 2
-    assert len(region_ids(segment(room_with_block(4.0), SegmentationParams(tau_m=2.5)))) == 1
+    merged = SegmentationParams(tau_m=2.5, passage_merge_ratio=0.7)
+    assert len(region_ids(segment(room_with_block(4.0), merged))) == 1
 
 
 def test_scan_noise_and_free_rays_are_cleaned():

@@ -39,14 +39,23 @@ def ring_with_rooms() -> GridMap:
     return c.grid()
 
 
+#: The furniture fill and the passage merge on (both off by default), as for real scans.
+ON = {"furniture_min_thickness_m": 0.7, "passage_merge_ratio": 0.7}
+
+
 def _at(labels: np.ndarray, x_m: float, y_m: float) -> int:
     return int(labels[round(y_m / RES), round(x_m / RES)])
+
+
+def test_both_rules_are_off_by_default():
+    p = SegmentationParams()
+    assert p.furniture_min_thickness_m == 0.0 and p.passage_merge_ratio == 0.0
 
 
 def test_desk_against_a_wall_does_not_cut_the_room():
     """At tau 0.8 m the desk's corners (1 m deep with the inflation) cut the room in
     three without the furniture fill; with it the room is one region."""
-    p = SegmentationParams(tau_m=0.8, passage_merge_ratio=0.0)
+    p = SegmentationParams(tau_m=0.8, furniture_min_thickness_m=0.7)
     assert len(region_ids(segment(desk_room(), p))) == 1
     off = SegmentationParams(tau_m=0.8, passage_merge_ratio=0.0,
                              furniture_min_thickness_m=0.0)
@@ -57,7 +66,7 @@ def test_desk_against_a_wall_does_not_cut_the_room():
 def test_desk_is_a_bulge_and_thin_walls_are_not():
     g = desk_room()
     occ = (g.data > 90).astype(np.uint8)
-    bulge = furniture_cells(occ, SegmentationParams(), RES)
+    bulge = furniture_cells(occ, SegmentationParams(**ON), RES)
     rows, cols = np.nonzero(bulge)
     assert rows.size > 0
     # inside the desk's footprint (x 3.7..5.3 m), nowhere along the thin walls
@@ -69,7 +78,7 @@ def test_desk_is_a_bulge_and_thin_walls_are_not():
 
 def test_door_between_two_rooms_still_cuts():
     for door_at_end in (True, False):
-        lab = segment(two_rooms(door_at_end))
+        lab = segment(two_rooms(door_at_end), SegmentationParams(**ON))
         assert len(region_ids(lab)) == 2
         assert _at(lab, 2.8, 2.8) != _at(lab, 8.0, 2.8)
 
@@ -78,7 +87,7 @@ def test_thick_wall_beside_a_door_is_not_opened():
     """A 0.8 m wall is a bulge (thicker than furniture_min_thickness_m) with a room on
     either side and a door beside it: it is never filled, the door still cuts."""
     g = thick_wall_rooms()
-    p = SegmentationParams()
+    p = SegmentationParams(**ON)
     _raw, filled = clean_masks(g.data, p, RES)
     _raw, plain = clean_masks(g.data, SegmentationParams(furniture_min_thickness_m=0.0), RES)
     assert np.array_equal(filled, plain)
@@ -89,8 +98,8 @@ def test_thick_wall_beside_a_door_is_not_opened():
 
 def test_ring_corridor_is_one_region_and_its_rooms_stay_apart():
     g = ring_with_rooms()
-    for ratio, ring_parts in ((0.0, 4), (SegmentationParams().passage_merge_ratio, 1)):
-        lab = segment(g, SegmentationParams(passage_merge_ratio=ratio))
+    for ratio, ring_parts in ((0.0, 4), (ON["passage_merge_ratio"], 1)):
+        lab = segment(g, SegmentationParams(**(ON | {"passage_merge_ratio": ratio})))
         ring = {_at(lab, x, y) for x, y in ((4.2, 8.0), (11.8, 8.0), (8.0, 4.2), (8.0, 11.8),
                                             (4.2, 4.2), (11.8, 11.8), (4.2, 11.8))}
         rooms = [_at(lab, 5.5, 14.0), _at(lab, 10.5, 14.0), _at(lab, 1.9, 5.5),
@@ -123,7 +132,7 @@ def test_ids_stay_stable_while_a_furnished_ring_is_revealed():
     data = full.data.copy()
     data[round(3.5 / RES):round(4.3 / RES), round(0.5 / RES):round(2.0 / RES)] = 100  # desk
     full = full.with_data(data)
-    p = SegmentationParams()
+    p = SegmentationParams(**ON)
     seg = IncrementalSegmenter(p)
     seen: dict[str, int] = {}
     modes = []
