@@ -179,12 +179,13 @@ class PaperParams:
         "paper: regionGain of a frontier outside the robot's region", default=1.0)
 
     def __post_init__(self) -> None:
-        check_non_negative(self, ('alpha', 'beta', 'gamma'))
+        check_non_negative(self, ("alpha", "beta", "gamma"))
 
 
 @dataclass(frozen=True)
 class ExploreLiteParams:
-    """explore_lite's cost weights (bound flat as ROS parameters through ``SelectionParams``)."""
+    """explore_lite's cost weights (bound flat as ROS parameters through
+    ``SelectionParams``)."""
 
     potential_scale: float = non_negative(
         "explore_lite: weight of the path length", "1/m", default=3.0)
@@ -192,12 +193,14 @@ class ExploreLiteParams:
         "explore_lite: weight of the frontier length", "1/m", default=1.0)
 
     def __post_init__(self) -> None:
-        check_non_negative(self, ('potential_scale', 'gain_scale'))
+        check_non_negative(self, ("potential_scale", "gain_scale"))
 
 
 @dataclass(frozen=True)
 class RrtExplorationParams:
-    """The assigner's revenue weights (bound flat as ROS parameters through ``SelectionParams``; the RRT detector's own are :class:`explore_seg.core.rrt.RrtParams`, ``rrt.*``)."""
+    """The assigner's revenue weights (bound flat as ROS parameters through
+    ``SelectionParams``; the RRT detector's own are :class:`explore_seg.core.rrt.RrtParams`,
+    ``rrt.*``)."""
 
     info_multiplier: float = non_negative(
         "rrt_exploration: weight of a candidate's information gain (unknown area, m^2) "
@@ -210,12 +213,13 @@ class RrtExplorationParams:
         "it exploring where it is)", default=2.0)
 
     def __post_init__(self) -> None:
-        check_non_negative(self, ('info_multiplier', 'hysteresis_radius_m', 'hysteresis_gain'))
+        check_non_negative(self, ("info_multiplier", "hysteresis_radius_m", "hysteresis_gain"))
 
 
 @dataclass(frozen=True)
 class RoutedParams:
-    """Viewpoints, tour and goal handling of ``routed`` (bound flat as ROS parameters through ``SelectionParams``)."""
+    """Viewpoints, tour and goal handling of ``routed`` (bound flat as ROS parameters
+    through ``SelectionParams``)."""
 
     viewpoint_radius_m: float = non_negative(
         "routed: viewpoint candidates lie within this distance of their frontier's cells",
@@ -263,7 +267,9 @@ class RoutedParams:
         "often; 0 = no limit", range=(0, INT_MAX)))
 
     def __post_init__(self) -> None:
-        check_non_negative(self, ('viewpoint_radius_m', 'frontier_split_m', 'region_switch_m', 'gain_weight_m_per_m2', 'leftover_gain_m2', 'leftover_max_length_m', 'handover_m'))
+        check_non_negative(self, ("viewpoint_radius_m", "frontier_split_m", "region_switch_m",
+                                  "gain_weight_m_per_m2", "leftover_gain_m2",
+                                  "leftover_max_length_m", "handover_m"))
         if not 0.0 <= self.reached_unknown_fraction <= 1.0:
             raise ValueError(f"reached_unknown_fraction must be in [0, 1], "
                              f"got {self.reached_unknown_fraction}")
