@@ -118,6 +118,8 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
         ``furniture_max_extent_m`` wide and high that stands in one free area, the
         cells its inflation took from the free space.
     """
+    if params.furniture_min_thickness_m <= 0:
+        return free_clean
     bulge = furniture_cells(occ, params, res)
     if not bulge.any():
         return free_clean
