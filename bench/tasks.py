@@ -47,7 +47,8 @@ def run_task(task: tuple[str, str, int, float, str | None, tuple[float, float] |
                          float | None]) -> dict[str, Any]:
     """One run (see the module docstring): its :meth:`RunResult.to_dict`; the final map is
     drawn to the picture path when one is given."""
-    spec, strategy, seed, max_t, picture, mount, nav_margin = task
+    spec, strategy, seed, max_t, picture, mount, nav_margin, *rest = task
+    mapping_error = rest[0] if rest else "none"
     world, gt = load(spec)
     last: dict[str, LockstepState] = {}
 
@@ -56,12 +57,12 @@ def run_task(task: tuple[str, str, int, float, str | None, tuple[float, float] |
 
     res = run_exploration(world, strategy, seed, params=LockstepParams(max_sim_time_s=max_t),
                           ground_truth=gt,
-                          sim_params=sim_params_for(mount, nav_margin),
+                          sim_params=sim_params_for(mount, nav_margin, mapping_error),
                           explorer_params=_EXPLORER_PARAMS,
                           observer=keep_last if picture else None)
     if picture and "state" in last:
         _save_picture(last["state"], picture)
-    return res.to_dict()
+    return {**res.to_dict(), "mapping_error": mapping_error}
 
 
 def _save_picture(st: LockstepState, path: str) -> None:
