@@ -275,3 +275,29 @@ def test_navigation_reaches_goals_on_the_erroneous_map(profile):
         x, y, _ = e.slam_pose
         assert math.hypot(x - gx, y - gy) <= e.params.nav_goal_tolerance_xy_m + 0.05
     assert e.metrics.n_collisions == 0
+
+
+def test_objects_are_placed_in_the_map_frame():
+    """The lock step's object pipeline projects the scan from the SLAM pose, and the
+    paper strategy (object costmap on) runs with a mapping error."""
+    from sim_bridge.lockstep import LockstepParams, run_exploration
+    from sim_bridge.object_pipeline import _map_from_world, scan_points_map
+
+    e = _drifting_engine(seed=2)
+    e.set_cmd_vel(0.2, 0.4)
+    e.step(30.0)
+    scan = e.latest_scan
+    pts = scan_points_map(e)
+    lp = e.params.lidar_params()
+    r = np.asarray(scan.ranges, dtype=np.float64)
+    ok = np.isfinite(r) & (r >= lp.range_min_m) & (r < lp.range_max_m)
+    a = scan.map_pose[2] + lp.angle_min_rad + lp.angle_increment_rad * np.flatnonzero(ok)
+    assert pts == pytest.approx(np.column_stack([scan.map_pose[0] + r[ok] * np.cos(a),
+                                                 scan.map_pose[1] + r[ok] * np.sin(a)]))
+    d = (0.3, -0.2, 0.4)
+    p_world = np.array([1.0, 2.0, 0.5, 1.0])
+    mx, my, _ = compose(d, (1.0, 2.0, 0.0))
+    assert (_map_from_world(d) @ p_world)[:3] == pytest.approx([mx, my, 0.5])
+    res = run_exploration(room_world([]), "paper", 0, params=LockstepParams(max_sim_time_s=30.0),
+                          sim_params=SimParams(mapping_error="harsh", compute_coverage=True))
+    assert res.goals_sent >= 1 and res.collisions == 0
