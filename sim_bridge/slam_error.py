@@ -111,7 +111,8 @@ PROFILES: dict[str, SlamErrorParams] = {"realistic": REALISTIC, "harsh": HARSH}
 
 @dataclass(frozen=True)
 class LoopClosure:
-    """One correction: when, the keyframes it joined, and how far the SLAM pose jumped."""
+    """One correction: the keyframes it joined, how far the SLAM pose jumped, and whether
+    the map was re-rendered."""
 
     keyframe: int
     matched: int
@@ -188,6 +189,7 @@ class SlamErrorModel:
 
     @property
     def n_keyframes(self) -> int:
+        """Keyframes in the graph (scans in the map)."""
         return len(self._kf_base)
 
     @property
