@@ -193,7 +193,8 @@ def _run(task: tuple[str, str, str, int, float]) -> dict[str, Any]:
                           params=dataclasses.replace(ls, max_sim_time_s=float(limit)),
                           sim_params=sim, explorer_params=ex, ground_truth=gt)
     row = res.summary_row()
-    row.update(arm=arm, cpu_s=round(time.process_time() - t0, 2), code=_CODE[0])
+    row.update(arm=arm, cpu_s=round(time.process_time() - t0, 2), code=_CODE[0],
+               mapping_error=sim.mapping_error)
     return row
 
 
@@ -357,6 +358,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--max-sim-time", type=float, default=0.0,
                     help="sim time limit per run in s (0 = the benchmark's per-area limit)")
+    ap.add_argument("--mapping-noise", default="none", metavar="PROFILE",
+                    help="SLAM-like mapping error of every arm (SimParams.mapping_error: none, "
+                         "realistic, harsh, custom); an arm's sim.mapping_error overrides it")
     ap.add_argument("--md", default="", help="also write the report to this file (with "
                     "--title, the command and the code version); BENCHMARKS.md includes "
                     "bench/results/paired/*.md")
@@ -381,7 +385,8 @@ def main(argv: list[str] | None = None) -> int:
         seeds = parse_seeds(a.seeds)
         if a.against and a.against not in strategies:
             raise ValueError(f"--against {a.against} is not one of --strategies")
-        base = (load_explorer_params(), sim_params_for(PAPER_CAMERA_MOUNT), LockstepParams())
+        base = (load_explorer_params(),
+                sim_params_for(PAPER_CAMERA_MOUNT, None, a.mapping_noise), LockstepParams())
         for arm in arms:
             _ARMS[arm.name] = build_params(arm, *base)
     except ValueError as err:

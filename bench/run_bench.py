@@ -126,6 +126,9 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                     help="clearance in m that the navigation stand-in keeps beyond the robot "
                          "radius (sim_bridge's nav_inflation_margin_m; default: its default, "
                          f"{SimParams().nav_inflation_margin_m:g})")
+    ap.add_argument("--mapping-noise", default="none", metavar="PROFILE",
+                    help="SLAM-like mapping error of the runs (SimParams.mapping_error): "
+                         "none, realistic, harsh or custom")
     ap.add_argument("--report-only", action="store_true",
                     help="only redo plots and BENCHMARKS.md from --out")
     ap.add_argument("--resume", action="store_true",
@@ -162,6 +165,10 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
             sim_params_for(None, a.nav_margin).nav_params()
         except ValueError as err:
             ap.error(f"--nav-margin {a.nav_margin}: {err}")
+    try:
+        sim_params_for(None, None, a.mapping_noise)
+    except ValueError as err:
+        ap.error(f"--mapping-noise {a.mapping_noise}: {err}")
     if a.runs < 1 or a.jobs < 1:
         ap.error("--runs and --jobs must be >= 1")
     try:
@@ -211,7 +218,8 @@ def _settings(a: argparse.Namespace) -> dict[str, Any]:
         "nav_inflation_soft_margin_m": SimParams().nav_inflation_soft_margin_m,
         "nav_arc_check_edges": SimParams().nav_arc_check_edges,
         "nav_inflation_edge_cost": SimParams().nav_inflation_edge_cost,
-        "object_confirm_hits": explorer_params().objects.confirm_hits}
+        "object_confirm_hits": explorer_params().objects.confirm_hits,
+        "mapping_error": a.mapping_noise}
     return json.loads(json.dumps(settings))
 
 
@@ -364,7 +372,8 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
         for strat in strategies:
             for k in range(a.runs):
                 pic = (str(out / "maps" / f"{store.slug(s)}_{strat}.png") if k == 0 else None)
-                tasks.append((s, strat, a.seed0 + k, limit, pic, a.mount, a.nav_margin))
+                tasks.append((s, strat, a.seed0 + k, limit, pic, a.mount, a.nav_margin,
+                              a.mapping_noise))
     if a.resume:
         kept, tasks = store.resume(out, tasks, a.redo_keys)
         results += kept

@@ -25,7 +25,8 @@ SETTING_DEFAULTS: dict[str, Any] = {"nav_inflation_margin_m": 0.0,
                                      "nav_inflation_soft_margin_m": 0.0,
                                      "nav_arc_check_edges": False,
                                      "nav_inflation_edge_cost": 0.0,
-                                     "object_confirm_hits": 1}
+                                     "object_confirm_hits": 1,
+                                     "mapping_error": "none"}
 
 
 def code_version() -> str:

@@ -2,7 +2,8 @@
 pool that runs them (drainable by SIGUSR1) and the signal handling around it.
 
 A run task is ``(world spec, strategy, seed, sim time limit s, picture path or None,
-camera mount or None, navigation margin m or None)``. The workers are forked from the
+camera mount or None, navigation margin m or None[, mapping error profile])``; the
+run_bench settings record the profile. The workers are forked from the
 main process and inherit what it loaded before: the worlds (:func:`bench.worlds.load`'s
 cache) and the explorer parameters (:func:`fix_explorer_params`).
 """
@@ -43,11 +44,11 @@ def explorer_params() -> ExplorerParams:
     return _EXPLORER_PARAMS if _EXPLORER_PARAMS is not None else fix_explorer_params()
 
 
-def run_task(task: tuple[str, str, int, float, str | None, tuple[float, float] | None,
-                         float | None]) -> dict[str, Any]:
+def run_task(task: tuple[Any, ...]) -> dict[str, Any]:
     """One run (see the module docstring): its :meth:`RunResult.to_dict`; the final map is
     drawn to the picture path when one is given."""
-    spec, strategy, seed, max_t, picture, mount, nav_margin = task
+    spec, strategy, seed, max_t, picture, mount, nav_margin, *rest = task
+    mapping_error = rest[0] if rest else "none"
     world, gt = load(spec)
     last: dict[str, LockstepState] = {}
 
@@ -56,7 +57,7 @@ def run_task(task: tuple[str, str, int, float, str | None, tuple[float, float] |
 
     res = run_exploration(world, strategy, seed, params=LockstepParams(max_sim_time_s=max_t),
                           ground_truth=gt,
-                          sim_params=sim_params_for(mount, nav_margin),
+                          sim_params=sim_params_for(mount, nav_margin, mapping_error),
                           explorer_params=_EXPLORER_PARAMS,
                           observer=keep_last if picture else None)
     if picture and "state" in last:

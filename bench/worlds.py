@@ -69,11 +69,19 @@ PAPER_CAMERA_MOUNT = (0.894, 0.1)
 
 
 def sim_params_for(camera_mount: tuple[float, float] | None,
-                   nav_margin_m: float | None = None) -> SimParams:
+                   nav_margin_m: float | None = None,
+                   mapping_error: str = "none") -> SimParams:
     """Simulator parameters of the runs: the defaults, with the camera at
-    ``camera_mount`` = (height m, pitch rad) unless None, and the navigation stand-in's
-    clearance beyond the robot radius (``nav_inflation_margin_m``) unless None."""
-    kw: dict[str, float] = {}
+    ``camera_mount`` = (height m, pitch rad) unless None, the navigation stand-in's
+    clearance beyond the robot radius (``nav_inflation_margin_m``) unless None, and the
+    SLAM-like mapping error profile ``mapping_error`` (``SimParams.mapping_error``).
+
+    Raises
+    ------
+    ValueError
+        On a value SimParams rejects (e.g. an unknown mapping error profile).
+    """
+    kw: dict[str, float | str] = {"mapping_error": mapping_error}
     if camera_mount is not None:
         kw.update(camera_mount_z_m=camera_mount[0], camera_pitch_rad=camera_mount[1])
     if nav_margin_m is not None:

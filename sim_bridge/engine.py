@@ -37,6 +37,7 @@ from sim_bridge.navigation import NavState, NavStatus, Navigator
 from sim_bridge.observable import with_observable
 from sim_bridge.params import DEPTH_ENCODINGS, SimParams
 from sim_bridge.sensors import DepthCamera, Lidar
+from sim_bridge.slam_error import LidarGeometry, SlamErrorModel
 from sim_bridge.world import World
 
 #: Re-exported: SimParams and Collider moved to sim_bridge.params / sim_bridge.collision.
@@ -57,20 +58,24 @@ class ScanGeometry:
 
 @dataclass(frozen=True)
 class ScanFrame:
-    """One lidar scan: sim time, the true pose it was taken at, ranges (inf = no return)."""
+    """One lidar scan: sim time, the true pose it was taken at, ranges (inf = no return),
+    and the SLAM pose then (the map-frame pose consistent with the map; None: ``pose``)."""
 
     stamp_s: float
     pose: tuple[float, float, float]
     ranges: npt.NDArray[np.float32]
+    map_pose: tuple[float, float, float] | None = None
 
 
 @dataclass(frozen=True)
 class CameraSample:
-    """One camera frame (the sensors' CameraFrame) with its sim time and robot pose."""
+    """One camera frame (the sensors' CameraFrame) with its sim time, true robot pose and
+    SLAM pose (None: ``pose``)."""
 
     stamp_s: float
     pose: tuple[float, float, float]
     frame: Any
+    map_pose: tuple[float, float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -114,9 +119,13 @@ class SimEngine:
 
     Notes
     -----
-    Time advances only in :meth:`step`. Published poses are true poses (localisation
-    assumed perfect, as with slam_toolbox + Nav2 in a well-behaved run); pose noise only
-    perturbs the pose each scan is mapped at.
+    Time advances only in :meth:`step`. With ``params.mapping_error`` "none" the map is
+    built at true poses and the SLAM pose is the true pose (localisation assumed perfect);
+    pose noise only perturbs the pose each scan is mapped at. Otherwise
+    (:mod:`sim_bridge.slam_error`) :attr:`map` is the erroneous SLAM map and
+    :attr:`slam_pose` the pose consistent with it, which navigation tracks (as Nav2 does
+    with SLAM's map -> base transform); physics, collisions and coverage (measured on
+    :attr:`true_map`) stay in the true world.
     """
 
     def __init__(self, world: World, params: SimParams | None = None, *,
@@ -152,9 +161,14 @@ class SimEngine:
         self._step_count = 0
         self._accum_s = 0.0
         self._mapper = ScanMapper((x, y), p.mapping_params())
+        slam = p.slam_error_params()
+        self._slam_error = (None if slam is None else SlamErrorModel(
+            slam, (x, y), p.mapping_params(),
+            LidarGeometry(lp.angle_min_rad, lp.angle_increment_rad, lp.range_max_m,
+                          lp.range_min_m), p.seed))
         self._nav = Navigator(p.nav_params())
         self._map_stamp_ns = 0
-        self._nav.set_map(lambda: self._mapper.grid(self._map_stamp_ns), 0)
+        self._nav.set_map(lambda: self.map, 0)
         self.metrics = SimMetrics(ground_truth)
         self._in_contact = False
         self._next_scan_s = 0.0
@@ -196,13 +210,36 @@ class SimEngine:
         return int(round(self._time_s * 1e9))
 
     @property
+    def slam_pose(self) -> tuple[float, float, float]:
+        """The robot's pose in the map's frame: the true pose composed with the mapping
+        error's drift (:attr:`pose` without a mapping error model)."""
+        if self._slam_error is None:
+            return self._pose
+        return self._slam_error.estimate(self._pose)
+
+    @property
+    def slam_error(self) -> SlamErrorModel | None:
+        """The mapping error model (None with ``mapping_error`` "none")."""
+        return self._slam_error
+
+    @property
     def map(self) -> GridMap:
-        """The current occupancy map (stamped with the sim time of its last change)."""
+        """The published occupancy map (stamped with the sim time of the last scan): the
+        SLAM map with a mapping error model, else :attr:`true_map`."""
+        if self._slam_error is not None:
+            return self._slam_error.grid(self._map_stamp_ns)
+        return self._mapper.grid(self._map_stamp_ns)
+
+    @property
+    def true_map(self) -> GridMap:
+        """The map of every scan at its true pose (what coverage is measured on)."""
         return self._mapper.grid(self._map_stamp_ns)
 
     @property
     def map_version(self) -> int:
-        """Changes whenever a scan changed the map."""
+        """Changes whenever a scan changed :attr:`map`."""
+        if self._slam_error is not None:
+            return self._slam_error.version
         return self._mapper.version
 
     @property
@@ -266,7 +303,7 @@ class SimEngine:
             is counted in the metrics.
         """
         try:
-            self._nav.set_goal(x, y, yaw, self._time_s, self._pose)
+            self._nav.set_goal(x, y, yaw, self._time_s, self.slam_pose)
         except ValueError:
             self.metrics.goal_rejected()
             raise
@@ -377,18 +414,18 @@ class SimEngine:
         if self._camera is not None and t >= self._next_camera_s - 1e-9:
             self._next_camera_s += 1.0 / p.camera_rate_hz
             frame = self._camera.render(self._pose, self._rng)
-            self._latest_camera = CameraSample(t, self._pose, frame)
+            self._latest_camera = CameraSample(t, self._pose, frame, self.slam_pose)
             self.camera_events.append(self._latest_camera)
         if self.ground_truth is not None and t >= self._next_coverage_s - 1e-9:
             self._next_coverage_s += p.coverage_period_s
-            self.metrics.update_coverage(self.map, t)
+            self.metrics.update_coverage(self.true_map, t)
         # Command: the post-collision back-up, else the navigator while a goal is active,
         # else the direct command.
         backing = self._backup_left_m > 0.0
         if backing:
             v, w = self._backup_dir * p.collision_backup_speed_mps, 0.0
         elif self._nav.status.state is NavState.ACTIVE:
-            v, w = self._nav.update(self._pose, t)
+            v, w = self._nav.update(self.slam_pose, t)
         else:
             v, w = self._cmd
         self._track_nav_outcome()
@@ -455,7 +492,8 @@ class SimEngine:
             self._backup_dir = -1.0 if v >= 0.0 else 1.0
         else:
             self._backup_left_m = 0.0
-        self._nav.recover(f"collision with {obj or cls} ({part})", self._time_s, self._pose)
+        self._nav.recover(f"collision with {obj or cls} ({part})", self._time_s,
+                          self.slam_pose)
         self._track_nav_outcome()
         if self._in_contact:
             return
@@ -476,7 +514,8 @@ class SimEngine:
         # Ranges are measured from the lidar, mounted at mount_xy in base_footprint.
         mx, my = self._lidar_mount
         c, sn = math.cos(pose[2]), math.sin(pose[2])
-        map_pose = (pose[0] + c * mx - sn * my, pose[1] + sn * mx + c * my, pose[2])
+        map_pose = sensor_pose = (pose[0] + c * mx - sn * my, pose[1] + sn * mx + c * my,
+                                  pose[2])
         if p.pose_noise_xy_m > 0 or p.pose_noise_yaw_rad > 0:
             nx, ny, nyaw = self._rng.normal(0.0, 1.0, 3)
             map_pose = (map_pose[0] + nx * p.pose_noise_xy_m,
@@ -484,9 +523,11 @@ class SimEngine:
                         map_pose[2] + nyaw * p.pose_noise_yaw_rad)
         self._mapper.integrate_scan(map_pose, ranges, g.angle_min_rad, g.angle_increment_rad,
                                     g.range_max_m, g.range_min_m)
+        if self._slam_error is not None:
+            self._slam_error.add_scan(pose, sensor_pose, ranges)
         self._map_stamp_ns = self.time_ns
-        self._nav.set_map(lambda: self._mapper.grid(self._map_stamp_ns), self._mapper.version)
-        self._latest_scan = ScanFrame(self._time_s, pose, ranges)
+        self._nav.set_map(lambda: self.map, self.map_version)
+        self._latest_scan = ScanFrame(self._time_s, pose, ranges, self.slam_pose)
         self.scan_events.append(self._latest_scan)
 
 

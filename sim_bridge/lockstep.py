@@ -464,7 +464,7 @@ class _LockstepRun:
         ended = self.follower.poll(self.engine.nav_status) if self.follower is not None else None
         if ended is not None:
             self.explorer.report_navigation(*ended)
-        step = self.last_step = self.explorer.step(now, grid, self.engine.pose, self.layer,
+        step = self.last_step = self.explorer.step(now, grid, self.engine.slam_pose, self.layer,
                                                    labels)
         timings, res = self.result.timings_ms, self.result
         if step.detected:

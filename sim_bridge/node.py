@@ -5,11 +5,14 @@ It owns the clock: a wall-clock (steady) timer advances the :class:`SimEngine` b
 lock-step mode) and publishes ``/clock``; every stamp is sim time, so the other nodes
 run with ``use_sim_time: true``. Exploration nodes need none of the ``sim/*`` topics.
 
-Published: ``/clock``, ``scan``, ``odom`` (the true pose in ``map``; with ``odom_frame``
-``odom``: drifting odometry, :mod:`sim_bridge.odometry`), ``pose`` (with ``slam_pose``: the
-scan-rate map-frame pose slam_toolbox would publish), ``map``, ``plan``, ``camera/*`` (with
+Published: ``/clock``, ``scan``, ``odom`` (the map-frame pose in ``map``; with
+``odom_frame`` ``odom``: drifting odometry of the true motion, :mod:`sim_bridge.odometry`),
+``pose`` (with ``slam_pose``: the scan-rate map-frame pose slam_toolbox would publish),
+``map``, ``plan``, ``camera/*`` (with
 ``enable_camera``), ``sim/metrics``. Subscribed: ``goal_pose`` and
 the OccupancyGrid layers named in ``costmap_layers``. Service: ``sim/save_metrics``.
+The map-frame pose is the engine's SLAM pose: the true pose, or with ``mapping_error`` the
+pose consistent with the erroneous map (:mod:`sim_bridge.slam_error`).
 With ``nav_action`` (default ``navigate_to_pose``) the navigation stand-in also looks like
 Nav2's action from outside: ``<action>/_action/status`` and ``<action>/_action/cancel_goal``
 (:mod:`sim_bridge.nav_action`).
@@ -255,12 +258,12 @@ class SimBridgeNode(Node):
                         + [(f.stamp_s, 1, f) for f in eng.drain_camera()],
                         key=lambda e: e[:2])
         for stamp_s, kind, sample in sensed:
-            self._publish_odom(stamp_s, sample.pose)
+            self._publish_odom(stamp_s, sample.pose, sample.map_pose or sample.pose)
             if kind == 0:
                 self._publish_scan(sample)
             else:
                 self._publish_camera(sample)
-        self._publish_odom(t, eng.pose)
+        self._publish_odom(t, eng.pose, eng.slam_pose)
         if t >= self._next_map_s:
             self._next_map_s = t + 1.0 / p.map_rate_hz
             self._map_pub.publish(convert.grid_to_msg(eng.map))
@@ -279,10 +282,12 @@ class SimBridgeNode(Node):
             eng.metrics.set_time(t)
             self._publish_metrics(stamp)
 
-    def _publish_odom(self, t_s: float, true_pose: tuple[float, float, float]) -> None:
-        """Odometry at ``t_s``: the true pose in ``map``, or drifting in ``odom_frame``."""
+    def _publish_odom(self, t_s: float, true_pose: tuple[float, float, float],
+                      map_pose: tuple[float, float, float]) -> None:
+        """Odometry at ``t_s``: the map-frame (SLAM) pose in ``map``, or odometry of the
+        true motion drifting in ``odom_frame``."""
         if self._odometry is None:
-            pose, frame = true_pose, MAP_FRAME
+            pose, frame = map_pose, MAP_FRAME
         else:
             pose, frame = self._odometry.update(t_s, true_pose), self._p.params.odom_frame
         self._odom_pub.publish(convert.odometry_msg(pose, self._engine.velocity, frame,
@@ -298,7 +303,7 @@ class SimBridgeNode(Node):
         if self._slam_pub is not None and self._slam.take(scan.pose):
             pose = PoseWithCovarianceStamped()
             pose.header = convert.make_header(MAP_FRAME, _ns(scan.stamp_s))
-            pose.pose.pose = convert.pose_from_2d(*scan.pose)
+            pose.pose.pose = convert.pose_from_2d(*(scan.map_pose or scan.pose))
             self._slam_pub.publish(pose)
 
     def _publish_camera(self, sample: CameraSample) -> None:

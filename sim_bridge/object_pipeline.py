@@ -4,6 +4,8 @@
 (:func:`~explore_seg.core.objects.process_frame` + :class:`~explore_seg.core.objects.ObjectMap`)
 on a :class:`~sim_bridge.engine.SimEngine`'s camera frames and latest scan, and tells the
 lock step when the boxes changed enough to give navigation a new object layer.
+Everything is in the map's frame: with a mapping error model (:mod:`sim_bridge.slam_error`)
+frames, scans and the robot are placed by their SLAM poses, as the node places them.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from explore_seg.core.camera import CameraIntrinsics
 from explore_seg.core.detector import Detector, DetectorParams
 from explore_seg.core.objects import WALL_OCCUPIED_THRESHOLD, DepthFrame, ObjectMap, ObjectParams, \
     WallMask, load_priors, process_frame, wall_mask
+from explore_seg.core.pose_fusion import compose, inverse
 from sim_bridge.engine import SimEngine
 from sim_bridge.sensors import CLASS_IDS
 
@@ -39,7 +42,7 @@ def scan_points_map(engine: SimEngine) -> npt.NDArray[np.float64]:
     r = np.asarray(scan.ranges, dtype=np.float64)
     ang = g.angle_min_rad + g.angle_increment_rad * np.arange(r.shape[0])
     ok = np.isfinite(r) & (r >= g.range_min_m) & (r < g.range_max_m)
-    x, y, yaw = scan.pose
+    x, y, yaw = scan.map_pose or scan.pose
     mx = engine.params.lidar_mount_x_m
     ox, oy = x + mx * math.cos(yaw), y + mx * math.sin(yaw)
     a = yaw + ang[ok]
@@ -91,7 +94,7 @@ class ObjectPipeline:
         Appends the oracle detection time to ``timings["detection"]`` and the rest
         (3D boxes, fusion; the layer is timed by the caller) to ``timings["objects"]``.
         """
-        self.map.note_robot_position(*self.engine.pose[:2])
+        self.map.note_robot_position(*self.engine.slam_pose[:2])
         cam = self.engine.latest_camera
         if cam is None or cam.stamp_s <= self._last_stamp:
             return False
@@ -100,6 +103,8 @@ class ObjectPipeline:
         tf = np.eye(4)
         tf[:3, :3] = fr.rotation
         tf[:3, 3] = fr.translation
+        if cam.map_pose is not None and cam.map_pose != cam.pose:
+            tf = _map_from_world(compose(cam.map_pose, inverse(cam.pose))) @ tf
         t0 = time.perf_counter()
         # The oracle reads the semantic and instance images only: it gets a blank view of
         # the image's shape, and the frame's colour image is never shaded.
@@ -112,7 +117,7 @@ class ObjectPipeline:
         res = process_frame(depth, dets, self.priors, self.params, scan_points_map(self.engine),
                             walls)
         self.map.update(res.objects + res.unknown, depth, int(round(cam.stamp_s * 1e9)),
-                        robot_xy=self.engine.pose[:2], walls=walls)
+                        robot_xy=self.engine.slam_pose[:2], walls=walls)
         timings["detection"].append((t1 - t0) * 1e3)
         timings["objects"].append((time.perf_counter() - t1) * 1e3)
         return True
@@ -141,3 +146,12 @@ class ObjectPipeline:
     def _signature(self) -> list[tuple[float, ...]]:
         return [(o.center_xyz[0], o.center_xyz[1], o.size_xyz[0], o.size_xyz[1],
                  math.sin(2 * o.yaw), math.cos(2 * o.yaw)) for _, o in self.map.boxes()]
+
+
+def _map_from_world(drift: tuple[float, float, float]) -> npt.NDArray[np.float64]:
+    """The 4x4 homogeneous transform of a map <- world drift (x, y, yaw)."""
+    c, s = math.cos(drift[2]), math.sin(drift[2])
+    out = np.eye(4)
+    out[:2, :2] = [[c, -s], [s, c]]
+    out[:2, 3] = drift[:2]
+    return out

@@ -14,6 +14,10 @@ from sim_bridge.mapping import MappingParams
 from sim_bridge.navigation.params import NavParams
 from sim_bridge.sensors.camera import CameraParams
 from sim_bridge.sensors.lidar import LidarParams
+from sim_bridge.slam_error import PROFILES, SlamErrorParams
+
+#: Values of ``SimParams.mapping_error`` besides the named profiles.
+MAPPING_ERROR_MODES = ("none", "custom")
 
 #: Encodings the node can publish depth images in.
 DEPTH_ENCODINGS = ("16UC1", "32FC1")
@@ -115,6 +119,47 @@ class SimParams:
     pose_noise_yaw_rad: float = field(default=0.0, metadata=param_meta(
         "std of the heading error of the pose each scan is mapped at", "rad",
         range=(0.0, math.inf)))
+    # --- SLAM-like mapping error (sim_bridge.slam_error)
+    mapping_error: str = field(default="none", metadata=param_meta(
+        "mapping error model: 'none' (every scan mapped at the true pose), 'realistic' "
+        "(slam_toolbox on a TurtleBot3), 'harsh', or 'custom' (the mapping_* numbers below): "
+        "drift between loop closures, keyframes only, the map re-rendered at closures; the "
+        "map, the published pose and navigation's pose are the SLAM ones, collisions and "
+        "coverage the true ones", read_only=True))
+    mapping_drift_xy_m: float = field(default=SlamErrorParams.drift_xy_m, metadata=param_meta(
+        "(custom) std of the position random walk after 1 m of travel", "m",
+        range=(0.0, math.inf), read_only=True))
+    mapping_drift_yaw_per_m_rad: float = field(
+        default=SlamErrorParams.drift_yaw_per_m_rad, metadata=param_meta(
+        "(custom) std of the heading random walk after 1 m of travel", "rad",
+        range=(0.0, math.inf), read_only=True))
+    mapping_drift_yaw_per_rad: float = field(
+        default=SlamErrorParams.drift_yaw_per_rad, metadata=param_meta(
+        "(custom) std of the heading random walk after 1 rad of turning", "rad",
+        range=(0.0, math.inf), read_only=True))
+    mapping_jitter_xy_m: float = field(default=SlamErrorParams.jitter_xy_m, metadata=param_meta(
+        "(custom) std of the per-keyframe position error", "m", range=(0.0, math.inf),
+        read_only=True))
+    mapping_jitter_yaw_rad: float = field(
+        default=SlamErrorParams.jitter_yaw_rad, metadata=param_meta(
+        "(custom) std of the per-keyframe heading error", "rad", range=(0.0, math.inf),
+        read_only=True))
+    mapping_keyframe_travel_m: float = field(
+        default=SlamErrorParams.keyframe_travel_m, metadata=param_meta(
+        "(custom) a scan enters the map after this much travel (slam_toolbox "
+        "minimum_travel_distance)", "m", range=(0.0, math.inf), read_only=True))
+    mapping_keyframe_turn_rad: float = field(
+        default=SlamErrorParams.keyframe_turn_rad, metadata=param_meta(
+        "(custom) ... or this much turning (minimum_travel_heading)", "rad",
+        range=(0.0, math.inf), read_only=True))
+    mapping_loop_radius_m: float = field(
+        default=SlamErrorParams.loop_radius_m, metadata=param_meta(
+        "(custom) a keyframe closes a loop with an old one within this distance", "m",
+        range=(0.0, math.inf), read_only=True))
+    mapping_loop_min_travel_m: float = field(
+        default=SlamErrorParams.loop_min_travel_m, metadata=param_meta(
+        "(custom) the old keyframe lies this much travel back, and the last closure too",
+        "m", range=(0.0, math.inf), read_only=True))
     # --- real-robot pose contract (sim_bridge.odometry)
     odom_frame: str = field(default="map", metadata=param_meta(
         "frame of the published odometry: 'map' (the true pose, no drift) or another name, "
@@ -249,6 +294,10 @@ class SimParams:
         if self.slam_min_travel_m < 0 or self.slam_min_turn_rad < 0:
             raise ValueError(f"slam_min_travel_m and slam_min_turn_rad must be >= 0, got "
                              f"{self.slam_min_travel_m}, {self.slam_min_turn_rad}")
+        modes = MAPPING_ERROR_MODES + tuple(PROFILES)
+        if self.mapping_error not in modes:
+            raise ValueError(f"mapping_error must be one of {modes}, got "
+                             f"{self.mapping_error!r}")
         if not self.world:
             raise ValueError("world must name a world or a file, got ''")
         if self.camera_depth_encoding not in DEPTH_ENCODINGS:
@@ -266,6 +315,7 @@ class SimParams:
         self.mapping_params()
         self.lidar_params()
         self.camera_params()
+        self.slam_error_params()
 
     def nav_params(self) -> NavParams:
         """The navigation stand-in's parameters."""
@@ -307,3 +357,19 @@ class SimParams:
                             cy=self.camera_cy_px, mount_x_m=self.camera_mount_x_m,
                             mount_z_m=self.camera_mount_z_m, pitch_rad=self.camera_pitch_rad,
                             range_max_m=self.camera_range_max_m, rate_hz=self.camera_rate_hz)
+
+    def slam_error_params(self) -> SlamErrorParams | None:
+        """The mapping error model's numbers: the profile's, the ``mapping_*`` fields'
+        (``custom``), or None (``none``)."""
+        custom = SlamErrorParams(
+            drift_xy_m=self.mapping_drift_xy_m,
+            drift_yaw_per_m_rad=self.mapping_drift_yaw_per_m_rad,
+            drift_yaw_per_rad=self.mapping_drift_yaw_per_rad,
+            jitter_xy_m=self.mapping_jitter_xy_m, jitter_yaw_rad=self.mapping_jitter_yaw_rad,
+            keyframe_travel_m=self.mapping_keyframe_travel_m,
+            keyframe_turn_rad=self.mapping_keyframe_turn_rad,
+            loop_radius_m=self.mapping_loop_radius_m,
+            loop_min_travel_m=self.mapping_loop_min_travel_m)   # validated in every mode
+        if self.mapping_error == "none":
+            return None
+        return PROFILES.get(self.mapping_error, custom)

@@ -269,6 +269,33 @@ def test_nav_margin_is_a_setting_and_earlier_folders_ran_on_zero(first, tmp_path
     assert run_bench.sim_params_for(None, 0.03).nav_inflation_margin_m == 0.03
 
 
+def test_mapping_noise_is_a_setting_and_earlier_folders_ran_without(first, tmp_path):
+    out, _ = first
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["settings"]["mapping_error"] == "none"
+    res = _copy_results(out, tmp_path / "noise")
+    del meta["settings"]["mapping_error"]
+    (res / "meta.json").write_text(json.dumps(meta))
+    assert run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
+                                  "--no-runs"]) == 0
+    # its runs had no mapping error: resuming them with one is refused
+    assert run_bench.main(ARGS + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
+                                  "--mapping-noise", "realistic"]) == 2
+    with pytest.raises(SystemExit):
+        run_bench.main(ARGS + ["--out", str(tmp_path / "bad"), "--mapping-noise", "wild"])
+    assert run_bench.sim_params_for(None, None, "harsh").mapping_error == "harsh"
+    # a task carrying the profile runs with it
+    task = ("small_house", "nearest", 0, 20.0, None, None, None, "harsh")
+    plain = task[:7] + ("none",)
+
+    def result(t):
+        return {k: v for k, v in tasks.run_task(t).items()
+                if k not in ("wall_time_s", "timings_ms")}
+
+    assert result(task) != result(plain)
+    assert result(plain) == result(plain[:7])
+
+
 @pytest.mark.parametrize("name", ["nav_inflation_soft_margin_m", "nav_arc_check_edges"])
 def test_navigation_safety_setting_is_recorded_and_folders_that_did_not_record_it_ran_without(
         first, tmp_path, name):
