@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections import deque
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -187,9 +186,6 @@ class Explorer:
         self._fcache = FrontierCache()
         self._layer_warning = ""
         self._reported_blacklisted = 0
-        # Goals the navigator failed: [x, y, retries left, stamp of the map of the failure].
-        self._nav_failed: deque[list[float]] = deque(maxlen=selection.blacklist_max)
-        self._map_stamp_ns = 0
 
     # ------------------------------------------------------------------ state
     @property
@@ -259,8 +255,6 @@ class Explorer:
         """Forget the goal and DONE (and the blacklist when asked), as on a (re)start; the
         ``routed`` tour forgets its kept gains and path lengths."""
         self.manager.reset(clear_blacklist=clear_blacklist)
-        if clear_blacklist:
-            self._nav_failed.clear()
         self._fcache.reset()
         if self._planner is not None:
             self._planner.reset()
@@ -285,35 +279,9 @@ class Explorer:
         """
         xy = goal.xy_m if isinstance(goal, Goal) else goal
         added = self.manager.blacklist_added
-        current = self.manager.goal
         applied = self.manager.report_navigation(outcome, xy)
         self._reported_blacklisted += self.manager.blacklist_added - added
-        if (applied and current is not None and self.manager.blacklist_added > added
-                and outcome in (NavOutcome.ABORTED, NavOutcome.REJECTED)):
-            self._note_nav_failure(current.xy_m)
         return applied
-
-    def _note_nav_failure(self, xy: tuple[float, float]) -> None:
-        """Remember a goal the navigator failed, for a retry on a newer map; a failure in
-        an area already remembered (within ``blacklist_radius_m``) waits for a newer map
-        again without new retries."""
-        for entry in self._nav_failed:
-            if math.hypot(entry[0] - xy[0], entry[1] - xy[1]) <= \
-                    self._selection_params.blacklist_radius_m:
-                entry[0], entry[1], entry[3] = xy[0], xy[1], self._map_stamp_ns
-                return
-        self._nav_failed.append([xy[0], xy[1], self._selection_params.nav_failure_retries,
-                                 self._map_stamp_ns])
-
-    def _retry_nav_failures(self, grid: GridMap) -> None:
-        """On a map newer than a navigation failure's, take the failed goal off the
-        blacklist (``nav_failure_retries`` times per area): the navigator judged it on the
-        map of that moment, and a noisy map closes a passage now and then."""
-        self._map_stamp_ns = grid.stamp_ns
-        for entry in self._nav_failed:
-            if entry[2] > 0 and entry[3] != grid.stamp_ns:
-                if self.manager.unblacklist((entry[0], entry[1])):
-                    entry[2] -= 1
 
     def clock_jumped(self, now_s: float) -> None:
         """The clock jumped (sim reset, ``/clock`` leap): the current goal's progress and
@@ -384,7 +352,6 @@ class Explorer:
         if self._layer_warning:
             warnings.append((WARN_LAYER_FRAME, self._layer_warning))
         t1 = time.perf_counter()
-        self._retry_nav_failures(grid)
         manager = self.manager
         if manager.start_xy_m is None:
             manager.set_start((x, y), yaw)

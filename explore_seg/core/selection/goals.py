@@ -191,16 +191,6 @@ class GoalManager:
         self.blacklist_added += 1
         self._blacklist_version += 1
 
-    def unblacklist(self, xy_m: tuple[float, float]) -> bool:
-        """Take the entries at ``xy_m`` (within 1 mm) off the blacklist; True if any."""
-        keep = [p for p in self._blacklist
-                if math.hypot(p[0] - xy_m[0], p[1] - xy_m[1]) > 1e-3]
-        if len(keep) == len(self._blacklist):
-            return False
-        self._blacklist = deque(keep, maxlen=self.params.blacklist_max)
-        self._blacklist_version += 1
-        return True
-
     def abandon_goal(self, blacklist: bool = True) -> None:
         """Drop the current goal (blacklisting it unless told not to)."""
         if self.goal is not None and blacklist and not self.goal.is_return:

@@ -112,11 +112,6 @@ class GoalParams:
         "when no frontier has a path, drive to a lookout from which an unreachable one is "
         "in sight (within sensor_range_m) and look, before exploration ends (a gap behind "
         "a passage narrower than the robot)"))
-    nav_failure_retries: int = field(default=2, metadata=param_meta(
-        "a goal the navigator failed (aborted, rejected) comes off the blacklist on a newer "
-        "map, this many times per goal area (within blacklist_radius_m): the navigator "
-        "judged it on the map of that moment, and map noise closes a passage now and then; "
-        "0 = blacklisted at the first failure", range=(0, INT_MAX)))
     speckle_max_cells: int = field(default=2, metadata=param_meta(
         "when no frontier (nor lookout) is selectable, occupied 8-connected pieces of at "
         "most this many cells count as map speckle (hits of one or two beams that no other "
@@ -141,8 +136,6 @@ class GoalParams:
                              f"{self.flicker_vanish_count}")
         if self.done_confirmations < 1:
             raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
-        if self.nav_failure_retries < 0:
-            raise ValueError(f"nav_failure_retries must be >= 0, got {self.nav_failure_retries}")
         if self.speckle_max_cells < 0:
             raise ValueError(f"speckle_max_cells must be >= 0, got {self.speckle_max_cells}")
 
