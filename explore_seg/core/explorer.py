@@ -53,6 +53,7 @@ from explore_seg.core.grid import GridMap, metres_to_cells
 from explore_seg.core.rrt import RrtFrontierDetector, RrtParams
 from explore_seg.core.selection import (Action, Goal, GoalManager, NavOutcome, PathGraphs,
                                         Selection, SelectionParams, StepInputs)
+from explore_seg.core.selection.blockage import approaches
 from explore_seg.core.selection.lookout import Reach, lookouts
 from explore_seg.core.selection.router import TourPlan
 from explore_seg.core.selection.strategies import Planner, Strategy, get_strategy
@@ -367,15 +368,10 @@ class Explorer:
             frontiers = planner.viewpoints(grid, frontiers, self._graph, start,
                                           self._det.passable)
         dist, excluded = self._distances(start, robot_rc, frontiers)
-        if (self._selection_params.lookout_goals and dist is not None and len(dist)
-                and not (np.isfinite(dist) & ~excluded).any()):
-            # No selectable frontier: look at the unreachable ones (lookout.py).
-            assert start is not None and self._det is not None and self._graph is not None
-            hop = math.hypot(start[0] - robot_rc[0], start[1] - robot_rc[1]) * grid.resolution_m
-            reach = Reach(self._graph.graph, start, self._det.passable, hop)
-            frontiers, dist = lookouts(grid, frontiers, dist, reach, self._selection_params,
-                                       self._frontier_params.occupied_threshold, excluded)
-            excluded = manager.excluded(frontiers)
+        if dist is not None and len(dist) and not (np.isfinite(dist) & ~excluded).any():
+            assert start is not None
+            frontiers, dist, excluded = self._unreachable_goals(grid, frontiers, dist, excluded,
+                                                                start, robot_rc)
         if planner is not None and dist is not None:
             tour = planner.tour_costs(grid, frontiers, dist, excluded, self._graph, robot_rc,
                                      labels, manager.goal_frontier(grid, frontiers))
@@ -394,6 +390,30 @@ class Explorer:
                             robot_rc, detected, blacklisted, switched, tuple(warnings),
                             t1 - t0, time.perf_counter() - t1, tour,
                             planner.viewpoint_s + planner.tour_s if planner is not None else 0.0)
+
+    def _unreachable_goals(self, grid: GridMap, frontiers: list[Frontier],
+                           dist: npt.NDArray[np.float64], excluded: npt.NDArray[np.bool_],
+                           start: tuple[int, int], robot_rc: tuple[int, int]
+                           ) -> tuple[list[Frontier], npt.NDArray[np.float64],
+                                      npt.NDArray[np.bool_]]:
+        """No selectable frontier: look at the unreachable ones from a lookout
+        (lookout.py); when no lookout is selectable either, drive up to a passage that
+        only map speckle closes and look at it (blockage.py). Returns the frontiers, their
+        path lengths and blacklist mask."""
+        sp, manager = self._selection_params, self.manager
+        assert self._det is not None and self._graph is not None
+        hop = math.hypot(start[0] - robot_rc[0], start[1] - robot_rc[1]) * grid.resolution_m
+        reach = Reach(self._graph.graph, start, self._det.passable, hop)
+        out, d_out, ex_out = frontiers, dist, excluded
+        if sp.lookout_goals:
+            out, d_out = lookouts(grid, frontiers, dist, reach, sp,
+                                  self._frontier_params.occupied_threshold, excluded)
+            ex_out = manager.excluded(out)
+        if sp.speckle_max_cells > 0 and not (np.isfinite(d_out) & ~ex_out).any():
+            out, d_out = approaches(grid, frontiers, dist, reach, self._frontier_params,
+                                    sp.speckle_max_cells, self._det.extra_obstacles, excluded)
+            ex_out = manager.excluded(out)
+        return out, d_out, ex_out
 
     def _start_cell(self, grid: GridMap, robot_rc: tuple[int, int], xy: tuple[float, float],
                     warnings: list[tuple[str, str]]) -> tuple[int, int] | None:

@@ -112,6 +112,12 @@ class GoalParams:
         "when no frontier has a path, drive to a lookout from which an unreachable one is "
         "in sight (within sensor_range_m) and look, before exploration ends (a gap behind "
         "a passage narrower than the robot)"))
+    speckle_max_cells: int = field(default=2, metadata=param_meta(
+        "when no frontier (nor lookout) is selectable, occupied 8-connected pieces of at "
+        "most this many cells count as map speckle (hits of one or two beams that no other "
+        "scan confirmed): frontiers reachable on the map without them get an approach goal "
+        "where the path meets the speckle, to look at the passage before exploration ends; "
+        "0 = no approach goals", range=(0, INT_MAX)))
 
     def __post_init__(self) -> None:
         check_non_negative(self, ("hysteresis_margin", "progress_min_m",
@@ -130,6 +136,8 @@ class GoalParams:
                              f"{self.flicker_vanish_count}")
         if self.done_confirmations < 1:
             raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
+        if self.speckle_max_cells < 0:
+            raise ValueError(f"speckle_max_cells must be >= 0, got {self.speckle_max_cells}")
 
 
 @dataclass(frozen=True)

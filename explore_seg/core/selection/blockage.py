@@ -1,0 +1,172 @@
+"""Approach goals: drive up to a passage closed only by map speckle and look at it.
+
+A map built from noisy scans holds **speckle**: single occupied cells (or pairs) where a
+scan mapped at a wrong pose put a hit that no other scan confirmed. Inflated by the robot
+radius, one such cell closes a doorway. A robot that drove through a doorway and then
+mapped speckle into it is walled in: every frontier beyond has no path, and exploration
+would end ("no path") with the rest of the building unseen. The sensor removes speckle
+where it sees through it (every beam that passes lowers a cell's occupancy), most
+surely from close by, where a heading error moves a hit least.
+
+When a decision has no selectable frontier, :func:`approaches` judges reachability once
+more on the map without speckle (occupied 8-connected pieces of at most
+``speckle_max_cells`` cells taken as free). Each unreachable frontier that this map
+reaches gets an **approach**: the last cell of that path (from the robot) that is
+reachable on the real map, i.e. where the path meets the speckle. The frontier is
+returned with its cPoint moved there, so the goal manager sends, judges (arrival, then
+"frontier still there?") and blacklists it as any other goal: one look per blocked
+passage (per blacklist retry), then exploration ends as before. When the look cleared
+the speckle, the frontiers beyond have a path again and exploration goes on.
+
+Examples
+--------
+>>> from explore_seg.core.grid import grid_from_ascii
+>>> g, _ = grid_from_ascii('''
+... #####
+... #.?.#
+... #...#
+... #...#
+... #...#
+... #.#.#
+... #...#
+... #...#
+... #...#
+... #####
+... ''', resolution_m=1.0)
+>>> speck = speckle_cells(g.data >= 65, 1)     # the lone cell in the middle, no wall
+>>> [g.cell_to_world(int(r), int(c)) for r, c in np.argwhere(speck)]
+[(2.5, 4.5)]
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Sequence
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.frontiers import Frontier, FrontierParams, traversable_mask
+from explore_seg.core.grid import GridMap
+from explore_seg.core.paths import distance_field, extract_path
+from explore_seg.core.selection.lookout import Reach
+
+
+def speckle_cells(occupied: npt.NDArray[np.bool_], max_cells: int) -> npt.NDArray[np.bool_]:
+    """Occupied cells in 8-connected occupied pieces of at most ``max_cells`` cells.
+
+    Parameters
+    ----------
+    occupied : ndarray of bool, shape (H, W)
+    max_cells : int
+        Largest piece counted as speckle; 0 = none.
+
+    Returns
+    -------
+    ndarray of bool, shape (H, W)
+
+    Raises
+    ------
+    ValueError
+        When ``max_cells`` < 0 or ``occupied`` is not 2-D.
+
+    Examples
+    --------
+    >>> occ = np.zeros((4, 6), bool); occ[1, 1] = True; occ[1:3, 3:5] = True
+    >>> speckle_cells(occ, 1).astype(int).tolist()
+    [[0, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 0, 0, 0, 0, 0], [0, 0, 0, 0, 0, 0]]
+    >>> int(speckle_cells(occ, 4).sum())
+    5
+    """
+    occ = np.asarray(occupied, dtype=bool)
+    if occ.ndim != 2:
+        raise ValueError(f"occupied must be 2-D, got shape {occ.shape}")
+    if max_cells < 0:
+        raise ValueError(f"max_cells must be >= 0, got {max_cells}")
+    if max_cells == 0 or not occ.any():
+        return np.zeros(occ.shape, dtype=bool)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(occ.astype(np.uint8),
+                                                           connectivity=8)
+    small = stats[:, cv2.CC_STAT_AREA] <= max_cells
+    small[0] = False                       # background
+    return small[labels]
+
+
+def despeckled(grid: GridMap, params: FrontierParams, max_cells: int) -> GridMap:
+    """``grid`` with its speckle (:func:`speckle_cells` of the occupied cells, values >=
+    ``params.occupied_threshold``) set free (0)."""
+    speck = speckle_cells(grid.data >= params.occupied_threshold, max_cells)
+    data = grid.data.copy()
+    data[speck] = 0
+    return replace(grid, data=data)
+
+
+def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray[np.float64],
+               reach: Reach, params: FrontierParams, max_cells: int,
+               extra_obstacles: npt.NDArray[np.bool_] | None = None,
+               excluded: npt.NDArray[np.bool_] | None = None
+               ) -> tuple[list[Frontier], npt.NDArray[np.float64]]:
+    """The frontiers with an approach instead of their unreachable cPoint (module
+    docstring).
+
+    Parameters
+    ----------
+    grid : GridMap
+    frontiers : sequence of Frontier
+    dist_m : ndarray of float64, shape (N,)
+        Path lengths robot -> cPoints (inf: no path).
+    reach : Reach
+        The graph, start cell and passable cells the distances were computed on.
+    params : FrontierParams
+        ``occupied_threshold``, ``free_threshold`` and ``robot_radius_m`` (as for the
+        passable cells).
+    max_cells : int
+        Occupied pieces of at most this many cells are speckle; 0: no approaches.
+    extra_obstacles : ndarray of bool, shape (H, W), optional
+        Obstacles besides the map (the object layer), kept.
+    excluded : ndarray of bool, shape (N,), optional
+        Blacklisted frontiers (left as they are).
+
+    Returns
+    -------
+    (list of Frontier, ndarray of float64)
+        Same order; an unreachable frontier with an approach has ``point_rc`` /
+        ``point_xy_m`` there and ``point_passable`` True, and its distance is the path
+        length to the approach. The others are unchanged.
+    """
+    out = list(frontiers)
+    d_out = np.asarray(dist_m, dtype=np.float64).copy()
+    todo = [i for i in range(len(frontiers))
+            if not np.isfinite(d_out[i]) and not (excluded is not None and excluded[i])]
+    if not todo or max_cells <= 0:
+        return out, d_out
+    clean = traversable_mask(despeckled(grid, params, max_cells), extra_obstacles, params)
+    clean |= reach.passable
+    field = distance_field(clean, reach.start_rc, grid.resolution_m)
+    found: dict[int, tuple[int, int]] = {}
+    for i in todo:
+        r, c = frontiers[i].point_rc
+        if not (grid.in_bounds(r, c) and np.isfinite(field[r, c])):
+            continue
+        path = extract_path(field, (r, c))
+        off = ~reach.passable[path[:, 0], path[:, 1]]
+        off[0] = False                     # the start cell (the robot may stand on a margin)
+        if not off.any():
+            continue
+        k = int(np.argmax(off))
+        found[i] = (int(path[k - 1, 0]), int(path[k - 1, 1]))
+    if not found:
+        return out, d_out
+    cells = np.asarray(list(found.values()), dtype=np.int64)
+    d = reach.graph.distances(reach.start_rc, cells) + reach.hop_m
+    for (i, (r, c)), di in zip(found.items(), d):
+        if not np.isfinite(di):
+            continue
+        out[i] = replace(frontiers[i], point_rc=(r, c), point_xy_m=grid.cell_to_world(r, c),
+                         point_passable=True)
+        d_out[i] = float(di)
+    return out, d_out
+
+
+__all__ = ["approaches", "despeckled", "speckle_cells"]

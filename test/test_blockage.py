@@ -1,0 +1,106 @@
+"""Approach goals (explore_seg.core.selection.blockage): a doorway closed only by map
+speckle (lone occupied cells from scans mapped at a noisy pose) does not end exploration;
+the robot drives up to it and looks first."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from explore_seg.core.explorer import Explorer
+from explore_seg.core.grid import grid_from_ascii
+from explore_seg.core.selection import Action
+from explore_seg.core.selection.blockage import speckle_cells
+from selection_cases import split_params
+
+# Room A (robot R) and room B joined by a 0.7 m doorway (robot radius 0.2 m: passable)
+# in which one speckle cell (*) stands; room B opens onto unknown space (a frontier).
+DOORWAY = """
+###############
+#.............#
+#.............#
+#...R.........#
+#.............#
+#.............#
+####...*...####
+#.............#
+#.............#
+#.............#
+#.............#
+#.............#
+#?????????????#
+###############
+"""
+
+
+def _scene(text: str = DOORWAY, **kw):
+    g, marks = grid_from_ascii(text.replace("*", "#"), resolution_m=0.1)
+    params = dict(strategy="nearest", robot_radius_m=0.2, min_group_size_cells=1,
+                  path_block_cells=1, blacklist_retries=0, done_confirmations=1)
+    params.update(kw)
+    fp, sp = split_params(**params)
+    x, y = g.cell_to_world(*marks["R"][0])
+    return g, (x, y, 0.0), Explorer(fp, sp), sp
+
+
+def test_the_speckle_cell_walls_the_robot_in():
+    g, pose, ex, _ = _scene(speckle_max_cells=0)
+    out = ex.step(0.0, g, pose)
+    assert len(out.frontiers) >= 1 and np.isinf(out.dist_m).all()
+    assert out.action is Action.DONE
+
+
+def test_walled_in_by_speckle_the_robot_approaches_the_doorway():
+    g, pose, ex, _ = _scene()
+    out = ex.step(0.0, g, pose)
+    assert out.action is Action.NEW_GOAL
+    r, c = out.goal.rc
+    assert ex._det.passable[r, c]                     # on the robot's side, reachable
+    door = np.argwhere(speckle_cells(g.data >= 65, 2))
+    assert len(door) == 1
+    dr, dc = door[0]
+    # where the path meets the speckle: next to it, within the inflation (0.2 m) + a cell
+    assert np.hypot(r - dr, c - dc) * g.resolution_m <= 0.2 + 2 * g.resolution_m + 1e-9
+    assert np.isfinite(out.dist_m).any()
+
+
+def test_an_approach_that_did_not_clear_the_speckle_is_blacklisted_once_then_done():
+    g, pose, ex, sp = _scene()
+    goal = ex.step(0.0, g, pose).goal
+    at = (goal.xy_m[0], goal.xy_m[1], goal.yaw_rad)
+    assert ex.step(1.0, g, at).action is Action.KEEP   # arrived: wait for a newer map
+    judged = ex.step(1.0 + sp.arrival_wait_s + 0.1, g, at)   # map unchanged
+    assert judged.blacklisted == 1
+    assert judged.action is Action.DONE
+
+
+def test_once_the_look_cleared_the_speckle_the_frontier_beyond_is_a_goal():
+    g, pose, ex, sp = _scene()
+    goal = ex.step(0.0, g, pose).goal
+    at = (goal.xy_m[0], goal.xy_m[1], goal.yaw_rad)
+    clear, _ = grid_from_ascii(DOORWAY.replace("*", "."), resolution_m=0.1)
+    out = ex.step(1.0 + sp.arrival_wait_s + 0.1, clear, at)
+    assert out.action in (Action.NEW_GOAL, Action.KEEP)
+    assert np.isfinite(out.dist_m).all()
+
+
+def test_a_piece_larger_than_speckle_max_cells_gets_no_approach():
+    """Three cells in a row (a real obstacle: a chair's seat edge, a box) close the
+    doorway as far as the explorer knows: DONE as before."""
+    g, pose, ex, _ = _scene(DOORWAY.replace("####...*...####", "####..***..####"))
+    assert ex.step(0.0, g, pose).action is Action.DONE
+
+
+def test_speckle_cells_counts_8_connected_pieces():
+    occ = np.zeros((6, 8), bool)
+    occ[1, 1] = True                      # lone cell
+    occ[3, 3] = occ[4, 4] = True          # diagonal pair: one piece of 2
+    occ[0:3, 6] = True                    # a piece of 3
+    assert speckle_cells(occ, 0).sum() == 0
+    assert np.argwhere(speckle_cells(occ, 1)).tolist() == [[1, 1]]
+    assert speckle_cells(occ, 2).sum() == 3
+    assert speckle_cells(occ, 3).sum() == 6
+    with pytest.raises(ValueError, match="max_cells must be >= 0, got -1"):
+        speckle_cells(occ, -1)
+    with pytest.raises(ValueError, match="occupied must be 2-D"):
+        speckle_cells(occ[0], 1)
