@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from explore_seg.core.segmentation.labels import bbox
 from explore_seg.core.segmentation.params import SegmentationParams
 
 
@@ -37,7 +38,7 @@ def _open(mask: npt.NDArray[np.bool_], d_cells: float,
     if dist is None:
         dist = cv2.distanceTransform(mask.view(np.uint8), cv2.DIST_L2, 3)
     core = dist > r
-    box = _bbox(core, int(math.ceil(r)) + 2)
+    box = bbox(core, int(math.ceil(r)) + 2)
     if box is None:
         return core
     out = np.zeros(core.shape, dtype=bool)
@@ -47,17 +48,6 @@ def _open(mask: npt.NDArray[np.bool_], d_cells: float,
     back = cv2.distanceTransform(pad.view(np.uint8), cv2.DIST_L2, 3)[1:-1, 1:-1]
     out[box] = back <= r
     return out
-
-
-def _bbox(mask: npt.NDArray[np.bool_], margin: int) -> tuple[slice, slice] | None:
-    """Bounding box of the true cells grown by ``margin`` (clipped), or None."""
-    rows = np.flatnonzero(mask.any(axis=1))
-    if rows.size == 0:
-        return None
-    cols = np.flatnonzero(mask.any(axis=0))
-    h, w = mask.shape
-    return (slice(max(0, rows[0] - margin), min(h, rows[-1] + 1 + margin)),
-            slice(max(0, cols[0] - margin), min(w, cols[-1] + 1 + margin)))
 
 
 def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res: float
@@ -91,7 +81,7 @@ def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res:
     # opened again so that the rounded-off corners of deep blocks (slivers thinner
     # than d_min) are no bulges; only around the candidates
     m = int(math.ceil(d_min)) + 2
-    box = _bbox(cand, m)
+    box = bbox(cand, m)
     if box is None:
         return out
     out[box] = _open(np.pad(cand[box], m), d_min)[m:-m, m:-m]
@@ -133,7 +123,7 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
     occ_b = occ > 0
     half_min = 0.5 * params.furniture_min_thickness_m / res
     # components of the bulges, in the bulges' bounding box
-    bb = _bbox(bulge, 0)
+    bb = bbox(bulge, 0)
     assert bb is not None
     lab = np.zeros(occ.shape, dtype=np.int32)
     n, lab[bb], stats, _ = cv2.connectedComponentsWithStats(bulge[bb].view(np.uint8),

@@ -24,6 +24,18 @@ def bbox(mask: npt.NDArray[np.bool_], margin: int
             slice(max(0, cols[0] - margin), min(w, cols[-1] + 1 + margin)))
 
 
+def region_edges(labels: npt.NDArray[np.integer]) -> npt.NDArray[np.bool_]:
+    """Cells with a 4-neighbour of another label (region borders, on both sides)."""
+    edge = np.zeros(labels.shape, dtype=bool)
+    ne = labels[:, :-1] != labels[:, 1:]
+    edge[:, :-1] |= ne
+    edge[:, 1:] |= ne
+    ne = labels[:-1, :] != labels[1:, :]
+    edge[:-1, :] |= ne
+    edge[1:, :] |= ne
+    return edge
+
+
 def fill_gaps(labels: npt.NDArray[np.int32], domain: npt.NDArray[np.bool_],
                max_iter: int) -> None:
     """Give unlabelled domain cells the label of a labelled neighbour, in place (§10.3).

@@ -8,7 +8,8 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.segmentation.labels import apply_mapping, label_counts, pair_counts
+from explore_seg.core.segmentation.labels import (apply_mapping, label_counts, pair_counts,
+                                                  region_edges)
 from explore_seg.core.segmentation.params import SegmentationParams
 from explore_seg.core.segmentation.passages import merge_passages
 
@@ -89,13 +90,7 @@ def merge_regions(labels: npt.NDArray[np.int32], out_mask: npt.NDArray[np.bool_]
         # a region is thin when no cell is farther than half the width from its border;
         # borders between regions count as borders too (one distance transform to the
         # union of both: the chamfer distance to a union is the smaller of the two)
-        edge = np.zeros(labels.shape, dtype=bool)
-        ne = labels[:, :-1] != labels[:, 1:]
-        edge[:, :-1] |= ne
-        edge[:, 1:] |= ne
-        ne = labels[:-1, :] != labels[1:, :]
-        edge[:-1, :] |= ne
-        edge[1:, :] |= ne
+        edge = region_edges(labels)
         dd = cv2.distanceTransform(((labels > 0) & ~edge).astype(np.uint8), cv2.DIST_L2, 3)
         wide = label_counts(labels[dd >= half_w])
         thin = {k for k in cand if k not in wide}

@@ -22,6 +22,7 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from explore_seg.core.segmentation.labels import region_edges
 from explore_seg.core.segmentation.params import SegmentationParams
 
 if TYPE_CHECKING:
@@ -92,13 +93,7 @@ def border_spans(labels: npt.NDArray[np.int32],
 def inscribed_diameters(labels: npt.NDArray[np.int32]) -> dict[int, float]:
     """Twice the largest distance (cells) from a cell of each region to its edge (other
     regions and non-region cells alike)."""
-    edge = np.zeros(labels.shape, dtype=bool)
-    ne = labels[:, :-1] != labels[:, 1:]
-    edge[:, :-1] |= ne
-    edge[:, 1:] |= ne
-    ne = labels[:-1, :] != labels[1:, :]
-    edge[:-1, :] |= ne
-    edge[1:, :] |= ne
+    edge = region_edges(labels)
     inner = ((labels > 0) & ~edge).astype(np.uint8)
     dd = cv2.distanceTransform(np.pad(inner, 1), cv2.DIST_L2, 3)[1:-1, 1:-1]
     top = int(labels.max()) if labels.size else 0
