@@ -35,9 +35,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.fields import param_meta
+from explore_seg.core.angles import wrap_angle
+from explore_seg.core.fields import check_non_negative, param_meta
 from explore_seg.core.grid import GridMap
-from explore_seg.core.pose_fusion import Pose2D, compose, inverse, wrap_angle
+from explore_seg.core.pose_fusion import Pose2D, compose, inverse
 from sim_bridge.mapping import MappingParams, ScanMapper
 
 #: Below this true displacement between two scans (m, rad) the robot counts as standing
@@ -73,12 +74,9 @@ class SlamErrorParams:
         "m"))
 
     def __post_init__(self) -> None:
-        for name in ("drift_xy_m", "drift_yaw_per_m_rad", "drift_yaw_per_rad",
-                     "jitter_xy_m", "jitter_yaw_rad", "keyframe_travel_m",
-                     "keyframe_turn_rad"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be finite and >= 0, got {v}")
+        check_non_negative(self, ("drift_xy_m", "drift_yaw_per_m_rad", "drift_yaw_per_rad",
+                                  "jitter_xy_m", "jitter_yaw_rad", "keyframe_travel_m",
+                                  "keyframe_turn_rad"))
         for name in ("loop_radius_m", "loop_min_travel_m"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
