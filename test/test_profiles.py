@@ -156,7 +156,7 @@ def test_profile_starts_its_nodes_with_its_values_and_stops_cleanly(ros, profile
         rc, out = interrupt()
         if rc < 0:
             # Killed by a signal while shutting down: an intermittent crash in rclpy's
-            # teardown (about 1 in 30 stops here, docs/robustness.md#known-defects). A
+            # teardown (seen once in the full test runs, docs/robustness.md#known-defects). A
             # second start-stop cycle must be clean.
             first = rc
             proc = start()
