@@ -5,6 +5,8 @@ from __future__ import annotations
 import functools
 import math
 import os
+import signal
+import threading
 import time
 import traceback
 from pathlib import Path
@@ -14,6 +16,7 @@ import rclpy
 from rclpy.executors import (ExternalShutdownException, MultiThreadedExecutor,
                              SingleThreadedExecutor)
 from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
 
 
 def config_file(name: str) -> Path | None:
@@ -35,31 +38,41 @@ def run(node_cls: Callable[..., Node] | Sequence[Callable[..., Node]],
         args: list[str] | None = None, num_threads: int = 1) -> int:
     """Main for console scripts: init, spin one or several nodes, exit cleanly.
 
-    SIGINT (Ctrl-C) and external shutdown end the spin; the nodes are destroyed and the
-    context shut down. ``num_threads > 1`` spins with a MultiThreadedExecutor (each node
-    keeps its default mutually exclusive callback group, so one node's callbacks never
+    SIGINT (Ctrl-C), SIGTERM and external shutdown end the spin; the nodes are destroyed
+    and the context shut down. ``num_threads > 1`` spins with a MultiThreadedExecutor (each
+    node keeps its default mutually exclusive callback group, so one node's callbacks never
     overlap); beware that rclpy's MultiThreadedExecutor busy-waits while such a callback
     runs (see :mod:`explore_seg.explorer`). Returns 0.
+
+    rclpy's own signal handler is off: it shuts the context down from the signal, which
+    races with the executor building its wait set and with node teardown (a crash or a hang
+    on Ctrl-C). Here a signal only sets a flag; the spin loop sees it within
+    :data:`STOP_POLL_S` and the teardown runs in order on the main thread. A second SIGINT
+    raises KeyboardInterrupt at once, for a stop that hangs in a callback.
     """
     classes = list(node_cls) if isinstance(node_cls, (list, tuple)) else [node_cls]
-    rclpy.init(args=args)
+    stop = StopFlag()
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     nodes: list[Node] = []
     executor = (MultiThreadedExecutor(num_threads=num_threads) if num_threads > 1
                 else SingleThreadedExecutor())
     try:
         for cls in classes:
+            if stop.is_set():
+                break
             node = cls()
             nodes.append(node)
             executor.add_node(node)
-        nodes[0].get_logger().info(
-            "running " + ", ".join(n.get_name() for n in nodes) + " (Ctrl-C to stop)")
-        executor.spin()
+        if nodes and not stop.is_set():
+            nodes[0].get_logger().info(
+                "running " + ", ".join(n.get_name() for n in nodes) + " (Ctrl-C to stop)")
+        while not stop.is_set() and rclpy.ok():
+            executor.spin_once(timeout_sec=STOP_POLL_S)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except RuntimeError:
-        # SIGINT shuts the context down from rclpy's signal handler; when that lands while
-        # the executor builds its wait set, rclpy raises RCLError (a RuntimeError, "context
-        # is not valid") instead of ExternalShutdownException: the same clean stop.
+        # A context shut down from elsewhere while the executor builds its wait set makes
+        # rclpy raise RCLError (a RuntimeError, "context is not valid"): a clean stop too.
         if rclpy.ok():
             raise
     finally:
@@ -69,8 +82,38 @@ def run(node_cls: Callable[..., Node] | Sequence[Callable[..., Node]],
         for node in nodes:
             node.destroy_node()
         rclpy.try_shutdown()
+        stop.restore()
     return 0
 
+
+#: Longest wait of the spin loop before it looks at the stop flag (s).
+STOP_POLL_S = 0.1
+
+
+class StopFlag:
+    """SIGINT / SIGTERM set this flag instead of raising; :meth:`restore` puts the previous
+    handlers back. After the first SIGINT the default handler is back, so a second Ctrl-C
+    raises KeyboardInterrupt in whatever runs."""
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self._event = threading.Event()
+        self._previous = {sig: signal.signal(sig, self._on_signal) for sig in self.SIGNALS}
+
+    def _on_signal(self, signum: int, _frame: Any) -> None:
+        self._event.set()
+        if signum == signal.SIGINT:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+
+    def is_set(self) -> bool:
+        """Whether a stop signal arrived."""
+        return self._event.is_set()
+
+    def restore(self) -> None:
+        """Put back the handlers that were installed before this flag."""
+        for sig, handler in self._previous.items():
+            signal.signal(sig, handler)
 
 
 class WarnThrottle:
