@@ -467,6 +467,8 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
           + (f", {sum(cpu):.0f} CPU s in the runs" + (f" ({len(runs) - len(cpu)} runs "
              "recorded without a CPU figure)" if len(cpu) < len(runs) else "")
              if cpu else "") + ".", ""]
+    L += parts_lines(parts)
+    L += setup_lines(meta, runs)
     missing = [s for s in STRATEGIES if s not in strategies]
     if DEFAULT_STRATEGY not in strategies:
         L += [f"**`{DEFAULT_STRATEGY}`, the default strategy, has no runs in these results**, "
@@ -479,11 +481,13 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
           "(by cause: `bench/causes.py`); *T95*, *T99* = sim seconds to 95 % / 99 % "
           "(median over all runs, a run that never got there counted as the slowest; "
           "*never* when that is the median); "
-          f"*T95 ÷ `{DEFAULT_STRATEGY}`* = median over seeds of the per-seed ratio of T95 to "
-          f"`{DEFAULT_STRATEGY}`'s on the same seeded start, with its 95 % percentile "
-          f"bootstrap interval ({BOOT_N} resamples of the seeds, seed {BOOT_SEED}; below 1: "
-          f"faster than `{DEFAULT_STRATEGY}`; † = on some seed a run never reached 95 % and "
-          "counts with its end time, a lower bound of its T95); *path / tour* = median path "
+          + (f"*T95 ÷ `{DEFAULT_STRATEGY}`* = median over seeds of the per-seed ratio of T95 "
+             f"to `{DEFAULT_STRATEGY}`'s on the same seeded start, with its 95 % percentile "
+             f"bootstrap interval ({BOOT_N} resamples of the seeds, seed {BOOT_SEED}; below 1: "
+             f"faster than `{DEFAULT_STRATEGY}`; † = on some seed a run never reached 95 % and "
+             "counts with its end time, a lower bound of its T95; n = seeds both ran when "
+             "fewer than the runs); " if DEFAULT_STRATEGY in strategies else "")
+          + "*path / tour* = median path "
           "to 99 % over the world's full-knowledge coverage tour ([tours.csv]"
           f"({(rel / 'tours.csv').as_posix()}); in brackets the runs that reached 99 % when "
           "not all did). Setup: lock-step runs of the explorer's core on the simulator, "
@@ -527,6 +531,51 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
           "and this report read), `runs.csv`, `tours.csv`, `meta.json`, the figures"
           + (f"; certificates in `{CERT_DIR}/`" if certs else "") + "."]
     return L
+
+
+def parts_lines(parts: list[dict[str, Any]]) -> list[str]:
+    """One line per part when the runs were made in several (commands that continued
+    with ``--resume`` or added another folder's runs with ``--merge``); [] for one."""
+    if len(parts) < 2:
+        return []
+    L = [f"Run in {len(parts)} parts, each later one with `--resume` (runs already in the "
+         "folder that the command asks for are kept, the rest are run):", ""]
+    for i, part in enumerate(parts, 1):
+        ran = part.get("runs_run")
+        L.append(f"{i}. {part.get('started', '?')}, code `{part.get('code') or UNKNOWN}`, "
+                 + (f"{ran} runs, " if ran is not None else "")
+                 + f"{part.get('wall_s', '?')} s wall"
+                 + (" (interrupted)" if part.get("interrupted") else "")
+                 + (f" ({len(part['failed'])} runs failed: "
+                    + "; ".join(f"`{f}`" for f in part["failed"]) + ")"
+                    if part.get("failed") else "")
+                 + (f" (run in `{part['merged_from']}`, added with `--merge`)"
+                    if part.get("merged_from") else ""))
+    return L + [""]
+
+
+def setup_lines(meta: dict[str, Any], runs: list[dict[str, Any]]) -> list[str]:
+    """The settings the runs were made with (those :func:`bench.store.same_settings`
+    compares), as one paragraph."""
+    settings = {**store.SETTING_DEFAULTS, **(meta.get("settings") or {})}
+    mount = meta.get("camera_mount")
+    margin = float(settings.get("nav_inflation_margin_m") or 0.0)
+    limit = float(settings.get("max_sim_time") or 0.0)
+    n_csv = sum(1 for r in runs if r.get("record") == "csv")
+    return [
+        "Settings: RGB-D camera "
+        + (f"{mount[0]:g} m above the floor, pitched {mount[1]:g} rad down"
+           + (" (the paper's robot)" if list(mount) == [0.894, 0.1] else "")
+           if mount else "at the simulator's default mount")
+        + "; the navigation stand-in keeps its arc "
+        + (f"the robot radius + {margin:g} m" if margin else "the robot radius")
+        + " from obstacles; mapping error "
+        + f"`{settings.get('mapping_error', 'none')}`; sim time limit "
+        + (f"{limit:g} s per run" if limit else "5 s per m² of explorable area, "
+           "600..7200 s") + "."
+        + (f" {n_csv} of the {len(runs)} records were rebuilt from `runs.csv` (their "
+           "coverage curves and timings are the ones drawn and pooled before)." if n_csv
+           else ""), ""]
 
 
 def cov_paths(out: Path) -> list[Path]:
