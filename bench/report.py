@@ -447,7 +447,10 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
     if not mixed:
         L += [f"**Code version: `{codes[0] if codes else '-'}`** (every run"
               + (f"; {sum(1 for r, c in zip(runs, codes) if run_code(r) != c)} of them "
-                 "certified identical by `bench/same_results.py`" if certs else "") + ").", ""]
+                 "certified identical by `bench/same_results.py`" if certs else "") + ")."
+              + (" `+modified`: the runs ran on uncommitted changes to that commit, so the "
+                 "commit alone does not reproduce them." if codes and "+modified" in codes[0]
+                 else ""), ""]
     else:
         L += [f"**Mixed code versions: {len(count)}.** These runs were not made on one "
               "commit; every row names its versions (×n: runs on that version). Figures of "
@@ -462,8 +465,12 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
           f"[meta.json]({(rel / 'meta.json').as_posix()})):", "", "```sh",
           f".venv/bin/python {cmd}", "```", ""]
     wall = meta.get("wall_s")
+    cpu_parts = [float(p["cpu_s"]) for p in parts if p.get("cpu_s") is not None]
     L += [f"{len(runs)} runs of {len(worlds)} worlds × {len(strategies)} strategies in "
           f"{len(parts)} part(s); {wall if wall is not None else '?'} s wall in all"
+          + (f", {sum(cpu_parts):.0f} CPU s" + (f" ({len(parts) - len(cpu_parts)} parts "
+             "recorded without it)" if len(cpu_parts) < len(parts) else "")
+             if cpu_parts else "")
           + (f", {sum(cpu):.0f} CPU s in the runs" + (f" ({len(runs) - len(cpu)} runs "
              "recorded without a CPU figure)" if len(cpu) < len(runs) else "")
              if cpu else "") + ".", ""]
@@ -523,10 +530,11 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
                      f"{row.get('object_frames', '-')} |")
         L.append("")
     L += ["## Experiments", "",
-          "Paired comparisons of settings (`bench/paired.py`) and other experiment reports are "
-          f"files in [{exp_rel}/]({exp_rel}/), each with its command and code version; what "
-          f"each decided: [docs/experiments.md]({docs}/experiments.md). They are not part of "
-          "the tables above.", "",
+          "Paired comparisons of settings (`bench/paired.py`) and other experiment reports "
+          + (f"are files in [{exp_rel}/]({exp_rel}/), each with its command and code version; "
+             if (out / EXPERIMENTS).is_dir() else "are not in this folder; ")
+          + f"what each decided: [docs/experiments.md]({docs}/experiments.md). They are not "
+          "part of the tables above.", "",
           f"Files in `{rel.as_posix()}/`: `runs.jsonl.gz` (every run's record: what `--resume` "
           "and this report read), `runs.csv`, `tours.csv`, `meta.json`, the figures"
           + (f"; certificates in `{CERT_DIR}/`" if certs else "") + "."]

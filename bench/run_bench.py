@@ -40,6 +40,15 @@ resume and merge are the same, and so are the results of every run.
 Stopping: SIGINT/SIGTERM stop at once (the runs in flight are lost); ``kill -USR1 PID``
 finishes the runs in flight and starts no new ones. Either way the runs so far are
 reported, the part is marked interrupted, and ``--resume`` continues.
+
+The full matrix: every strategy x the 20 worlds, ``--runs`` seeds (20), at most
+``--world-runs`` in the long generated worlds (10 in ``maze`` and ``office_floor``).
+It runs in parts: ``--resume`` continues where the last part stopped; ``--shard K/N``
+runs the K-th of N interleaved slices (each on its own machine, into its own ``--out``),
+and ``--resume --merge DIR`` adds a finished slice to the main folder. Every run records
+the commit it ran on and its CPU seconds; the report (:mod:`bench.report`) is of one
+code version and refuses runs of several (exit status 3) unless ``--allow-mixed``. The
+last line gives the matrix's wall time (all parts) and CPU seconds (all runs).
 """
 
 
@@ -49,6 +58,7 @@ import argparse
 import importlib.util
 import json
 import os
+import resource
 import shlex
 import signal
 import sys
@@ -139,6 +149,10 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                          "none, realistic, harsh or custom")
     ap.add_argument("--report-only", action="store_true",
                     help="only redo plots and BENCHMARKS.md from --out")
+    ap.add_argument("--allow-mixed", action="store_true",
+                    help="report runs of several code versions, every row marked with its "
+                         "versions (bench/report.py; without it such runs get no report "
+                         "and the exit status is 3)")
     ap.add_argument("--resume", action="store_true",
                     help="keep the runs and tours already in --out that this command asks "
                          "for (same world, strategy, seed) and run only the missing ones; "
@@ -307,8 +321,7 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(a.out)
     if a.report_only:
         out.mkdir(parents=True, exist_ok=True)
-        report.write_all(out, Path(a.md) if a.md else None, command=None)
-        return 0
+        return 0 if _report(out, a, None) else 3
     specs = [w for w in (a.worlds.split(",") if a.worlds else default_worlds()) if w]
     strategies = [s for s in a.strategies.split(",") if s]
     resolved, missing = {}, []
@@ -343,7 +356,7 @@ def main(argv: list[str] | None = None) -> int:
             "camera_mount": (list(a.mount) if a.mount is not None else
                              [SimParams().camera_mount_z_m, SimParams().camera_pitch_rad]),
             "started": time.strftime("%Y-%m-%d %H:%M:%S")}
-    t_start = time.monotonic()
+    t_start, cpu_start = time.monotonic(), _cpu_s()
     old_meta = store.read_json(out / "meta.json") if a.resume else {}
     if old_meta:
         old_settings = old_meta.get("settings")
@@ -418,37 +431,64 @@ def main(argv: list[str] | None = None) -> int:
         (out / "ros.json").write_text(json.dumps(ros, indent=1))
     part = {"command": command, "started": meta["started"], "code": meta["code"],
             "executor": a.executor,
-            "runs_run": counter[0], "wall_s": round(time.monotonic() - t_start, 1)}
+            "runs_run": counter[0], "wall_s": round(time.monotonic() - t_start, 1),
+            "cpu_s": round(_cpu_s() - cpu_start, 1)}
     if interrupted:
         part["interrupted"] = True
     if failed:
         part["failed"] = failed
     store.write_meta(out, meta, old_meta, part)
-    report.write_all(out, Path(a.md) if a.md else None, command=command)
+    reported = _report(out, a, command)
     print(f"[bench] {len(results)} runs; results in {out}"
-          + (f", summary in {a.md}" if a.md else ""), file=sys.stderr)
+          + (f", summary in {a.md}" if a.md and reported else ""), file=sys.stderr)
     print(matrix_summary(results, meta, part), file=sys.stderr)
     if failed:
         print(f"[bench] {len(failed)} runs failed (not in the results; --resume runs them "
               "again): " + "; ".join(failed), file=sys.stderr)
-    return 128 + interrupted if interrupted else (1 if failed else 0)
+    return 128 + interrupted if interrupted else (1 if failed else (0 if reported else 3))
+
+
+def _report(out: Path, a: argparse.Namespace, command: str | None) -> bool:
+    """Figures and BENCHMARKS.md (:func:`bench.report.write_all`); False, with the reason
+    on stderr, when the report refuses the runs (several code versions without
+    ``--allow-mixed``, a malformed certificate): the runs are kept either way."""
+    try:
+        report.write_all(out, Path(a.md) if a.md else None, command=command,
+                         allow_mixed=a.allow_mixed)
+    except ValueError as err:
+        print(f"[bench] no report: {err}", file=sys.stderr)
+        return False
+    return True
+
+
+def _cpu_s() -> float:
+    """CPU seconds of this process and of its children that have ended (the pool's
+    workers, once the pool is closed)."""
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
+        resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def matrix_summary(results: list[dict[str, Any]], meta: dict[str, Any],
                    part: dict[str, Any]) -> str:
-    """The line that ends a benchmark: the matrix's wall time (all parts) and CPU seconds
-    (the runs' own process CPU, summed; runs recorded before it was measured are counted
-    and named as such), and the same of this part."""
-    cpu = [float(d["cpu_time_s"]) for d in results if d.get("cpu_time_s") is not None]
-    new = [d for d in results[len(results) - int(part.get("runs_run") or 0):]]
-    cpu_new = sum(float(d.get("cpu_time_s") or 0.0) for d in new)
-    missing = len(results) - len(cpu)
-    return (f"[bench] matrix: {len(results)} runs in {len(meta.get('parts') or [])} parts, "
-            f"{hms(float(meta.get('wall_s') or 0.0))} wall ({float(meta.get('wall_s') or 0.0):.0f} s), "
-            f"{sum(cpu):.0f} CPU s in the runs"
+    """The line that ends a benchmark: the matrix's wall time and CPU seconds over all
+    parts (CPU of every process of a part, tours and report included: on this machine's
+    process pool; parts from before it was recorded are counted and named), the runs'
+    own CPU seconds, and the same of this part."""
+    parts = meta.get("parts") or []
+    wall = float(meta.get("wall_s") or 0.0)
+    cpu_parts = sum(float(p.get("cpu_s") or 0.0) for p in parts)
+    no_cpu = sum(1 for p in parts if p.get("cpu_s") is None)
+    runs_cpu = [float(d["cpu_time_s"]) for d in results if d.get("cpu_time_s") is not None]
+    new = results[len(results) - int(part.get("runs_run") or 0):]
+    missing = len(results) - len(runs_cpu)
+    return (f"[bench] matrix: {len(results)} runs in {len(parts)} parts, {hms(wall)} wall "
+            f"({wall:.0f} s), {cpu_parts:.0f} CPU s"
+            + (f" ({no_cpu} parts recorded without it)" if no_cpu else "")
+            + f", {sum(runs_cpu):.0f} of them in the runs"
             + (f" ({missing} runs recorded without a CPU figure)" if missing else "")
             + f"; this part: {len(new)} runs, {hms(float(part.get('wall_s') or 0.0))} wall, "
-            f"{cpu_new:.0f} CPU s")
+            f"{float(part.get('cpu_s') or 0.0):.0f} CPU s")
 
 
 def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: list[str],
