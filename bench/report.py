@@ -387,6 +387,55 @@ def world_table(world: str, g: dict[tuple[str, str], list[dict[str, Any]]],
     return lines
 
 
+def summary_table(g: dict[tuple[str, str], list[dict[str, Any]]], strategies: list[str],
+                  codes: dict[int, str] | None, labels: dict[str, str]) -> list[str]:
+    """A row per strategy over all worlds: runs, complete, contacts (total and per run),
+    the median per-seed T95 ratio against the default over every world with its
+    bootstrap interval (``codes``: the version column, as in :func:`world_table`)."""
+    with_ref = DEFAULT_STRATEGY in strategies
+    head = ("| strategy | worlds | runs | complete | contacts (per run) |"
+            + (f" T95 ÷ `{DEFAULT_STRATEGY}` [95 % CI] |" if with_ref else "")
+            + (" code |" if codes is not None else ""))
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    for st in strategies:
+        cells = {w: rs for (w, s), rs in g.items() if s == st}
+        rs = [r for v in cells.values() for r in v]
+        n = len(rs)
+        contacts = sum(int(r.get("collisions") or 0) for r in rs)
+        row = (f"| {st} | {len(cells)} | {n} | {sum(1 for r in rs if r['completed'])}/{n} | "
+               f"{contacts} ({contacts / max(n, 1):.2f}) |")
+        if with_ref:
+            if st == DEFAULT_STRATEGY:
+                row += " 1 (reference) |"
+            else:
+                ratios, cens = [], 0
+                for w, v in cells.items():
+                    ref = g.get((w, DEFAULT_STRATEGY))
+                    by_seed = {int(r["seed"]): r for r in ref or []}
+                    for r in v:
+                        b = by_seed.get(int(r["seed"]))
+                        if b is None:
+                            continue
+                        (ta, ca), (tb, cb) = _t_or_end(r, "95"), _t_or_end(b, "95")
+                        if tb > 0:
+                            ratios.append(ta / tb)
+                            cens += ca or cb
+                if ratios:
+                    lo, hi = bootstrap_ci(ratios)
+                    row += (f" {np.median(ratios):.2f} [{lo:.2f}, {hi:.2f}]"
+                            + (f" n={len(ratios)}" if len(ratios) < n else "")
+                            + (" †" if cens else "") + " |")
+                else:
+                    row += " - |"
+        if codes is not None:
+            cnt = Counter(codes[id(r)] for r in rs)
+            order = sorted(cnt, key=lambda c: int(labels[c][1:]))
+            row += (f" {labels[order[0]]}" if len(order) == 1 else
+                    f" {len(order)} versions, {labels[order[0]]}–{labels[order[-1]]}") + " |"
+        lines.append(row)
+    return lines
+
+
 def write_all(out: Path, md: Path | None, command: str | None, allow_mixed: bool = False,
               certificates: list[Path] | None = None) -> Path | None:
     """Figures in ``out`` and, when ``md`` is given, the report there.
@@ -502,6 +551,10 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
           f"({docs}/benchmarking.md#method)).", ""]
     cov_names = {p.name for p in cov_paths(out)}
     id_codes = {id(r): c for r, c in zip(runs, codes)} if mixed else None
+    L += ["## Summary", "", f"Over all {len(worlds)} worlds"
+          + ("; the ratio pools the per-seed ratios of every world (interval: resampling "
+             "world-seed pairs)" if DEFAULT_STRATEGY in strategies else "") + ".", ""]
+    L += summary_table(g, strategies, id_codes, labels) + [""]
     L += ["## Results per world", ""]
     for w in worlds:
         a = area.get(w)
