@@ -83,7 +83,9 @@ def test_allow_mixed_marks_every_row_with_its_versions(tmp_path):
     assert "Mixed code versions: 2" in text
     assert f"| v1 | `{A}` | 4 |" in text and f"| v2 | `{B}` | 2 |" in text
     rows = [ln for ln in text.splitlines() if ln.startswith(("| routed |", "| nearest |"))]
-    assert len(rows) == 2 and all(ln.endswith("| v1×2, v2×1 |") for ln in rows)
+    summary, per_world = rows[:2], rows[2:]
+    assert len(per_world) == 2 and all(ln.endswith("| v1×2, v2×1 |") for ln in per_world)
+    assert all(ln.endswith("| 2 versions, v1–v2 |") for ln in summary)
     # one version: no version column, the version in the heading
     one = _folder(tmp_path / "one", [_rec("w", "routed", k, A) for k in range(2)])
     text = report.write_all(one, tmp_path / "O.md", command="x").read_text()
@@ -232,7 +234,7 @@ def test_full_matrix_report_fits_in_400_lines(tmp_path, codes):
     lines = md.read_text().splitlines()
     assert len(lines) <= 400, len(lines)
     assert sum(1 for ln in lines if ln.startswith("### ")) == 20
-    assert sum(1 for ln in lines if ln.startswith("| nearest |")) == 20
+    assert sum(1 for ln in lines if ln.startswith("| nearest |")) == 20 + 1   # + summary
     assert "no runs in these results" not in md.read_text()
 
 
