@@ -58,6 +58,10 @@ TIMING_ROWS = (("frontier", "frontier detect + cluster"),
                ("segmentation", "DuDe segmentation update"),
                ("detection", "object detection (oracle, lock-step)"),
                ("objects", "object costmap update (3D boxes, fusion, layer)"))
+#: Column headings of the same keys in the report's table (a row per world).
+TIMING_COLUMNS = {"frontier": "frontier", "selection": "selection",
+                  "segmentation": "segmentation", "detection": "detection",
+                  "objects": "costmap"}
 _LOG_RATIO = math.log(BIN_RATIO)
 
 
@@ -311,16 +315,19 @@ def append_compact(folder: Path, d: dict[str, Any]) -> None:
 def timing_from_markdown(text: str, strategy: list[str] | None = None
                          ) -> dict[str, dict[str, list[float]]]:
     """world -> timing key -> [p50, mean, p95] read from the per-module timing table of
-    a BENCHMARKS.md written by :mod:`bench.report` (its row labels name the keys); the
-    strategy the table is of (``paper`` or ``all``) goes into ``strategy[0]``."""
+    a BENCHMARKS.md written by :mod:`bench.report`: a row per world (its column headings
+    name the keys, :data:`TIMING_COLUMNS`) or, in reports before 2026-12, a row per module
+    (its row labels name them); the strategy the table is of goes into ``strategy[0]``."""
     strategy = strategy if strategy is not None else [""]
     label_key = {label: key for key, label in TIMING_ROWS}
+    column_key = {col: key for key, col in TIMING_COLUMNS.items()}
     lines = text.splitlines()
     try:
         start = next(i for i, ln in enumerate(lines) if ln.startswith("## Per-module timing"))
     except StopIteration:
         return {}
     worlds: list[str] = []
+    columns: list[str | None] = []
     out: dict[str, dict[str, list[float]]] = {}
     for ln in lines[start + 1:]:
         if ln.startswith("## "):
@@ -331,12 +338,21 @@ def timing_from_markdown(text: str, strategy: list[str] | None = None
         if ln.startswith("| module |"):
             worlds = cells[1:]
             continue
+        if ln.startswith("| world |"):
+            columns = [column_key.get(c) for c in cells[1:]]
+            continue
+        if columns and ln.startswith("| ") and not ln.startswith("|---"):
+            for key, cell in zip(columns, cells[1:]):
+                parts = [p.strip() for p in cell.split("/")]
+                if key is not None and len(parts) == 3:
+                    out.setdefault(cells[0], {})[key] = [float(p.split()[0]) for p in parts]
+            continue
         if not worlds or cells[0] not in label_key:
             continue
         for w, cell in zip(worlds, cells[1:]):
             parts = [p.strip() for p in cell.split("/")]
             if len(parts) == 3:
-                out.setdefault(w, {})[label_key[cells[0]]] = [float(p) for p in parts]
+                out.setdefault(w, {})[label_key[cells[0]]] = [float(p.split()[0]) for p in parts]
     return out
 
 

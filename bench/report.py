@@ -76,7 +76,8 @@ def _mean_std(vals: list[float], nd: int = 1) -> str:
 
 def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
                  legacy: dict[str, Any] | None = None) -> list[str]:
-    """The paper's Table I: per-module p50 / mean / p95 ms over all updates of all runs.
+    """The paper's Table I, a row per world: per-module p50 / mean / p95 ms over all
+    updates of all runs of one strategy (``routed``, else ``paper``, else all).
 
     Pooled from the runs' timing histograms (:mod:`bench.records`: percentiles within
     half a 1 % bin, means exact). A world none of whose runs has timings left (records
@@ -91,12 +92,6 @@ def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
     # old cells only under the heading of the strategy they were pooled for
     legacy = ((legacy or {}).get("worlds") or {}
               if (legacy or {}).get("strategy", "paper") == (strat or "all") else {})
-    head = "| module | " + " | ".join(worlds) + " |"
-    lines = [f"Strategy `{strat or 'all'}`; each cell p50 / mean / p95 in ms over every "
-             "update of every run (frontier, selection and segmentation once per decision, "
-             "detection and costmap once per processed camera frame).", "",
-             head, "|" + "|".join(["---"] * (len(worlds) + 1)) + "|"]
-    totals = {w: 0.0 for w in worlds}
     marked = partial = False
 
     def pooled(w: str, key: str) -> tuple[Any, int, int]:
@@ -106,44 +101,50 @@ def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
         st = records.hist_stats(records.merge_histograms(hists)) if hists else None
         return st, len(hists), len(in_w)
 
-    for key, label in TIMING_ROWS:
-        cells = []
-        for w in worlds:
+    has_core = any(pooled(w, "core")[0] is not None for w in worlds)
+    real = bool(yolo and "ms_mean" in yolo)
+    head = ("| world | " + " | ".join(records.TIMING_COLUMNS[k] for k, _ in TIMING_ROWS)
+            + " | total | " + ("decision core | " if has_core else "")
+            + ("total, real detector | " if real else ""))
+    lines = [f"Strategy `{strat or 'all'}`; each cell p50 / mean / p95 in ms over every "
+             "update of every run (frontier, selection and segmentation once per decision, "
+             "detection and costmap once per processed camera frame); "
+             + "; ".join(f"*{records.TIMING_COLUMNS[k]}* = {label}" for k, label in TIMING_ROWS)
+             + "; *total* = sum of the means (oracle detection)"
+             + ("; *decision core* = frontier detect + selection of one decision (not added "
+                "to the total)" if has_core else "") + ".", "",
+             head.rstrip(), "|" + "---|" * (head.count("|") - 1)]
+    for w in worlds:
+        cells, total = [], 0.0
+        for key, _ in TIMING_ROWS:
             st, n_hist, n_runs = pooled(w, key)
             if st is not None:
                 part = n_hist < n_runs
                 cells.append(f"{st[0]:.1f} / {st[1]:.1f} / {st[2]:.1f}"
                              + (f" ‡{n_hist}/{n_runs}" if part else ""))
                 partial |= part
-                totals[w] += st[1]
+                total += st[1]
             elif not n_hist and key in legacy.get(w, {}):
                 p50, mean, p95 = legacy[w][key]
                 cells.append(f"{p50:.1f} / {mean:.1f} / {p95:.1f} †")
-                totals[w] += mean
+                total += mean
                 marked = True
             else:
                 cells.append("-")
-        lines.append(f"| {label} | " + " | ".join(cells) + " |")
-    if yolo and "ms_mean" in yolo:
-        lines.append(f"| object detection (real YOLOv3-tiny, {yolo['backend']}, "
-                     f"{yolo['input_size']} px, {yolo['threads']} threads) | "
-                     + " | ".join(f"{yolo['ms_p50']} / {yolo['ms_mean']} / {yolo['ms_p95']}"
-                                  for _ in worlds) + " |")
-    lines.append("| total (sum of means, oracle detection) | "
-                 + " | ".join(f"{totals[w]:.1f}" for w in worlds) + " |")
-    core = []
-    for w in worlds:
-        st = pooled(w, "core")[0]
-        core.append(f"{st[0]:.1f} / {st[1]:.1f} / {st[2]:.1f}" if st is not None else "-")
-    if any(c != "-" for c in core):
-        lines.append("| decision core (frontier detect + selection of one decision) | "
-                     + " | ".join(core) + " |")
-    if yolo and "ms_mean" in yolo:
-        lines.append("| total with the real detector | "
-                     + " | ".join(f"{totals[w] + yolo['ms_mean']:.1f}" for w in worlds) + " |")
+        cells.append(f"{total:.1f}")
+        if has_core:
+            st = pooled(w, "core")[0]
+            cells.append(f"{st[0]:.1f} / {st[1]:.1f} / {st[2]:.1f}" if st is not None else "-")
+        if real:
+            cells.append(f"{total + yolo['ms_mean']:.1f}")
+        lines.append(f"| {w} | " + " | ".join(cells) + " |")
+    if real:
+        lines += ["", f"Real detector (YOLOv3-tiny, {yolo['backend']}, {yolo['input_size']} px, "
+                      f"{yolo['threads']} threads) per frame: {yolo['ms_p50']} / "
+                      f"{yolo['ms_mean']} / {yolo['ms_p95']} ms (p50 / mean / p95); *total, "
+                      "real detector* adds its mean."]
     elif yolo:
-        lines.append("")
-        lines.append(f"Real detector not timed: {yolo.get('error')}")
+        lines += ["", f"Real detector not timed: {yolo.get('error')}"]
     if partial:
         lines += ["", "‡k/n: pooled over the k of the world's n runs whose timings are kept "
                   "(the others' records were rebuilt from `runs.csv`)."]

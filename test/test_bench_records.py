@@ -176,14 +176,14 @@ def test_import_from_csv_rebuilds_the_rows_and_the_timing_table(bench2, tmp_path
                                                                 and math.isnan(got))))
                     or float(got) == pytest.approx(float(v))), (k, got, v)
     legacy = json.loads((res / records.LEGACY_TIMING).read_text())["worlds"]
-    old_cells = [ln for ln in md.read_text().splitlines()
-                 if ln.startswith("| frontier detect + cluster |")][0]
+    old_row = [ln for ln in md.read_text().splitlines() if ln.startswith("| small_house |")
+               and " / " in ln][-1]
     p50, mean, p95 = legacy["small_house"]["frontier"]
-    assert f"{p50:.1f} / {mean:.1f} / {p95:.1f}" in old_cells
+    assert f"| small_house | {p50:.1f} / {mean:.1f} / {p95:.1f} |" in old_row
     new_md = tmp_path / "new.md"
     report.write_all(res, new_md, command="x")
     text = new_md.read_text()
-    assert f"| frontier detect + cluster | {p50:.1f} / {mean:.1f} / {p95:.1f} † |" in text
+    assert f"| small_house | {p50:.1f} / {mean:.1f} / {p95:.1f} † |" in text
     assert "rebuilt from `runs.csv`" in text
     assert "| nearest | 2 | " in text
 
@@ -233,24 +233,45 @@ def test_timing_table_marks_worlds_pooled_over_part_of_their_runs():
     lines = report.timing_table([full, rebuilt, only_csv], None,
                                 legacy={"strategy": "paper",
                                         "worlds": {"v": {"frontier": [4.0, 5.0, 6.0]}}})
-    row = next(ln for ln in lines if ln.startswith("| frontier detect + cluster |"))
-    cells = [c.strip() for c in row.strip("|").split("|")][1:]
+    head = next(ln for ln in lines if ln.startswith("| world |"))
+    col = [c.strip() for c in head.strip("|").split("|")].index("frontier")
+    cell = {ln.split("|")[1].strip(): [c.strip() for c in ln.strip("|").split("|")][col]
+            for ln in lines if ln.startswith(("| w |", "| v |"))}
     p50, mean, _ = records.hist_stats(records.histogram([1.0, 2.0, 3.0]))
-    assert cells == [f"{p50:.1f} / {mean:.1f} / 3.0 ‡1/2", "4.0 / 5.0 / 6.0 †"]
+    assert cell == {"w": f"{p50:.1f} / {mean:.1f} / 3.0 ‡1/2", "v": "4.0 / 5.0 / 6.0 †"}
     assert any(ln.startswith("‡k/n") for ln in lines) and any(ln.startswith("†") for ln in lines)
 
 
-def test_timing_table_has_the_decision_core_row_outside_the_total():
+def test_timing_table_has_the_decision_core_column_outside_the_total():
     run = {"world": "w", "strategy": "paper", "seed": 0,
            "timings_ms": {"frontier": [1.0, 3.0], "selection": [2.0, 4.0],
                           "core": [3.0, 7.0]}}
     lines = report.timing_table([run], None)
-    row = next(ln for ln in lines if ln.startswith("| decision core"))
+    head = [c.strip() for c in next(ln for ln in lines if ln.startswith("| world |"))
+            .strip("|").split("|")]
+    row = [c.strip() for c in next(ln for ln in lines if ln.startswith("| w |"))
+           .strip("|").split("|")]
     p50, mean, p95 = records.hist_stats(records.histogram([3.0, 7.0]))
-    assert row.endswith(f"| {p50:.1f} / {mean:.1f} / {p95:.1f} |")
-    total = next(ln for ln in lines if ln.startswith("| total (sum of means"))
+    assert row[head.index("decision core")] == f"{p50:.1f} / {mean:.1f} / {p95:.1f}"
     f_mean = records.hist_stats(records.histogram([1.0, 3.0]))[1]
     s_mean = records.hist_stats(records.histogram([2.0, 4.0]))[1]
-    assert total.endswith(f"| {f_mean + s_mean:.1f} |")         # the core is not added again
+    assert row[head.index("total")] == f"{f_mean + s_mean:.1f}"   # the core is not added again
     old = {"world": "w", "strategy": "paper", "seed": 1, "timings_ms": {"frontier": [1.0]}}
-    assert not any(ln.startswith("| decision core") for ln in report.timing_table([old], None))
+    assert not any("decision core |" in ln for ln in report.timing_table([old], None))
+
+
+def test_timing_is_read_back_from_either_layout_of_the_table():
+    """The report's table (a row per world) and the one of the kept 2026-12-02 report (a
+    row per module) give the same cells for bench/results."""
+    root = Path(__file__).resolve().parents[1]
+    old_md = (root / "bench" / "results" / "experiments"
+              / "benchmarks_mixed_versions_2026-11-23_to_2026-12-02.md")
+    runs = records.read(root / "bench" / "results")
+    legacy = json.loads((root / "bench" / "results" / records.LEGACY_TIMING).read_text())
+    new_md = "## Per-module timing\n\n" + "\n".join(report.timing_table(runs, None, legacy))
+    s_old, s_new = [""], [""]
+    old, new = records.timing_from_markdown(old_md.read_text(), s_old), \
+        records.timing_from_markdown(new_md, s_new)
+    assert s_old == s_new == ["paper"]
+    assert len(old) >= 18 and all(new[w] == old[w] for w in old)
+    assert all(old[w] == legacy["worlds"][w] for w in old)
