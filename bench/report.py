@@ -583,12 +583,15 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
                      f"{row.get('goals', '-')} | {row.get('objects', '-')} | "
                      f"{row.get('object_frames', '-')} |")
         L.append("")
+    earlier = sorted((out / EXPERIMENTS).glob("benchmarks_*.md"))
     L += ["## Experiments", "",
           "Paired comparisons of settings (`bench/paired.py`) and other experiment reports "
           + (f"are files in [{exp_rel}/]({exp_rel}/), each with its command and code version; "
              if (out / EXPERIMENTS).is_dir() else "are not in this folder; ")
           + f"what each decided: [docs/experiments.md]({docs}/experiments.md). They are not "
-          "part of the tables above.", "",
+          "part of the tables above."
+          + ("" if not earlier else " Earlier benchmark reports: " + ", ".join(
+              f"[{p.stem}]({exp_rel}/{p.name})" for p in earlier) + "."), "",
           f"Files in `{rel.as_posix()}/`: `runs.jsonl.gz` (every run's record: what `--resume` "
           "and this report read), `runs.csv`, `tours.csv`, `meta.json`, the figures"
           + (f"; certificates in `{CERT_DIR}/`" if certs else "") + "."]

@@ -70,6 +70,10 @@ def test_mixed_versions_are_refused_naming_each_version_and_its_runs(tmp_path):
     assert f"{A}: 4 runs" in msg and f"{B}: 2 runs" in msg and "--allow-mixed" in msg
     assert not (tmp_path / "B.md").exists()
     assert report.main([str(out), "--md", str(tmp_path / "B.md")]) == 2
+    assert run_bench.main(["--report-only", "--out", str(out), "--md", str(tmp_path / "B.md")]) == 3
+    assert not (tmp_path / "B.md").exists()
+    assert run_bench.main(["--report-only", "--out", str(out), "--md", str(tmp_path / "B.md"),
+                           "--allow-mixed"]) == 0
     # a run that records no version is not one version either
     no_code = _folder(tmp_path / "old", [_rec("w", "routed", 0, None)])
     with pytest.raises(report.MixedVersions, match="unknown: 1 runs"):
@@ -270,26 +274,31 @@ TINY = ["--worlds", "small_house,eb/room", "--strategies", "nearest,explore_lite
 
 
 def test_tiny_matrix_in_shards_merged_and_resumed(tmp_path, capsys):
-    a, b = tmp_path / "a", tmp_path / "b"
-    assert run_bench.main(TINY + ["--out", str(a), "--md", "", "--shard", "1/2"]) == 0
-    assert run_bench.main(TINY + ["--out", str(b), "--md", "", "--shard", "2/2"]) == 0
-    ra, rb = records.read(a), records.read(b)
-    assert len(ra) + len(rb) == 2 * 2 + 2 * 1          # small_house 2 seeds, eb/room 1
-    assert all(r["code"] == store.code_version() and r["cpu_time_s"] > 0 for r in ra + rb)
+    a, b, c = tmp_path / "a", tmp_path / "b", tmp_path / "c"
+    for k, out in enumerate((a, b, c), 1):
+        assert run_bench.main(TINY + ["--out", str(out), "--md", "", "--shard", f"{k}/3"]) == 0
+    runs = [records.read(out) for out in (a, b, c)]
+    assert [len(r) for r in runs] == [2, 2, 2]        # small_house 2 seeds, eb/room 1
+    assert all(r["code"] == store.code_version() and r["cpu_time_s"] > 0 for rs in runs
+               for r in rs)
     err = capsys.readouterr().err
-    assert "[bench] matrix: 3 runs in 1 parts" in err and "CPU s" in err and "in the runs" in err
-    md = tmp_path / "B.md"
-    assert run_bench.main(TINY + ["--out", str(a), "--md", str(md), "--resume",
+    assert "[bench] matrix: 2 runs in 1 parts" in err and "CPU s" in err and "in the runs" in err
+    # merging one slice runs nothing of the slice still missing (--no-runs)
+    assert run_bench.main(TINY + ["--out", str(a), "--md", "", "--resume", "--no-runs",
                                   "--merge", str(b)]) == 0
+    assert len(records.read(a)) == 4
+    md = tmp_path / "B.md"
+    assert run_bench.main(TINY + ["--out", str(a), "--md", str(md), "--resume", "--no-runs",
+                                  "--merge", str(c)]) == 0
     meta = json.loads((a / "meta.json").read_text())
-    assert [p["runs_run"] for p in meta["parts"]] == [3, 3, 0]     # nothing run again
-    assert "[bench] matrix: 6 runs in 3 parts" in capsys.readouterr().err
+    assert [p["runs_run"] for p in meta["parts"]] == [2, 2, 0, 2, 0]   # nothing run again
+    assert "[bench] matrix: 6 runs in 5 parts" in capsys.readouterr().err
     keys = {records.key_of(r) for r in records.read(a)}
     assert keys == {("small_house", s, k) for s in ("nearest", "explore_lite") for k in (0, 1)} \
         | {("eb/room", s, 0) for s in ("nearest", "explore_lite")}
     text = md.read_text()
-    assert "### small_house" in text and "### eb/room" in text and "Run in 3 parts" in text
-    # a resumed matrix with one seed more runs only that seed
+    assert "### small_house" in text and "### eb/room" in text and "Run in 5 parts" in text
+    # --resume alone runs only what is missing: here one seed more
     more = [x if x != "2" else "3" for x in TINY]
     assert run_bench.main(more + ["--out", str(a), "--md", "", "--resume"]) == 0
     assert json.loads((a / "meta.json").read_text())["parts"][-1]["runs_run"] == 2
