@@ -20,6 +20,11 @@ no histogram.
 Usage (once, for a folder whose ``runs.jsonl`` is lost)::
 
     .venv/bin/python bench/records.py import-csv bench/results --timing-md BENCHMARKS.md
+
+Records made before runs carried their code version get it from the git history of the
+folder's ``runs.csv`` and ``meta.json`` (:func:`codes_from_history`)::
+
+    .venv/bin/python bench/records.py attribute-code bench/results
 """
 
 from __future__ import annotations
@@ -316,8 +321,8 @@ def timing_from_markdown(text: str, strategy: list[str] | None = None
                          ) -> dict[str, dict[str, list[float]]]:
     """world -> timing key -> [p50, mean, p95] read from the per-module timing table of
     a BENCHMARKS.md written by :mod:`bench.report`: a row per world (its column headings
-    name the keys, :data:`TIMING_COLUMNS`) or, in reports before 2026-12, a row per module
-    (its row labels name them); the strategy the table is of goes into ``strategy[0]``."""
+    name the keys, :data:`TIMING_COLUMNS`) or a row per module (the earlier layout: its
+    row labels name them); the strategy the table is of goes into ``strategy[0]``."""
     strategy = strategy if strategy is not None else [""]
     label_key = {label: key for key, label in TIMING_ROWS}
     column_key = {col: key for key, col in TIMING_COLUMNS.items()}

@@ -8,6 +8,7 @@ import gzip
 import json
 import math
 import shutil
+import subprocess
 import sys
 from pathlib import Path
 
@@ -275,3 +276,19 @@ def test_timing_is_read_back_from_either_layout_of_the_table():
     assert s_old == s_new == ["paper"]
     assert len(old) >= 18 and all(new[w] == old[w] for w in old)
     assert all(old[w] == legacy["worlds"][w] for w in old)
+
+
+def test_the_code_versions_of_bench_results_are_those_its_git_history_gives():
+    root = Path(__file__).resolve().parents[1]
+    res = root / "bench" / "results"
+    try:
+        code, log = records.codes_from_history(res)
+    except (OSError, subprocess.CalledProcessError):
+        pytest.skip("no git history of bench/results here")
+    if not log:
+        pytest.skip("no git history of bench/results here (shallow clone?)")
+    recs = records.read(res)
+    old = [r for r in recs if r.get("record") == "csv" or "cpu_time_s" not in r]
+    assert old, "bench/results holds no run from before versions were recorded"
+    assert all(r["code"] == code[records.key_of(r)] for r in old)
+    assert "unknown" not in {r["code"] for r in old}
