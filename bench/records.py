@@ -473,10 +473,10 @@ def codes_from_history(folder: Path) -> tuple[dict[tuple[str, str, int], str], l
                     left = [k for k in left if k not in take]
         for k in changed:
             code[k] = got.get(k, "unknown")
+        tally = sorted(Counter(got.get(k, "unknown") for k in changed).items())
         log.append(f"{c[:12]}: {len(changed)} runs new or changed, parts "
                    + ", ".join(f"{p.get('code')} ({p.get('runs_run')} run)" for p in new_parts)
-                   + " -> " + ", ".join(f"{v}: {n}" for v, n in
-                                        sorted(Counter(got.get(k, 'unknown') for k in changed).items())))
+                   + " -> " + ", ".join(f"{v}: {n}" for v, n in tally))
     return code, log
 
 

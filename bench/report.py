@@ -62,15 +62,6 @@ def load_runs(out: Path) -> list[dict[str, Any]]:
     return records.read(out)
 
 
-def _mean_std(vals: list[float], nd: int = 1) -> str:
-    v = np.asarray([x for x in vals if math.isfinite(x)], dtype=np.float64)
-    if v.size == 0:
-        return "-"
-    if v.size == 1:
-        return f"{v[0]:.{nd}f}"
-    return f"{v.mean():.{nd}f} ± {v.std(ddof=1):.{nd}f}"
-
-
 # ------------------------------------------------------------------------ tables
 
 
@@ -250,9 +241,10 @@ def check_versions(runs: list[dict[str, Any]], codes: list[str], allow_mixed: bo
     count = Counter(codes)
     if allow_mixed or (len(count) <= 1 and UNKNOWN not in count):
         return
-    detail = "; ".join(
-        f"{c}: {n} runs ({len({(r['world'], r['strategy']) for r, k in zip(runs, codes) if k == c})}"
-        " world x strategy cells)" for c, n in count.most_common())
+    cells = {c: {(r["world"], r["strategy"]) for r, k in zip(runs, codes) if k == c}
+             for c in count}
+    detail = "; ".join(f"{c}: {n} runs ({len(cells[c])} world x strategy cells)"
+                       for c, n in count.most_common())
     raise MixedVersions(
         f"the runs ran on {len(count)} code version(s) ({detail}); a report is of one "
         "version: rerun the others on one commit (bench/run_bench.py --resume --redo), "
@@ -382,8 +374,9 @@ def world_table(world: str, g: dict[tuple[str, str], list[dict[str, Any]]],
                + f" {pt} |")
         if codes is not None:
             cnt = Counter(codes[id(r)] for r in rs)
-            row += " " + ", ".join(labels[c] + (f"×{k}" if len(cnt) > 1 else "")
-                                   for c, k in sorted(cnt.items(), key=lambda x: int(labels[x[0]][1:]))) + " |"
+            order = sorted(cnt, key=lambda c: int(labels[c][1:]))
+            row += " " + ", ".join(labels[c] + (f"×{cnt[c]}" if len(cnt) > 1 else "")
+                                   for c in order) + " |"
         lines.append(row)
     return lines
 
@@ -488,6 +481,7 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
     g = by_world_strategy(runs)
     worlds = list(dict.fromkeys(r["world"] for r in runs))
     strategies = list(dict.fromkeys(r["strategy"] for r in runs))
+    strategies.sort(key=lambda st: st != DEFAULT_STRATEGY)     # the reference row first
     parts = store.parts_of(meta)
     cpu = [float(r["cpu_time_s"]) for r in runs if r.get("cpu_time_s") is not None]
     L = ["# Benchmarks", "",
