@@ -336,14 +336,14 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if a.list:
         keys = matrix_tasks(specs, strategies, a.runs, a.seed0, a.world_runs, a.shard_kn)
+        caps = [f"{w}: {n}" for w, n in a.world_runs.items() if w in specs and n < a.runs]
+        extra = "; ".join(([f"at most {', '.join(caps)}"] if caps else [])
+                          + ([f"shard {a.shard}"] if a.shard_kn else []))
         print(f"[bench] {len(specs)} worlds x {len(strategies)} strategies "
               f"({', '.join(strategies)}) x {a.runs} runs"
-              + (f" (at most {', '.join(f'{w}: {n}' for w, n in a.world_runs.items())})"
-                 if a.world_runs else "")
-              + (f", shard {a.shard}" if a.shard_kn else "") + f": {len(keys)} runs")
+              + (f" ({extra}; {len(keys)} runs in all)" if extra else "") + ":")
         for s in specs:
-            n = sum(1 for w, _, _ in keys if w == s)
-            print(f"{s}\t{resolved[s] if resolved[s] != s else '(generated)'}\t{n} runs")
+            print(f"{s}\t{resolved[s] if resolved[s] != s else '(generated)'}")
         return 0
     out.mkdir(parents=True, exist_ok=True)
     command = "bench/run_bench.py " + " ".join(shlex.quote(x) for x in (argv if argv is not None

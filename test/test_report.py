@@ -268,6 +268,15 @@ def test_matrix_tasks_cap_the_long_worlds_and_shards_partition_the_matrix():
             run_bench.parse_shard(bad)
 
 
+def test_list_counts_the_full_matrix(tmp_path, capsys):
+    assert run_bench.main(["--list", "--out", str(tmp_path / "x")]) == 0
+    head = capsys.readouterr().out.splitlines()[0]
+    assert head.startswith(f"[bench] 20 worlds x {len(STRATEGIES)} strategies")
+    assert head.endswith(f"(at most maze: 10, office_floor: 10; {len(STRATEGIES) * (18 * 20 + 2 * 10)} "
+                         "runs in all):")
+    assert not (tmp_path / "x").exists()
+
+
 TINY = ["--worlds", "small_house,eb/room", "--strategies", "nearest,explore_lite",
         "--runs", "2", "--jobs", "1", "--max-sim-time", "12", "--no-tour",
         "--yolo-frames", "0", "--world-runs", "eb/room=1"]
