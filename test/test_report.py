@@ -272,8 +272,8 @@ def test_list_counts_the_full_matrix(tmp_path, capsys):
     assert run_bench.main(["--list", "--out", str(tmp_path / "x")]) == 0
     head = capsys.readouterr().out.splitlines()[0]
     assert head.startswith(f"[bench] 20 worlds x {len(STRATEGIES)} strategies")
-    assert head.endswith(f"(at most maze: 10, office_floor: 10; {len(STRATEGIES) * (18 * 20 + 2 * 10)} "
-                         "runs in all):")
+    n = len(STRATEGIES) * (18 * 20 + 2 * 10)
+    assert head.endswith(f"(at most maze: 10, office_floor: 10; {n} runs in all):")
     assert not (tmp_path / "x").exists()
 
 
