@@ -567,7 +567,9 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
     ros_path = out / "ros.json"
     if ros_path.is_file():
         ros = json.loads(ros_path.read_text())
-        L += ["## Lock-step vs ROS", "", ros.get("note", ""), "",
+        L += ["## Lock-step vs ROS", "", ros.get("note", "") + " "
+              + (f"Code `{ros['code']}`." if ros.get("code") else "Code version not recorded."),
+              "",
               "| seed | mode | stop | coverage [%] | sim time [s] | path [m] | collisions | "
               "goals | objects | object frames |", "|---|---|---|---|---|---|---|---|---|---|"]
         for row in ros.get("rows", []):

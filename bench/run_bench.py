@@ -428,6 +428,7 @@ def main(argv: list[str] | None = None) -> int:
                                out / "ros", a.ros_rtf,
                                sim_time_limit(areas[specs[0]], a.max_sim_time), a.mount,
                                a.nav_margin)
+        ros["code"] = meta["code"]          # the commit its runs ran on
         (out / "ros.json").write_text(json.dumps(ros, indent=1))
     part = {"command": command, "started": meta["started"], "code": meta["code"],
             "executor": a.executor,
