@@ -7,13 +7,15 @@ BENCH_OUT ?= out/bench
 RUNS ?= 20
 QUICK_OUT ?= out/bench-quick
 
-.PHONY: help setup test demo bench bench-quick build clean
+.PHONY: help setup test demo bench bench-report bench-quick build clean
 
 help:
 	@echo "make demo   - headless exploration demo on the embedded cluttered house -> $(OUT)/"
 	@echo "make demo LIVE=1 - the same at real time, watchable in RViz (prints the rviz2 command)"
 	@echo "make test   - the test suite (private network namespace where possible)"
-	@echo "make bench  - benchmarks: strategies x worlds x $(RUNS) runs -> $(BENCH_OUT)/, BENCHMARKS.md"
+	@echo "make bench  - the full matrix: every strategy x 20 worlds x $(RUNS) runs (10 in maze, office_floor) -> $(BENCH_OUT)/, BENCHMARKS.md; again: continues (--resume)"
+	@echo "make bench SHARD=K/N - the K-th of N slices of the matrix (one per machine) -> $(BENCH_OUT)/"
+	@echo "make bench-report - BENCHMARKS.md again from $(BENCH_OUT)/ (one code version; BENCH_ARGS=--allow-mixed to mark mixed ones)"
 	@echo "make bench-quick - a representative subset (~10 min on 2 cores) -> $(QUICK_OUT)/QUICK.md, ratios vs bench/results"
 	@echo "make build  - colcon build of the package into build/ install/"
 	@echo "make setup  - only the idempotent set-up (venv, apt packages, detector weights)"
@@ -28,7 +30,10 @@ demo: setup
 	@LIVE=$(LIVE) bash scripts/run_demo.sh $(OUT)
 
 bench: setup
-	@bash scripts/run_bench.sh $(BENCH_OUT) $(RUNS)
+	@BENCH_RESUME=1 bash scripts/run_bench.sh $(BENCH_OUT) $(RUNS) $(if $(SHARD),--shard $(SHARD))
+
+bench-report: setup
+	@$(PY) bench/report.py $(BENCH_OUT) $(BENCH_ARGS)
 
 bench-quick: setup
 	@bash scripts/run_bench.sh --quick $(QUICK_OUT)

@@ -362,8 +362,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="SLAM-like mapping error of every arm (SimParams.mapping_error: none, "
                          "realistic, harsh, custom); an arm's sim.mapping_error overrides it")
     ap.add_argument("--md", default="", help="also write the report to this file (with "
-                    "--title, the command and the code version); BENCHMARKS.md includes "
-                    "bench/results/paired/*.md")
+                    "--title, the command and the code version); keep a report that decides "
+                    "something in bench/results/experiments/ (BENCHMARKS.md links it)")
     ap.add_argument("--title", default="", help="heading of the --md report")
     ap.add_argument("--against", default="", metavar="STRATEGY",
                     help="also compare this strategy with the others of each arm, paired "

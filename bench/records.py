@@ -20,6 +20,11 @@ no histogram.
 Usage (once, for a folder whose ``runs.jsonl`` is lost)::
 
     .venv/bin/python bench/records.py import-csv bench/results --timing-md BENCHMARKS.md
+
+Records made before runs carried their code version get it from the git history of the
+folder's ``runs.csv`` and ``meta.json`` (:func:`codes_from_history`)::
+
+    .venv/bin/python bench/records.py attribute-code bench/results
 """
 
 from __future__ import annotations
@@ -30,8 +35,10 @@ import gzip
 import json
 import math
 import re
+import subprocess
 import sys
 import zlib
+from collections import Counter
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -56,6 +63,10 @@ TIMING_ROWS = (("frontier", "frontier detect + cluster"),
                ("segmentation", "DuDe segmentation update"),
                ("detection", "object detection (oracle, lock-step)"),
                ("objects", "object costmap update (3D boxes, fusion, layer)"))
+#: Column headings of the same keys in the report's table (a row per world).
+TIMING_COLUMNS = {"frontier": "frontier", "selection": "selection",
+                  "segmentation": "segmentation", "detection": "detection",
+                  "objects": "costmap"}
 _LOG_RATIO = math.log(BIN_RATIO)
 
 
@@ -225,6 +236,8 @@ def from_csv_row(row: dict[str, str]) -> dict[str, Any]:
         "contacts": contacts,
         "early_stop": {"cause": row["stop_cause"]} if row.get("stop_cause") else None,
         "record": "csv",
+        **({"code": row["code"]} if row.get("code") else {}),
+        **({"cpu_time_s": float(row["cpu_time_s"])} if row.get("cpu_time_s") else {}),
     }
 
 
@@ -307,16 +320,19 @@ def append_compact(folder: Path, d: dict[str, Any]) -> None:
 def timing_from_markdown(text: str, strategy: list[str] | None = None
                          ) -> dict[str, dict[str, list[float]]]:
     """world -> timing key -> [p50, mean, p95] read from the per-module timing table of
-    a BENCHMARKS.md written by :mod:`bench.report` (its row labels name the keys); the
-    strategy the table is of (``paper`` or ``all``) goes into ``strategy[0]``."""
+    a BENCHMARKS.md written by :mod:`bench.report`: a row per world (its column headings
+    name the keys, :data:`TIMING_COLUMNS`) or a row per module (the earlier layout: its
+    row labels name them); the strategy the table is of goes into ``strategy[0]``."""
     strategy = strategy if strategy is not None else [""]
     label_key = {label: key for key, label in TIMING_ROWS}
+    column_key = {col: key for key, col in TIMING_COLUMNS.items()}
     lines = text.splitlines()
     try:
         start = next(i for i, ln in enumerate(lines) if ln.startswith("## Per-module timing"))
     except StopIteration:
         return {}
     worlds: list[str] = []
+    columns: list[str | None] = []
     out: dict[str, dict[str, list[float]]] = {}
     for ln in lines[start + 1:]:
         if ln.startswith("## "):
@@ -327,12 +343,21 @@ def timing_from_markdown(text: str, strategy: list[str] | None = None
         if ln.startswith("| module |"):
             worlds = cells[1:]
             continue
+        if ln.startswith("| world |"):
+            columns = [column_key.get(c) for c in cells[1:]]
+            continue
+        if columns and ln.startswith("| ") and not ln.startswith("|---"):
+            for key, cell in zip(columns, cells[1:]):
+                parts = [p.strip() for p in cell.split("/")]
+                if key is not None and len(parts) == 3:
+                    out.setdefault(cells[0], {})[key] = [float(p.split()[0]) for p in parts]
+            continue
         if not worlds or cells[0] not in label_key:
             continue
         for w, cell in zip(worlds, cells[1:]):
             parts = [p.strip() for p in cell.split("/")]
             if len(parts) == 3:
-                out.setdefault(w, {})[label_key[cells[0]]] = [float(p) for p in parts]
+                out.setdefault(w, {})[label_key[cells[0]]] = [float(p.split()[0]) for p in parts]
     return out
 
 
@@ -360,6 +385,133 @@ def import_csv(folder: Path, timing_md: Path | None) -> int:
     return 0
 
 
+# ------------------------------------------------------------------ code versions from git
+
+
+def _git(*args: str) -> str:
+    return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True,
+                          check=True).stdout
+
+
+def _at(commit: str, path: str) -> str | None:
+    """A file's text at ``commit``, None when it was not there."""
+    try:
+        return _git("show", f"{commit}:{path}")
+    except subprocess.CalledProcessError:
+        return None
+
+
+def _fingerprint(row: dict[str, Any]) -> tuple[float, ...]:
+    """What tells one run of a key from another in ``runs.csv`` (wall time differs)."""
+    return tuple(round(float(row.get(k) or "nan"), 2)
+                 for k in ("wall_time_s", "sim_time_s", "path_length_m"))
+
+
+def _redo_items(command: str) -> list[tuple[str | None, str]]:
+    """The (world or None, strategy) items of a part's ``--redo``."""
+    m = re.search(r"--redo[ =](\S+)", command or "")
+    return [((w or None), s) for w, _, s in (x.rpartition(":") for x in m.group(1).split(","))] \
+        if m else []
+
+
+def codes_from_history(folder: Path) -> tuple[dict[tuple[str, str, int], str], list[str]]:
+    """The code version of every run of ``folder`` (a folder of this repository whose
+    ``runs.csv`` and ``meta.json`` were committed after each part), read from git: the
+    runs that are new or changed in a commit of ``runs.csv`` ran in the parts that commit
+    added to ``meta.json`` (all its runs when a part ran without ``--resume``: a fresh
+    benchmark). When it added parts of several versions, the runs go to them
+    by the order of the commit's ``runs.jsonl.gz`` (appended as they ran: the last part's
+    ``runs_run`` runs last) or, without it, by the parts' ``--redo`` lists. Returns key ->
+    code (``unknown`` where it cannot be told) and a line per commit saying what it did."""
+    rel = folder.resolve().relative_to(ROOT).as_posix()
+    commits = _git("log", "--reverse", "--format=%H", "--", f"{rel}/runs.csv").split()
+    fps: dict[tuple[str, str, int], tuple[float, ...]] = {}
+    code: dict[tuple[str, str, int], str] = {}
+    seen_parts: set[tuple[Any, Any]] = set()
+    log = []
+    for c in commits:
+        text = _at(c, f"{rel}/runs.csv") or ""
+        rows = list(csv.DictReader(text.splitlines())) if text.strip() else []
+        meta_text = _at(c, f"{rel}/meta.json")
+        meta = json.loads(meta_text) if meta_text else {}
+        parts = meta.get("parts") or ([meta] if meta else [])
+        new_parts = [p for p in parts if (p.get("started"), p.get("command")) not in seen_parts]
+        seen_parts |= {(p.get("started"), p.get("command")) for p in parts}
+        running = [p for p in new_parts if p.get("runs_run") is None or p["runs_run"] > 0]
+        fresh = any("--resume" not in (p.get("command") or "--resume") for p in running)
+        changed = [(r["world"], r["strategy"], int(r["seed"])) for r in rows
+                   if fresh or fps.get((r["world"], r["strategy"], int(r["seed"])))
+                   != _fingerprint(r)]
+        fps = {(r["world"], r["strategy"], int(r["seed"])): _fingerprint(r) for r in rows}
+        versions = {str(p.get("code") or "unknown") for p in running}
+        got: dict[tuple[str, str, int], str] = {}
+        if len(versions) == 1:
+            got = {k: next(iter(versions)) for k in changed}
+        elif running:
+            order: list[tuple[str, str, int]] = []
+            gz = _git_bytes(c, f"{rel}/{COMPACT}")
+            if gz is not None:
+                for line in gzip.decompress(gz).decode().splitlines():
+                    d = json.loads(line)
+                    order.append(key_of(d))
+                pos = {k: i for i, k in enumerate(order)}
+                left = sorted(changed, key=lambda k: pos.get(k, -1))
+                for p in reversed(running):
+                    n = int(p.get("runs_run") or 0)
+                    take, left = left[len(left) - n:] if n else [], left[:len(left) - n]
+                    got.update({k: str(p.get("code") or "unknown") for k in take})
+            else:
+                left = list(changed)
+                for p in reversed(running):
+                    items = _redo_items(p.get("command", ""))
+                    if items and p is not running[0]:
+                        take = [k for k in left if any(s == k[1] and w in (None, k[0])
+                                                       for w, s in items)]
+                    else:
+                        take = left
+                    got.update({k: str(p.get("code") or "unknown") for k in take})
+                    left = [k for k in left if k not in take]
+        for k in changed:
+            code[k] = got.get(k, "unknown")
+        tally = sorted(Counter(got.get(k, "unknown") for k in changed).items())
+        log.append(f"{c[:12]}: {len(changed)} runs new or changed, parts "
+                   + ", ".join(f"{p.get('code')} ({p.get('runs_run')} run)" for p in new_parts)
+                   + " -> " + ", ".join(f"{v}: {n}" for v, n in tally))
+    return code, log
+
+
+def _git_bytes(commit: str, path: str) -> bytes | None:
+    try:
+        return subprocess.run(["git", "show", f"{commit}:{path}"], cwd=ROOT,
+                              capture_output=True, check=True).stdout
+    except subprocess.CalledProcessError:
+        return None
+
+
+def attribute_codes(folder: Path) -> int:
+    """Write into ``folder``'s records without a ``code`` the one
+    :func:`codes_from_history` finds (only when its ``runs.csv`` row is the committed
+    one); prints what each commit did."""
+    code, log = codes_from_history(folder)
+    for line in log:
+        print(f"[records] {line}", file=sys.stderr)
+    rows = {(r["world"], r["strategy"], int(r["seed"])): r
+            for r in csv.DictReader((folder / "runs.csv").read_text().splitlines())}
+    recs = read_jsonl(folder / COMPACT)
+    n = 0
+    for d in recs:
+        k = key_of(d)
+        if d.get("code") or k not in code or k not in rows:
+            continue
+        d["code"] = code[k]
+        n += 1
+    write_compact(folder, recs)
+    print(f"[records] code version written into {n} of {len(recs)} records: "
+          + ", ".join(f"{c}: {k}" for c, k in Counter(d.get("code") for d in recs).most_common()),
+          file=sys.stderr)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -367,7 +519,12 @@ def main(argv: list[str] | None = None) -> int:
     imp.add_argument("folder")
     imp.add_argument("--timing-md", default="",
                      help="BENCHMARKS.md whose timing table was pooled from those runs")
+    att = sub.add_parser("attribute-code", help="the code version of each run from the "
+                         "git history of the folder's runs.csv and meta.json")
+    att.add_argument("folder")
     a = ap.parse_args(argv)
+    if a.cmd == "attribute-code":
+        return attribute_codes(Path(a.folder))
     return import_csv(Path(a.folder), Path(a.timing_md) if a.timing_md else None)
 
 

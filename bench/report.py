@@ -4,11 +4,21 @@
   strategy (the paper's Fig. 10). A run that stopped keeps its final coverage.
 * ``time_to_95.png``: box plots of the time to 95 % coverage per world and strategy
   (runs that never reached it are counted in the table, not drawn).
-* ``BENCHMARKS.md``: setup and command, per world x strategy results, the per-module
-  timing table (the paper's Table I) with the real detector timed on rendered frames,
-  coverage tours and the lock-step vs ROS comparison when present.
+* ``BENCHMARKS.md``: the code version and the command, a table per world with a row per
+  strategy (:func:`write_all`), the per-module timing table (the paper's Table I) with
+  the real detector timed on rendered frames, the lock-step vs ROS comparison when
+  present, and links to the figures and to the experiment reports in
+  ``OUT/experiments/`` (which it does not include).
 
-Usage: ``.venv/bin/python bench/report.py OUT [--md BENCHMARKS.md]``.
+A report is of one code version. Every run record carries the commit it ran on
+(``code``, :func:`bench.store.code_version`); runs of another commit that a certificate
+of :mod:`bench.same_results` (in ``OUT/certificates/`` or ``--certificate``) lists as
+identical count as the certificate's ``after`` commit. Runs of several versions are
+refused, naming each version and its number of runs, unless ``--allow-mixed``, which
+marks every row with its versions.
+
+Usage: ``.venv/bin/python bench/report.py OUT [--md BENCHMARKS.md] [--allow-mixed]
+[--certificate FILE]``.
 """
 
 from __future__ import annotations
@@ -18,6 +28,7 @@ import json
 import math
 import os
 import sys
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -27,13 +38,23 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from bench import records  # noqa: E402
-from bench.causes import contacts_table, early_stop_table  # noqa: E402
-from bench.figures import coverage_curves, plot_coverage, plot_time_to  # noqa: E402,F401
+from bench import records, same_results, store  # noqa: E402
+from bench.figures import plot_coverage, plot_time_to  # noqa: E402
 from bench.records import TIMING_ROWS, as_float, by_world_strategy  # noqa: E402
 from bench.store import read_csv, slug  # noqa: E402
+from sim_bridge.strategy_specs import STRATEGIES  # noqa: E402
 
-MILESTONES = ("50", "90", "95", "99")
+#: The strategy the ratios are against: the explorer's default.
+DEFAULT_STRATEGY = "routed"
+#: The code version of a record that names none (runs from before versions were kept).
+UNKNOWN = "unknown"
+#: Bootstrap resamples and the seed of their generator (the intervals are reproducible).
+BOOT_N = 2000
+BOOT_SEED = 0
+#: Folder of ``out`` with the certificates of bench/same_results.py the report applies.
+CERT_DIR = "certificates"
+#: Folder of ``out`` with the experiment reports (linked, not included).
+EXPERIMENTS = "experiments"
 
 
 def load_runs(out: Path) -> list[dict[str, Any]]:
@@ -41,60 +62,13 @@ def load_runs(out: Path) -> list[dict[str, Any]]:
     return records.read(out)
 
 
-def _mean_std(vals: list[float], nd: int = 1) -> str:
-    v = np.asarray([x for x in vals if math.isfinite(x)], dtype=np.float64)
-    if v.size == 0:
-        return "-"
-    if v.size == 1:
-        return f"{v[0]:.{nd}f}"
-    return f"{v.mean():.{nd}f} ± {v.std(ddof=1):.{nd}f}"
-
-
 # ------------------------------------------------------------------------ tables
-
-
-def results_table(runs: list[dict[str, Any]], tours: dict[str, float],
-                  tours95: dict[str, float] | None = None) -> list[str]:
-    """Markdown table: one row per world x strategy (path / tour: path to 99 % over the
-    99 % tour; path 95 / tour 95: path to 95 % over the 95 % tour, "-" without it)."""
-    tours95 = tours95 or {}
-    head = ("| world | strategy | runs | completed | time to 50 / 90 / 95 / 99 % [s] | "
-            "path to 99 % [m] | path / tour | path 95 / tour 95 | collisions | goals | "
-            "switches | wall per run [s] |")
-    lines = [head, "|" + "|".join(["---"] * (head.count("|") - 1)) + "|"]
-    for (world, strat), rs in by_world_strategy(runs).items():
-        n = len(rs)
-        done = sum(1 for r in rs if r["completed"])
-        times = " / ".join(
-            _mean_std([as_float(r["time_to_s"].get(m)) for r in rs], 0)
-            + (f" ({sum(math.isfinite(as_float(r['time_to_s'].get(m))) for r in rs)})"
-               if any(not math.isfinite(as_float(r["time_to_s"].get(m))) for r in rs) else "")
-            for m in MILESTONES)
-        p99 = _mean_std([as_float(r["path_to_m"].get("99")) for r in rs])
-        tour = tours.get(world)
-        ratio = (_mean_std([as_float(r["path_to_m"].get("99")) / tour for r in rs], 2)
-                 if tour else "-")
-        tour95 = tours95.get(world)
-        ratio95 = (_mean_std([as_float(r["path_to_m"].get("95")) / tour95 for r in rs], 2)
-                   if tour95 else "-")
-        coll = [r["collisions"] for r in rs]
-        early = sum(1 for r in rs if r["stop_reason"] == "done")
-        timeout = sum(1 for r in rs if r["stop_reason"] == "timeout")
-        stops = ", ".join(x for x in (f"{early} done early" if early else "",
-                                      f"{timeout} timed out" if timeout else "") if x)
-        lines.append(
-            f"| {world} | {strat} | {n} | {done}/{n}{f' ({stops})' if stops else ''} | "
-            f"{times} | {p99} | {ratio} | {ratio95} | "
-            f"{np.mean(coll):.1f} (max {max(coll)}) | "
-            f"{_mean_std([r['goals_sent'] for r in rs], 0)} | "
-            f"{_mean_std([r['goal_switches'] for r in rs], 0)} | "
-            f"{_mean_std([r['wall_time_s'] for r in rs], 0)} |")
-    return lines
 
 
 def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
                  legacy: dict[str, Any] | None = None) -> list[str]:
-    """The paper's Table I: per-module p50 / mean / p95 ms over all updates of all runs.
+    """The paper's Table I, a row per world: per-module p50 / mean / p95 ms over all
+    updates of all runs of one strategy (``routed``, else ``paper``, else all).
 
     Pooled from the runs' timing histograms (:mod:`bench.records`: percentiles within
     half a 1 % bin, means exact). A world none of whose runs has timings left (records
@@ -102,18 +76,13 @@ def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
     ``timing_legacy.json``: ``worlds``: world -> key -> [p50, mean, p95], pooled when those
     runs' full records still existed, for the table's ``strategy``), marked with †.
     """
-    strat = "paper" if any(r["strategy"] == "paper" for r in runs) else None
+    strat = next((s for s in (DEFAULT_STRATEGY, "paper") if any(r["strategy"] == s
+                                                               for r in runs)), None)
     sel = [r for r in runs if strat is None or r["strategy"] == strat]
     worlds = list(dict.fromkeys(r["world"] for r in sel))
     # old cells only under the heading of the strategy they were pooled for
     legacy = ((legacy or {}).get("worlds") or {}
               if (legacy or {}).get("strategy", "paper") == (strat or "all") else {})
-    head = "| module | " + " | ".join(worlds) + " |"
-    lines = [f"Strategy `{strat or 'all'}`; each cell p50 / mean / p95 in ms over every "
-             "update of every run (frontier, selection and segmentation once per decision, "
-             "detection and costmap once per processed camera frame).", "",
-             head, "|" + "|".join(["---"] * (len(worlds) + 1)) + "|"]
-    totals = {w: 0.0 for w in worlds}
     marked = partial = False
 
     def pooled(w: str, key: str) -> tuple[Any, int, int]:
@@ -123,44 +92,50 @@ def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
         st = records.hist_stats(records.merge_histograms(hists)) if hists else None
         return st, len(hists), len(in_w)
 
-    for key, label in TIMING_ROWS:
-        cells = []
-        for w in worlds:
+    has_core = any(pooled(w, "core")[0] is not None for w in worlds)
+    real = bool(yolo and "ms_mean" in yolo)
+    head = ("| world | " + " | ".join(records.TIMING_COLUMNS[k] for k, _ in TIMING_ROWS)
+            + " | total | " + ("decision core | " if has_core else "")
+            + ("total, real detector | " if real else ""))
+    lines = [f"Strategy `{strat or 'all'}`; each cell p50 / mean / p95 in ms over every "
+             "update of every run (frontier, selection and segmentation once per decision, "
+             "detection and costmap once per processed camera frame); "
+             + "; ".join(f"*{records.TIMING_COLUMNS[k]}* = {label}" for k, label in TIMING_ROWS)
+             + "; *total* = sum of the means (oracle detection)"
+             + ("; *decision core* = frontier detect + selection of one decision (not added "
+                "to the total)" if has_core else "") + ".", "",
+             head.rstrip(), "|" + "---|" * (head.count("|") - 1)]
+    for w in worlds:
+        cells, total = [], 0.0
+        for key, _ in TIMING_ROWS:
             st, n_hist, n_runs = pooled(w, key)
             if st is not None:
                 part = n_hist < n_runs
                 cells.append(f"{st[0]:.1f} / {st[1]:.1f} / {st[2]:.1f}"
                              + (f" ‡{n_hist}/{n_runs}" if part else ""))
                 partial |= part
-                totals[w] += st[1]
+                total += st[1]
             elif not n_hist and key in legacy.get(w, {}):
                 p50, mean, p95 = legacy[w][key]
                 cells.append(f"{p50:.1f} / {mean:.1f} / {p95:.1f} †")
-                totals[w] += mean
+                total += mean
                 marked = True
             else:
                 cells.append("-")
-        lines.append(f"| {label} | " + " | ".join(cells) + " |")
-    if yolo and "ms_mean" in yolo:
-        lines.append(f"| object detection (real YOLOv3-tiny, {yolo['backend']}, "
-                     f"{yolo['input_size']} px, {yolo['threads']} threads) | "
-                     + " | ".join(f"{yolo['ms_p50']} / {yolo['ms_mean']} / {yolo['ms_p95']}"
-                                  for _ in worlds) + " |")
-    lines.append("| total (sum of means, oracle detection) | "
-                 + " | ".join(f"{totals[w]:.1f}" for w in worlds) + " |")
-    core = []
-    for w in worlds:
-        st = pooled(w, "core")[0]
-        core.append(f"{st[0]:.1f} / {st[1]:.1f} / {st[2]:.1f}" if st is not None else "-")
-    if any(c != "-" for c in core):
-        lines.append("| decision core (frontier detect + selection of one decision) | "
-                     + " | ".join(core) + " |")
-    if yolo and "ms_mean" in yolo:
-        lines.append("| total with the real detector | "
-                     + " | ".join(f"{totals[w] + yolo['ms_mean']:.1f}" for w in worlds) + " |")
+        cells.append(f"{total:.1f}")
+        if has_core:
+            st = pooled(w, "core")[0]
+            cells.append(f"{st[0]:.1f} / {st[1]:.1f} / {st[2]:.1f}" if st is not None else "-")
+        if real:
+            cells.append(f"{total + yolo['ms_mean']:.1f}")
+        lines.append(f"| {w} | " + " | ".join(cells) + " |")
+    if real:
+        lines += ["", f"Real detector (YOLOv3-tiny, {yolo['backend']}, {yolo['input_size']} px, "
+                      f"{yolo['threads']} threads) per frame: {yolo['ms_p50']} / "
+                      f"{yolo['ms_mean']} / {yolo['ms_p95']} ms (p50 / mean / p95); *total, "
+                      "real detector* adds its mean."]
     elif yolo:
-        lines.append("")
-        lines.append(f"Real detector not timed: {yolo.get('error')}")
+        lines += ["", f"Real detector not timed: {yolo.get('error')}"]
     if partial:
         lines += ["", "‡k/n: pooled over the k of the world's n runs whose timings are kept "
                   "(the others' records were rebuilt from `runs.csv`)."]
@@ -171,297 +146,430 @@ def timing_table(runs: list[dict[str, Any]], yolo: dict[str, Any] | None,
     return lines
 
 
-def _mean(rs: list[dict[str, Any]], m: str) -> tuple[float, int]:
-    v = [as_float(r["time_to_s"].get(m)) for r in rs]
-    v = [x for x in v if math.isfinite(x)]
-    return (float(np.mean(v)) if v else math.nan), len(v)
+# ------------------------------------------------------------------ code versions
 
 
-def targets_summary(runs: list[dict[str, Any]]) -> list[str]:
-    """The issue's questions answered from the runs: does ``paper`` complete every run,
-    its time to 95 % against ``explore_lite`` and ``nearest`` (target <= 0.75x), which
-    strategies fail to complete, and collisions with against without the object costmap."""
-    g = by_world_strategy(runs)
-    worlds = list(dict.fromkeys(r["world"] for r in runs))
-    if not any(w for w in worlds if (w, "paper") in g):
-        return []
-    lines = ["Computed from the table above. Time to 95 %: mean over the runs that reached "
-             "it (their number in brackets when not all did); ratio = `paper` / baseline, "
-             "target ≤ 0.75 (counted as met only when every `paper` run reached 95 %). "
-             "Incomplete: runs below 99 % per strategy. Collisions: per run, "
-             "`paper` against `paper_noobj` (the same strategy without the object costmap; "
-             "target 0 with it).", "",
-             "| world | paper completed | paper t95 [s] | vs explore_lite | vs nearest | "
-             "incomplete runs | collisions paper / paper_noobj |",
-             "|---|---|---|---|---|---|---|"]
-    met = {"complete": 0, "lite": 0, "nearest": 0, "zero": 0, "worlds": 0}
-    for w in worlds:
-        p = g.get((w, "paper"))
-        if not p:
-            continue
-        met["worlds"] += 1
-        n, done = len(p), sum(1 for r in p if r["completed"])
-        met["complete"] += done == n
-        t_p, k_p = _mean(p, "95")
-        ratios = []
-        for base, tag in (("explore_lite", "lite"), ("nearest", "nearest")):
-            b = g.get((w, base))
-            if not b:
-                ratios.append("-")
-                continue
-            t_b, k_b = _mean(b, "95")
-            if math.isfinite(t_p) and math.isfinite(t_b):
-                r = t_p / t_b
-                # counted only when every paper run got there (a mean over the lucky runs
-                # would flatter it); a baseline's misses only make the ratio cautious
-                met[tag] += r <= 0.75 and k_p == n
-                ratios.append(f"{r:.2f}× ({t_b:.0f} s{f', {k_b} of {len(b)}' if k_b < len(b) else ''})")
-            elif math.isfinite(t_p):
-                ratios.append(f"baseline never reached 95 % ({len(b)} runs)")
-            else:
-                ratios.append("-")
-        fails = ", ".join(f"{st} {sum(1 for r in rs if not r['completed'])}/{len(rs)}"
-                          for (ww, st), rs in g.items()
-                          if ww == w and any(not r["completed"] for r in rs)) or "none"
-        c_p = float(np.mean([r["collisions"] for r in p]))
-        met["zero"] += c_p == 0
-        no = g.get((w, "paper_noobj"))
-        c_no = f"{np.mean([r['collisions'] for r in no]):.1f}" if no else "-"
-        t_txt = (f"{t_p:.0f}" + (f" ({k_p} of {n})" if k_p < n else "")) if math.isfinite(t_p) else "-"
-        lines.append(f"| {w} | {done}/{n} | {t_txt} | {ratios[0]} | {ratios[1]} | {fails} | "
-                     f"{c_p:.1f} / {c_no} |")
-    k = met["worlds"]
-    lines += ["", f"Targets over {k} worlds: `paper` completes every run in {met['complete']}; "
-              f"time to 95 % ≤ 0.75× `explore_lite` in {met['lite']} and ≤ 0.75× `nearest` in "
-              f"{met['nearest']}; zero collisions with the object costmap in {met['zero']}."]
-    return lines + [""] + _findings(g, worlds)
+class MixedVersions(ValueError):
+    """The runs of a report ran on more than one code version (and no certificate makes
+    them one); the message names each version and its number of runs."""
 
 
-def _findings(g: dict[tuple[str, str], list[dict[str, Any]]], worlds: list[str]) -> list[str]:
-    """The answers in words: is ``paper`` faster to 95 % than each baseline and than its
-    ablations, and by how much; which strategies fail to complete; collisions with against
-    without the object costmap where there is furniture."""
-    out = ["Findings (time-to-95 % ratios as in the table: `paper`'s mean / the other's):", ""]
-    for base in ("explore_lite", "nearest", "paper_noseg", "paper_noobj"):
-        rs = []
-        for w in worlds:
-            if (w, "paper") not in g or (w, base) not in g:
-                continue
-            t_p, _ = _mean(g[(w, "paper")], "95")
-            t_b, _ = _mean(g[(w, base)], "95")
-            if math.isfinite(t_p):
-                rs.append((t_p / t_b if math.isfinite(t_b) else math.inf, w))
-        if not rs:
-            continue
-        ratios = sorted(r for r in rs if math.isfinite(r[0]))
-        never = [w for r, w in rs if not math.isfinite(r)]
-        text = f"* Time to 95 % against `{base}`: "
-        if ratios:
-            faster = sum(1 for r, _ in ratios if r < 0.99)
-            same = sum(1 for r, _ in ratios if 0.99 <= r <= 1.01)
-            med = float(np.median([r for r, _ in ratios]))
-            text += (f"`paper` is faster in {faster} of the {len(ratios)} worlds where both "
-                     f"reached 95 %" + (f" and within 1 % in {same}" if same else "")
-                     + f"; ratio median {med:.2f}×, from {ratios[0][0]:.2f}× "
-                     f"({ratios[0][1]}) to {ratios[-1][0]:.2f}× ({ratios[-1][1]})")
-        if never:
-            text += ("; " if ratios else "") + (f"in {len(never)} more ({', '.join(never)}) "
-                                                 f"`{base}` never reached 95 % and `paper` did")
-        out.append(text + ".")
-    strategies = list(dict.fromkeys(st for _, st in g))
-    fails = []
-    for st in strategies:
-        runs = [r for w in worlds for r in g.get((w, st), [])]
-        bad = [w for w in worlds if any(not r["completed"] for r in g.get((w, st), []))]
-        n_bad = sum(1 for r in runs if not r["completed"])
-        fails.append(f"`{st}` {n_bad}/{len(runs)} runs" + (f" in {len(bad)} worlds" if bad else ""))
-    out.append("* Runs that did not complete (below 99 %): " + ", ".join(fails) + ".")
-    furnished = [w for w in worlds if (w, "paper") in g and (w, "paper_noobj") in g
-                 and any((r.get("n_objects") or 0) > 0 for r in g[(w, "paper")])]
-    if furnished:
-        with_ = [r["collisions"] for w in furnished for r in g[(w, "paper")]]
-        without = [r["collisions"] for w in furnished for r in g[(w, "paper_noobj")]]
-        zero = sum(1 for w in furnished if all(r["collisions"] == 0 for r in g[(w, "paper")]))
-        out.append(f"* Collisions in the {len(furnished)} worlds with furniture the object "
-                   f"costmap found ({', '.join(furnished)}): {np.mean(with_):.2f} per run with "
-                   f"it (`paper`), {np.mean(without):.2f} without (`paper_noobj`); no collision "
-                   f"in any run with it in {zero} of them.")
+def run_code(r: dict[str, Any]) -> str:
+    """The code version a run record ran on; ``unknown`` for a record without one."""
+    return str(r.get("code") or UNKNOWN)
+
+
+def read_certificates(paths: list[Path]) -> list[dict[str, Any]]:
+    """The certificates of :mod:`bench.same_results` in ``paths`` (files, or folders whose
+    ``*.json`` are read), checked for their form.
+
+    Raises
+    ------
+    ValueError
+        On a file that is not a same-results certificate of a known format, or one whose
+        commits are not clean (the message names the file and what is wrong).
+    """
+    files: list[Path] = []
+    for p in paths:
+        files += sorted(p.glob("*.json")) if p.is_dir() else [p]
+    certs = []
+    for f in files:
+        try:
+            c = json.loads(f.read_text())
+        except (OSError, ValueError) as err:
+            raise ValueError(f"certificate {f}: unreadable ({err})") from None
+        if not isinstance(c, dict) or c.get("certificate") != same_results.CERTIFICATE:
+            raise ValueError(f"certificate {f}: expected a {same_results.CERTIFICATE!r} "
+                             f"certificate, got {str(c)[:80]!r}")
+        if c.get("format") != same_results.CERTIFICATE_FORMAT:
+            raise ValueError(f"certificate {f}: expected format "
+                             f"{same_results.CERTIFICATE_FORMAT}, got {c.get('format')!r}")
+        for side in ("before", "after"):
+            code = c.get(side)
+            if not isinstance(code, str) or not code or code == UNKNOWN or "+modified" in code:
+                raise ValueError(f"certificate {f}: {side} must be a clean commit, got {code!r}")
+        if not isinstance(c.get("runs"), dict) or not c["runs"]:
+            raise ValueError(f"certificate {f}: expected a non-empty 'runs' object")
+        certs.append(dict(c, file=str(f)))
+    return certs
+
+
+def _same_figures(r: dict[str, Any], listed: dict[str, Any]) -> bool:
+    """Whether a run record has the figures a certificate lists for its key."""
+    for k in same_results.FINGERPRINT:
+        a, b = r.get(k), listed.get(k)
+        if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+            if not math.isclose(float(a), float(b), rel_tol=0.0, abs_tol=1e-9):
+                return False
+        elif a != b:
+            return False
+    return True
+
+
+def effective_codes(runs: list[dict[str, Any]], certs: list[dict[str, Any]]) -> list[str]:
+    """Per run, the code version it counts as: its own, or the ``after`` commit of a
+    certificate that lists it (its key, its commit as ``before`` and its figures), followed
+    along chains of certificates (A -> B, B -> C: C)."""
+    out = []
+    for r in runs:
+        code = run_code(r)
+        key = f"{r['world']}/{r['strategy']}/{int(r['seed'])}"
+        seen = {code}
+        changed = True
+        while changed:
+            changed = False
+            for c in certs:
+                listed = c["runs"].get(key)
+                if c["before"] == code and listed is not None and _same_figures(r, listed) \
+                        and c["after"] not in seen:
+                    code = c["after"]
+                    seen.add(code)
+                    changed = True
+        out.append(code)
     return out
 
 
-def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
-    """Figures in ``out`` and, when ``md`` is given, the markdown summary there."""
+def check_versions(runs: list[dict[str, Any]], codes: list[str], allow_mixed: bool) -> None:
+    """Refuse runs of several code versions unless ``allow_mixed``.
+
+    Raises
+    ------
+    MixedVersions
+        Naming every version with its number of runs (and worlds x strategies); runs
+        that record no version (``unknown``) are refused too.
+    """
+    count = Counter(codes)
+    if allow_mixed or (len(count) <= 1 and UNKNOWN not in count):
+        return
+    cells = {c: {(r["world"], r["strategy"]) for r, k in zip(runs, codes) if k == c}
+             for c in count}
+    detail = "; ".join(f"{c}: {n} runs ({len(cells[c])} world x strategy cells)"
+                       for c, n in count.most_common())
+    raise MixedVersions(
+        f"the runs ran on {len(count)} code version(s) ({detail}); a report is of one "
+        "version: rerun the others on one commit (bench/run_bench.py --resume --redo), "
+        "certify them with bench/same_results.py compare --certificate, or pass "
+        "--allow-mixed to mark every row with its version")
+
+
+def version_labels(codes: list[str], meta: dict[str, Any]) -> dict[str, str]:
+    """Short labels ``v1``, ``v2``, ... of the code versions, in the order of the parts of
+    ``meta`` that ran them (versions no part names last, by name)."""
+    order = [p.get("code") for p in store.parts_of(meta)]
+    known = sorted(set(codes), key=lambda c: (order.index(c) if c in order else len(order), c))
+    return {c: f"v{i}" for i, c in enumerate(known, 1)}
+
+
+# ------------------------------------------------------------------ statistics
+
+
+def bootstrap_ci(values: list[float], level: float = 0.95, n_boot: int = BOOT_N,
+                 seed: int = BOOT_SEED) -> tuple[float, float]:
+    """Percentile bootstrap interval of the median of ``values``: the ``(1 - level) / 2``
+    and ``(1 + level) / 2`` quantiles (numpy's default, linear) of the medians of
+    ``n_boot`` resamples with replacement, drawn from ``numpy.random.default_rng(seed)``,
+    so the same values give the same interval.
+
+    Raises
+    ------
+    ValueError
+        On no values or a level outside (0, 1).
+
+    Examples
+    --------
+    >>> bootstrap_ci([2.0, 2.0, 2.0])
+    (2.0, 2.0)
+    """
+    v = np.asarray(values, dtype=np.float64)
+    if v.size == 0:
+        raise ValueError("bootstrap_ci needs at least one value, got none")
+    if not 0.0 < level < 1.0:
+        raise ValueError(f"level must be in (0, 1), got {level}")
+    rng = np.random.default_rng(seed)
+    idx = rng.integers(0, v.size, size=(n_boot, v.size))
+    med = np.median(v[idx], axis=1)
+    lo, hi = np.quantile(med, [(1.0 - level) / 2.0, (1.0 + level) / 2.0])
+    return float(lo), float(hi)
+
+
+def _t(r: dict[str, Any], m: str) -> float:
+    """Time to milestone ``m`` of a run, +inf when it never got there."""
+    v = as_float((r.get("time_to_s") or {}).get(m))
+    return v if math.isfinite(v) else math.inf
+
+
+def _t_or_end(r: dict[str, Any], m: str) -> tuple[float, bool]:
+    """Time to ``m``, or the run's end when it never got there (a lower bound; True)."""
+    v = _t(r, m)
+    return (v, False) if math.isfinite(v) else (float(r["sim_time_s"]), True)
+
+
+def paired_ratio(rs: list[dict[str, Any]], ref: list[dict[str, Any]], m: str = "95"
+                 ) -> tuple[float, float, float, int, int] | None:
+    """Median over the seeds both have of T``m`` / the reference's T``m``, its bootstrap
+    interval (:func:`bootstrap_ci`), the number of seeds and of seeds where either run
+    never got there (counted with its end time instead); None without a common seed."""
+    by_seed = {int(r["seed"]): r for r in ref}
+    ratios, cens = [], 0
+    for r in rs:
+        b = by_seed.get(int(r["seed"]))
+        if b is None:
+            continue
+        ta, ca = _t_or_end(r, m)
+        tb, cb = _t_or_end(b, m)
+        if tb <= 0:
+            continue
+        ratios.append(ta / tb)
+        cens += ca or cb
+    if not ratios:
+        return None
+    lo, hi = bootstrap_ci(ratios)
+    return float(np.median(ratios)), lo, hi, len(ratios), cens
+
+
+def _median_time(rs: list[dict[str, Any]], m: str) -> str:
+    """Median time to ``m`` over all runs, a run that never got there counted as slower
+    than any; 'never' when the median is such a run."""
+    med = float(np.median([_t(r, m) for r in rs]))
+    return f"{med:.0f}" if math.isfinite(med) else "never"
+
+
+# ------------------------------------------------------------------ the report
+
+
+def world_table(world: str, g: dict[tuple[str, str], list[dict[str, Any]]],
+                strategies: list[str], tour: float | None, codes: dict[int, str] | None,
+                labels: dict[str, str]) -> list[str]:
+    """One world's table: a row per strategy (see :func:`write_all`), the ratio column
+    only when ``strategies`` has the default; ``codes`` (id of a record -> its version)
+    adds the version column."""
+    with_ref = DEFAULT_STRATEGY in strategies
+    head = ("| strategy | runs | complete | contacts / run | T95 median [s] | T99 median [s] |"
+            + (f" T95 ÷ `{DEFAULT_STRATEGY}` [95 % CI] |" if with_ref else "")
+            + " path / tour |" + (" code |" if codes is not None else ""))
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    ref = g.get((world, DEFAULT_STRATEGY))
+    for st in strategies:
+        rs = g.get((world, st))
+        if not rs:
+            continue
+        n = len(rs)
+        done = sum(1 for r in rs if r["completed"])
+        contacts = float(np.mean([int(r.get("collisions") or 0) for r in rs]))
+        if st == DEFAULT_STRATEGY:
+            ratio = "1 (reference)"
+        elif ref is None:
+            ratio = "-"
+        else:
+            pr = paired_ratio(rs, ref)
+            ratio = ("-" if pr is None else
+                     f"{pr[0]:.2f} [{pr[1]:.2f}, {pr[2]:.2f}]"
+                     + (f" n={pr[3]}" if pr[3] < n else "") + (" †" if pr[4] else ""))
+        p99 = [as_float((r.get("path_to_m") or {}).get("99")) for r in rs]
+        p99 = [p for p in p99 if math.isfinite(p)]
+        pt = (f"{np.median(p99) / tour:.2f}" + (f" ({len(p99)})" if len(p99) < n else "")
+              if tour and p99 else "-")
+        row = (f"| {st} | {n} | {done}/{n} | {contacts:.2f} | {_median_time(rs, '95')} | "
+               f"{_median_time(rs, '99')} |" + (f" {ratio} |" if with_ref else "")
+               + f" {pt} |")
+        if codes is not None:
+            cnt = Counter(codes[id(r)] for r in rs)
+            order = sorted(cnt, key=lambda c: int(labels[c][1:]))
+            row += " " + ", ".join(labels[c] + (f"×{cnt[c]}" if len(cnt) > 1 else "")
+                                   for c in order) + " |"
+        lines.append(row)
+    return lines
+
+
+def summary_table(g: dict[tuple[str, str], list[dict[str, Any]]], strategies: list[str],
+                  codes: dict[int, str] | None, labels: dict[str, str]) -> list[str]:
+    """A row per strategy over all worlds: runs, complete, contacts (total and per run),
+    the median per-seed T95 ratio against the default over every world with its
+    bootstrap interval (``codes``: the version column, as in :func:`world_table`)."""
+    with_ref = DEFAULT_STRATEGY in strategies
+    head = ("| strategy | worlds | runs | complete | contacts (per run) |"
+            + (f" T95 ÷ `{DEFAULT_STRATEGY}` [95 % CI] |" if with_ref else "")
+            + (" code |" if codes is not None else ""))
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    for st in strategies:
+        cells = {w: rs for (w, s), rs in g.items() if s == st}
+        rs = [r for v in cells.values() for r in v]
+        n = len(rs)
+        contacts = sum(int(r.get("collisions") or 0) for r in rs)
+        row = (f"| {st} | {len(cells)} | {n} | {sum(1 for r in rs if r['completed'])}/{n} | "
+               f"{contacts} ({contacts / max(n, 1):.2f}) |")
+        if with_ref:
+            if st == DEFAULT_STRATEGY:
+                row += " 1 (reference) |"
+            else:
+                ratios, cens = [], 0
+                for w, v in cells.items():
+                    ref = g.get((w, DEFAULT_STRATEGY))
+                    by_seed = {int(r["seed"]): r for r in ref or []}
+                    for r in v:
+                        b = by_seed.get(int(r["seed"]))
+                        if b is None:
+                            continue
+                        (ta, ca), (tb, cb) = _t_or_end(r, "95"), _t_or_end(b, "95")
+                        if tb > 0:
+                            ratios.append(ta / tb)
+                            cens += ca or cb
+                if ratios:
+                    lo, hi = bootstrap_ci(ratios)
+                    row += (f" {np.median(ratios):.2f} [{lo:.2f}, {hi:.2f}]"
+                            + (f" n={len(ratios)}" if len(ratios) < n else "")
+                            + (" †" if cens else "") + " |")
+                else:
+                    row += " - |"
+        if codes is not None:
+            cnt = Counter(codes[id(r)] for r in rs)
+            order = sorted(cnt, key=lambda c: int(labels[c][1:]))
+            row += (f" {labels[order[0]]}" if len(order) == 1 else
+                    f" {len(order)} versions, {labels[order[0]]}–{labels[order[-1]]}") + " |"
+        lines.append(row)
+    return lines
+
+
+def write_all(out: Path, md: Path | None, command: str | None, allow_mixed: bool = False,
+              certificates: list[Path] | None = None) -> Path | None:
+    """Figures in ``out`` and, when ``md`` is given, the report there.
+
+    The report is of one code version: runs of several (after the certificates in
+    ``out/certificates/`` and ``certificates``) are refused (:class:`MixedVersions`)
+    unless ``allow_mixed``, which marks every row with its versions instead. Per world a
+    table with a row per strategy: runs, complete (coverage >= 99 %), contacts per run,
+    median T95 and T99, the median per-seed T95 ratio against ``routed`` with its 95 %
+    bootstrap interval, and the median path to 99 % over the world's coverage tour.
+    """
     runs = load_runs(out)
     meta_path = out / "meta.json"
     meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
+    cert_paths = ([out / CERT_DIR] if (out / CERT_DIR).is_dir() else []) + list(certificates or [])
+    certs = read_certificates(cert_paths)
+    codes = effective_codes(runs, certs)
+    check_versions(runs, codes, allow_mixed)
     w_order = {w: i for i, w in enumerate(meta.get("worlds", []))}
     s_order = {st: i for i, st in enumerate(meta.get("strategies", []))}
-    runs.sort(key=lambda r: (w_order.get(r["world"], len(w_order)), r["world"],
-                             s_order.get(r["strategy"], len(s_order)), r["strategy"], r["seed"]))
-    cov = plot_coverage(runs, out)
-    box = plot_time_to(runs, out)
+    order = sorted(range(len(runs)), key=lambda i: (
+        w_order.get(runs[i]["world"], len(w_order)), runs[i]["world"],
+        s_order.get(runs[i]["strategy"], len(s_order)), runs[i]["strategy"], runs[i]["seed"]))
+    runs, codes = [runs[i] for i in order], [codes[i] for i in order]
+    plot_coverage(runs, out)
+    plot_time_to(runs, out)
     if md is None:
         return None
+    md.write_text("\n".join(report_lines(out, md, runs, codes, meta, certs, command)) + "\n")
+    return md
+
+
+def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[str],
+                 meta: dict[str, Any], certs: list[dict[str, Any]],
+                 command: str | None) -> list[str]:
+    """The lines of BENCHMARKS.md (see :func:`write_all`)."""
+    rel = Path(os.path.relpath(out, md.parent))
+    exp_rel = Path(os.path.relpath(out / EXPERIMENTS, md.parent)).as_posix()
+    docs = Path(os.path.relpath(ROOT / "docs", md.parent)).as_posix()
     cmd = command or meta.get("command", "bench/run_bench.py")
     tours_rows = read_csv(out / "tours.csv")
     tours = {r["world"]: float(r["tour_m"]) for r in tours_rows}
-    tours95 = {r["world"]: float(r["tour95_m"]) for r in tours_rows if r.get("tour95_m")}
+    area = {r["world"]: r.get("explorable_area_m2") for r in tours_rows}
     yolo_path = out / "yolo.json"
     yolo = json.loads(yolo_path.read_text()) if yolo_path.is_file() else None
-    rel = Path(os.path.relpath(out, md.parent))
+    count = Counter(codes)
+    mixed = len(count) > 1
+    labels = version_labels(codes, meta)
+    g = by_world_strategy(runs)
+    worlds = list(dict.fromkeys(r["world"] for r in runs))
+    strategies = list(dict.fromkeys(r["strategy"] for r in runs))
+    strategies.sort(key=lambda st: st != DEFAULT_STRATEGY)     # the reference row first
+    parts = store.parts_of(meta)
+    cpu = [float(r["cpu_time_s"]) for r in runs if r.get("cpu_time_s") is not None]
     L = ["# Benchmarks", "",
-         "Generated by `bench/run_bench.py` (via `make bench` / `scripts/run_bench.sh`); "
-         "do not edit by hand.", "",
-         "Command:", "", "```sh", f".venv/bin/python {cmd}", "```", ""]
-    if meta:
-        s0, n = meta.get("seed0", 0), meta.get("runs", 1)
-        parts = meta.get("parts") or []
-        L += [f"Started {parts[0].get('started') if parts else meta.get('started', '?')}, "
-              f"{n} seeded runs per world x strategy (seeds {s0}..{s0 + n - 1}), "
-              f"{meta.get('jobs')} worker processes on {meta.get('cpus')} CPUs, "
-              f"{meta.get('wall_s', '?')} s wall in total.", ""]
-        if len(parts) > 1:
-            codes = {part.get("code") for part in parts}
-            same = (f"on the same code ({next(iter(codes))})" if len(codes) == 1 and None not in codes
-                    else "(code version of each part given where recorded)")
-            L += [f"Run in {len(parts)} parts {same}, each later part with `--resume` "
-                  "(runs already in the output folder that the command asks for are kept, "
-                  "the rest are run):", ""]
-            for i, part in enumerate(parts, 1):
-                ran = part.get("runs_run")
-                L.append(f"{i}. started {part.get('started', '?')}, "
-                         + (f"{ran} runs, " if ran is not None else "")
-                         + f"{part.get('wall_s', '?')} s wall"
-                         + (f", code {part['code']}" if part.get("code") and len(codes) != 1
-                            else "")
-                         + (" (interrupted)" if part.get("interrupted") else "")
-                         + (f" ({len(part['failed'])} runs failed: "
-                            + "; ".join(f"`{f}`" for f in part["failed"]) + ")"
-                            if part.get("failed") else "")
-                         + (f" (run in `{part['merged_from']}`, added with `--merge`)"
-                            if part.get("merged_from") else "")
-                         + f": `{part.get('command')}`")
-            L.append("")
-    mount = meta.get("camera_mount") if meta else None
-    # parts before the setting existed ran on 0.0 (store.SETTING_DEFAULTS)
-    margin = float((meta.get("settings") or {}).get("nav_inflation_margin_m", 0.0)) if meta else 0.0
-    mount_txt = (f"{mount[0]:g} m above the floor, pitched {mount[1]:g} rad down"
-                 + (" (the paper's robot)" if mount and list(mount) == [0.894, 0.1] else "")
-                 if mount else "at the simulator's default mount")
-    L += ["## Setup", "",
-          "* Lock-step runs (`sim_bridge/lockstep.py`): the simulator and the explorer's core "
-          "code (frontiers, selection + goal manager, DuDe segmentation, object costmap) in one "
-          "loop at the nodes' rates, no real-time waiting. The seed perturbs the start "
-          "(±0.2 m, any heading), the lidar noise and the oracle detector (10 % misses, 2 px "
-          "jitter).",
-          "* Completed = coverage >= 99 % of the ground-truth explorable area: free cells "
-          "at the lidar plane connected to the start that a noise-free scan sees from some "
-          "pose the robot can reach (robot centres 0.22 m clear of obstacles, sampled every "
-          "0.25 m; `sim_bridge/observable.py`; this drops e.g. the inside of a hollow wall "
-          "block joined to a corridor by a slit, 1.03 % of the authors' maze). Coverage is "
-          "the share of those cells the map knows (observed, free or occupied; see "
-          "`sim_bridge/metrics.py`). "
-          "A run also stops when the explorer "
-          "reports exploration done or at the sim time limit (5 s per m² of explorable area, "
-          "600..7200 s).",
-          "* Strategies: `paper` (eq. 1-3, regions + object costmap), `paper_noseg` (no "
-          "regions, γ = 0), `paper_noobj` (no object costmap), `nearest` (nearest frontier "
-          "by path length), `explore_lite` (3·dist − 1·length). The two baselines run as "
-          "their packages would: no object costmap (not in frontiers, selection or planning) "
-          "and no regions.",
-          "* Robot: TurtleBot3-waffle-sized disk (0.22 m), 1.1 m tall: chair seats and table "
-          "tops are collisions although the 0.17 m lidar plane only sees legs. RGB-D camera "
-          f"{mount_txt}. Navigation stand-in: "
-          "grid planner + pure pursuit (arc kept out of the lethal zone: cells closer than "
-          + (f"the robot radius + {margin:g} m" if margin else "the robot radius")
-          + " to an obstacle); after a collision "
-          "it backs off 0.15 m and replans, twice per goal, before aborting the goal "
-          "(each contact counts as a collision).",
-          "* Coverage tour: full-knowledge reference (`sim_bridge/coverage_tour.py`): "
-          "viewpoints from a greedy set cover of a 5 m 360° sensor's view, ordered by nearest "
-          "neighbour + 2-opt on geodesic distances (paths 0.27 m clear of the footprint "
-          "raster, smoothed to any-angle), pruned while the scans along the tour still bring "
-          "99 % into view (the tour to 95 %: the same, pruned and cut where 95 % is in view). "
-          "A heuristic, not a proven bound: a lucky run can beat it. "
-          "path / tour = path length to 99 % divided by it; path 95 / tour 95 = path length "
-          "to 95 % divided by the tour to 95 % (near 1: the strategy already drives about "
-          "as far to 95 % as a robot that knows the map; no strategy can be much faster "
-          "there).", ""]
-    L += ["## Results", "", "Times and paths: mean ± std over the runs that reached the "
-          "milestone (their number in brackets when not all did). \"done early\": the "
-          "explorer reported exploration done (no reachable frontier left) below 99 %. "
-          "Goals: goals sent to navigation; switches: goals replaced by a cheaper frontier "
-          "while the old goal's frontier was still there and reachable.", ""]
-    L += results_table(runs, tours, tours95) + [""]
-    contacts = contacts_table(runs)
-    if contacts:
-        L += ["## Contacts by cause", "",
-              "What each contact touched and whether navigation could have known it "
-              "(`sim_bridge/contacts.py`): wall mapped / unmapped (the map had an occupied "
-              "cell at the touched point or not); object in layer (the object costmap the "
-              "navigation plans around had it), in map only (the lidar map had it, the layer "
-              "did not), unseen (neither); unclassified: runs recorded before contacts were "
-              "classified. Backing off: contacts during the back-up after an earlier one.", ""]
-        L += contacts + [""]
-    stops = early_stop_table(runs)
-    if stops:
-        L += ["## Runs below 99 % by cause", "",
-              "Per run that ended below the target (`sim_bridge/early_stop.py`): the cause of "
-              "its largest unseen piece of the explorable area (a frontier's reason: "
-              "blacklisted, no passable cPoint, no path, not selectable, selectable; or no "
-              "frontier: frontier too small, closed by object layer, behind mapped obstacles) "
-              "and the frontiers left at the stop; unexplained: runs recorded before the "
-              "analysis existed.", ""]
-        L += stops + [""]
-    summary = targets_summary(runs)
-    if summary:
-        L += ["## Against the targets", ""] + summary + [""]
-    drawn = {p.name for p in cov}
-    kept = [out / f"coverage_{slug(w)}.png" for w in dict.fromkeys(r["world"] for r in runs)
-            if f"coverage_{slug(w)}.png" not in drawn
-            and not any(r.get("coverage_samples") for r in runs if r["world"] == w)
-            and (out / f"coverage_{slug(w)}.png").is_file()]
-    if cov or box or kept:
-        L += ["## Figures", ""]
-        partial = [w for w in dict.fromkeys(r["world"] for r in runs)
-                   if f"coverage_{slug(w)}.png" in drawn
-                   and any(not r.get("coverage_samples") for r in runs if r["world"] == w)]
-        if partial:
-            L += ["Coverage curves of " + ", ".join(f"`{w}`" for w in partial) + " are over "
-                  "the runs whose coverage samples are kept (the legend gives n of the runs "
-                  "in the table; the others' records were rebuilt from `runs.csv`).", ""]
-        for p in cov:
-            L.append(f"![{p.stem}]({(rel / p.name).as_posix()})")
-        if kept:
-            L += ["", "Drawn when the full records of these worlds' runs still existed (their "
-                  "coverage samples are not in the records kept now, so they are not redrawn):", ""]
-            L += [f"![{p.stem}]({(rel / p.name).as_posix()})" for p in kept]
-            L.append("")
-        if box:
-            L.append(f"![time to 95 %]({(rel / box.name).as_posix()})")
-        maps = sorted((out / "maps").glob("*.png")) if (out / "maps").is_dir() else []
-        if maps:
-            L += ["", "Final maps of the first run of each world x strategy (path green, "
-                  "regions tinted, object boxes yellow, goals purple, collisions red): "
-                  + ", ".join(f"[{p.stem}]({(rel / 'maps' / p.name).as_posix()})"
-                              for p in maps)]
+         "Generated by `bench/report.py` (`make bench` runs it at the end); do not edit by "
+         "hand. How to run it, in parts, and how long it takes: "
+         f"[docs/benchmarking.md]({docs}/benchmarking.md).", ""]
+    if not mixed:
+        L += [f"**Code version: `{codes[0] if codes else '-'}`** (every run"
+              + (f"; {sum(1 for r, c in zip(runs, codes) if run_code(r) != c)} of them "
+                 "certified identical by `bench/same_results.py`" if certs else "") + ")."
+              + (" `+modified`: the runs ran on uncommitted changes to that commit, so the "
+                 "commit alone does not reproduce them." if codes and "+modified" in codes[0]
+                 else ""), ""]
+    else:
+        L += [f"**Mixed code versions: {len(count)}.** These runs were not made on one "
+              "commit; every row names its versions (×n: runs on that version). Figures of "
+              "different versions are not comparable as they stand: the one-version run "
+              "replaces this file.", "",
+              "| label | code | runs | first part started |", "|---|---|---|---|"]
+        for c, lab in labels.items():
+            first = next((p.get("started") for p in parts if p.get("code") == c), "-")
+            L.append(f"| {lab} | `{c}` | {count[c]} | {first} |")
+        L.append("")
+    L += ["Command (the last part; every part's command, commit and wall time are in "
+          f"[meta.json]({(rel / 'meta.json').as_posix()})):", "", "```sh",
+          f".venv/bin/python {cmd}", "```", ""]
+    wall = meta.get("wall_s")
+    cpu_parts = [float(p["cpu_s"]) for p in parts if p.get("cpu_s") is not None]
+    L += [f"{len(runs)} runs of {len(worlds)} worlds × {len(strategies)} strategies in "
+          f"{len(parts)} part(s); {wall if wall is not None else '?'} s wall in all"
+          + (f", {sum(cpu_parts):.0f} CPU s" + (f" ({len(parts) - len(cpu_parts)} parts "
+             "recorded without it)" if len(cpu_parts) < len(parts) else "")
+             if cpu_parts else "")
+          + (f", {sum(cpu):.0f} CPU s in the runs" + (f" ({len(runs) - len(cpu)} runs "
+             "recorded without a CPU figure)" if len(cpu) < len(runs) else "")
+             if cpu else "") + ".", ""]
+    L += parts_lines(parts)
+    L += setup_lines(meta, runs)
+    missing = [s for s in STRATEGIES if s not in strategies]
+    if DEFAULT_STRATEGY not in strategies:
+        L += [f"**`{DEFAULT_STRATEGY}`, the default strategy, has no runs in these results**, "
+              "so no ratio against it is given; its figures so far are paired comparisons "
+              f"on other code versions, in [{exp_rel}/]({exp_rel}/).", ""]
+    elif missing:
+        L += ["Strategies without runs here: " + ", ".join(f"`{s}`" for s in missing) + ".", ""]
+    L += ["How to read the tables: *complete* = runs that reached 99 % of the explorable "
+          "area; *contacts / run* = mean contacts of the robot's disk with walls or objects "
+          "(by cause: `bench/causes.py`); *T95*, *T99* = sim seconds to 95 % / 99 % "
+          "(median over all runs, a run that never got there counted as the slowest; "
+          "*never* when that is the median); "
+          + (f"*T95 ÷ `{DEFAULT_STRATEGY}`* = median over seeds of the per-seed ratio of T95 "
+             f"to `{DEFAULT_STRATEGY}`'s on the same seeded start, with its 95 % percentile "
+             f"bootstrap interval ({BOOT_N} resamples of the seeds, seed {BOOT_SEED}; below 1: "
+             f"faster than `{DEFAULT_STRATEGY}`; † = on some seed a run never reached 95 % and "
+             "counts with its end time, a lower bound of its T95; n = seeds both ran when "
+             "fewer than the runs); " if DEFAULT_STRATEGY in strategies else "")
+          + "*path / tour* = median path "
+          "to 99 % over the world's full-knowledge coverage tour ([tours.csv]"
+          f"({(rel / 'tours.csv').as_posix()}); in brackets the runs that reached 99 % when "
+          "not all did). Setup: lock-step runs of the explorer's core on the simulator, "
+          "seeded starts, the robot a 0.22 m disk ([docs/benchmarking.md]"
+          f"({docs}/benchmarking.md#method)).", ""]
+    cov_names = {p.name for p in cov_paths(out)}
+    id_codes = {id(r): c for r, c in zip(runs, codes)} if mixed else None
+    L += ["## Summary", "", f"Over all {len(worlds)} worlds"
+          + ("; the ratio pools the per-seed ratios of every world (interval: resampling "
+             "world-seed pairs)" if DEFAULT_STRATEGY in strategies else "") + ".", ""]
+    L += summary_table(g, strategies, id_codes, labels) + [""]
+    L += ["## Results per world", ""]
+    for w in worlds:
+        a = area.get(w)
+        L += [f"### {w}" + (f" ({float(a):.0f} m², tour {tours[w]:.0f} m)" if a and w in tours
+                            else ""), ""]
+        L += world_table(w, g, strategies, tours.get(w), id_codes, labels)
+        name = f"coverage_{slug(w)}.png"
+        if name in cov_names:
+            L += ["", f"Coverage vs time: [{name}]({(rel / name).as_posix()})"]
         L.append("")
     legacy_path = out / records.LEGACY_TIMING
     legacy = json.loads(legacy_path.read_text()) if legacy_path.is_file() else None
-    L += (["## Per-module timing (paper's Table I)", ""] + timing_table(runs, yolo, legacy)
-          + [""])
-    if tours_rows:
-        L += ["## Coverage tours", "", "| world | explorable area [m²] | tour [m] | viewpoints "
-              "| tour to 95 % [m] | viewpoints | coverable | compute [s] |",
-              "|---|---|---|---|---|---|---|---|"]
-        L += [f"| {r['world']} | {r['explorable_area_m2']} | {r['tour_m']} | {r['viewpoints']} "
-              f"| {r.get('tour95_m') or '-'} | {r.get('viewpoints95') or '-'} "
-              f"| {float(r['coverable_fraction']):.3f} | {r['wall_s']} |" for r in tours_rows]
-        L.append("")
+    L += (["## Per-module timing (the paper's Table I)", ""]
+          + timing_table(runs, yolo, legacy) + [""])
     ros_path = out / "ros.json"
     if ros_path.is_file():
         ros = json.loads(ros_path.read_text())
-        L += ["## Lock-step vs ROS", "", ros.get("note", ""), "",
+        L += ["## Lock-step vs ROS", "", ros.get("note", "") + " "
+              + (f"Code `{ros['code']}`." if ros.get("code") else "Code version not recorded."),
+              "",
               "| seed | mode | stop | coverage [%] | sim time [s] | path [m] | collisions | "
               "goals | objects | object frames |", "|---|---|---|---|---|---|---|---|---|---|"]
         for row in ros.get("rows", []):
@@ -471,36 +579,69 @@ def write_all(out: Path, md: Path | None, command: str | None) -> Path | None:
                      f"{row.get('goals', '-')} | {row.get('objects', '-')} | "
                      f"{row.get('object_frames', '-')} |")
         L.append("")
-    L += paired_sections(out)
-    n_csv = sum(1 for r in runs if r.get("record") == "csv")
-    L += ["Files: `runs.csv` (one row per run), `runs.jsonl.gz` (every run's record without "
-          "its per-update timings, which are pooled into histograms: what `--resume` reads "
-          "on a new checkout; `bench/records.py`), `runs.jsonl` (the full records: samples "
-          "and every update's time; tens of MB, so kept out of git), `tours.csv`, "
-          f"`yolo.json`, `meta.json` in `{rel.as_posix()}/`."
-          + (f" {n_csv} of the {len(runs)} runs were rebuilt from `runs.csv` after their "
-             "full records were lost with a checkout: their table rows are exact, their "
-             "coverage curves and pooled timings are the ones drawn and computed before "
-             "(figures kept, timing cells marked †)." if n_csv else ""), ""]
-    md.write_text("\n".join(L))
-    return md
-
-
-def paired_sections(out: Path) -> list[str]:
-    """The reports of ``bench/paired.py`` kept in ``out/paired/*.md`` (by name), under one
-    heading: comparisons of parameter settings run since (or beside) the full benchmark,
-    each with its command and code version. Empty when there are none."""
-    files = sorted((out / "paired").glob("*.md")) if (out / "paired").is_dir() else []
-    if not files:
-        return []
-    L = ["## Paired comparisons", "",
-         "Parameter settings compared on the same worlds, strategies and seeded starts with "
-         "`bench/paired.py` (the benchmark's settings; ratio = arm / first arm, per seed). "
-         "These runs are not in the tables above: they are what a change is decided on "
-         "before the full benchmark is rerun.", ""]
-    for f in files:
-        L += [f.read_text().rstrip(), ""]
+    earlier = sorted((out / EXPERIMENTS).glob("benchmarks_*.md"))
+    L += ["## Experiments", "",
+          "Paired comparisons of settings (`bench/paired.py`) and other experiment reports "
+          + (f"are files in [{exp_rel}/]({exp_rel}/), each with its command and code version; "
+             if (out / EXPERIMENTS).is_dir() else "are not in this folder; ")
+          + f"what each decided: [docs/experiments.md]({docs}/experiments.md). They are not "
+          "part of the tables above."
+          + ("" if not earlier else " Earlier benchmark reports: " + ", ".join(
+              f"[{p.stem}]({exp_rel}/{p.name})" for p in earlier) + "."), "",
+          f"Files in `{rel.as_posix()}/`: `runs.jsonl.gz` (every run's record: what `--resume` "
+          "and this report read), `runs.csv`, `tours.csv`, `meta.json`, the figures"
+          + (f"; certificates in `{CERT_DIR}/`" if certs else "") + "."]
     return L
+
+
+def parts_lines(parts: list[dict[str, Any]]) -> list[str]:
+    """One line per part when the runs were made in several (commands that continued
+    with ``--resume`` or added another folder's runs with ``--merge``); [] for one."""
+    if len(parts) < 2:
+        return []
+    L = [f"Run in {len(parts)} parts, each later one with `--resume` (runs already in the "
+         "folder that the command asks for are kept, the rest are run):", ""]
+    for i, part in enumerate(parts, 1):
+        ran = part.get("runs_run")
+        L.append(f"{i}. {part.get('started', '?')}, code `{part.get('code') or UNKNOWN}`, "
+                 + (f"{ran} runs, " if ran is not None else "")
+                 + f"{part.get('wall_s', '?')} s wall"
+                 + (" (interrupted)" if part.get("interrupted") else "")
+                 + (f" ({len(part['failed'])} runs failed: "
+                    + "; ".join(f"`{f}`" for f in part["failed"]) + ")"
+                    if part.get("failed") else "")
+                 + (f" (run in `{part['merged_from']}`, added with `--merge`)"
+                    if part.get("merged_from") else ""))
+    return L + [""]
+
+
+def setup_lines(meta: dict[str, Any], runs: list[dict[str, Any]]) -> list[str]:
+    """The settings the runs were made with (those :func:`bench.store.same_settings`
+    compares), as one paragraph."""
+    settings = {**store.SETTING_DEFAULTS, **(meta.get("settings") or {})}
+    mount = meta.get("camera_mount")
+    margin = float(settings.get("nav_inflation_margin_m") or 0.0)
+    limit = float(settings.get("max_sim_time") or 0.0)
+    n_csv = sum(1 for r in runs if r.get("record") == "csv")
+    return [
+        "Settings: RGB-D camera "
+        + (f"{mount[0]:g} m above the floor, pitched {mount[1]:g} rad down"
+           + (" (the paper's robot)" if list(mount) == [0.894, 0.1] else "")
+           if mount else "at the simulator's default mount")
+        + "; the navigation stand-in keeps its arc "
+        + (f"the robot radius + {margin:g} m" if margin else "the robot radius")
+        + " from obstacles; mapping error "
+        + f"`{settings.get('mapping_error', 'none')}`; sim time limit "
+        + (f"{limit:g} s per run" if limit else "5 s per m² of explorable area, "
+           "600..7200 s") + "."
+        + (f" {n_csv} of the {len(runs)} records were rebuilt from `runs.csv` (their "
+           "coverage curves and timings are the ones drawn and pooled before)." if n_csv
+           else ""), ""]
+
+
+def cov_paths(out: Path) -> list[Path]:
+    """The coverage figures in ``out`` (drawn now or kept from earlier runs)."""
+    return sorted(out.glob("coverage_*.png"))
 
 
 def _fmt(v: Any) -> str:
@@ -516,8 +657,20 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description="Plots and BENCHMARKS.md from a bench folder.")
     ap.add_argument("out", help="folder written by bench/run_bench.py")
     ap.add_argument("--md", default=str(Path(__file__).resolve().parents[1] / "BENCHMARKS.md"))
+    ap.add_argument("--allow-mixed", action="store_true",
+                    help="report runs of several code versions, every row marked with its "
+                         "versions (without it they are refused)")
+    ap.add_argument("--certificate", action="append", default=[], metavar="PATH",
+                    help="a certificate of bench/same_results.py (or a folder of them), "
+                         f"besides OUT/{CERT_DIR}/; repeatable")
     a = ap.parse_args(argv)
-    path = write_all(Path(a.out), Path(a.md) if a.md else None, None)
+    try:
+        path = write_all(Path(a.out), Path(a.md) if a.md else None, None,
+                         allow_mixed=a.allow_mixed,
+                         certificates=[Path(c) for c in a.certificate])
+    except ValueError as err:             # MixedVersions or a bad certificate
+        print(f"[report] {err}", file=sys.stderr)
+        return 2
     print(f"[report] wrote {path}", file=sys.stderr)
     return 0
 

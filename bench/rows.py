@@ -10,7 +10,8 @@ from sim_bridge.lockstep import RunResult
 
 
 def row_from_dict(d: dict[str, Any]) -> dict[str, Any]:
-    """The CSV row of a run stored as :meth:`RunResult.to_dict` (None -> NaN)."""
+    """The CSV row of a run stored as :meth:`RunResult.to_dict` (None -> NaN), with the
+    code version it ran on and its CPU seconds ('' when not recorded)."""
     cls = RunResult
     fields = {k: v for k, v in d.items() if k in cls.__dataclass_fields__}
     for k in ("time_to_s", "path_to_m"):
@@ -19,6 +20,8 @@ def row_from_dict(d: dict[str, Any]) -> dict[str, Any]:
         if fields.get(k) is None:
             fields[k] = math.nan
     row = cls(**fields).summary_row()
+    row["code"] = d.get("code") or ""                  # the commit the run ran on
+    row["cpu_time_s"] = d.get("cpu_time_s", "")        # its process CPU seconds
     if "timings_ms" not in d:              # compact or CSV record: its per-run percentiles
         for key, (p50, p95) in (d.get("timing_p") or {}).items():
             row[f"{key}_ms_p50"] = p50 if p50 is not None else math.nan

@@ -40,6 +40,15 @@ resume and merge are the same, and so are the results of every run.
 Stopping: SIGINT/SIGTERM stop at once (the runs in flight are lost); ``kill -USR1 PID``
 finishes the runs in flight and starts no new ones. Either way the runs so far are
 reported, the part is marked interrupted, and ``--resume`` continues.
+
+The full matrix: every strategy x the 20 worlds, ``--runs`` seeds (20), at most
+``--world-runs`` in the long generated worlds (10 in ``maze`` and ``office_floor``).
+It runs in parts: ``--resume`` continues where the last part stopped; ``--shard K/N``
+runs the K-th of N interleaved slices (each on its own machine, into its own ``--out``),
+and ``--resume --merge DIR`` adds a finished slice to the main folder. Every run records
+the commit it ran on and its CPU seconds; the report (:mod:`bench.report`) is of one
+code version and refuses runs of several (exit status 3) unless ``--allow-mixed``. The
+last line gives the matrix's wall time (all parts) and CPU seconds (all runs).
 """
 
 
@@ -49,6 +58,7 @@ import argparse
 import importlib.util
 import json
 import os
+import resource
 import shlex
 import signal
 import sys
@@ -87,6 +97,14 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--runs", type=int, default=20, help="seeded runs per world x strategy")
+    ap.add_argument("--world-runs", default=",".join(f"{w}={n}" for w, n in WORLD_RUNS.items()),
+                    metavar="WORLD=N,...",
+                    help="at most N runs in these worlds (the long ones; default: "
+                         "%(default)s; '' = --runs everywhere)")
+    ap.add_argument("--shard", default="", metavar="K/N",
+                    help="run only part K of N of the matrix (every N-th world x strategy x "
+                         "seed from the K-th on): the parts run on several machines, each "
+                         "into its own --out, and are put together with --resume --merge")
     ap.add_argument("--worlds", default="", help="comma-separated world specs "
                     "(default: the 20 of bench.worlds.default_worlds)")
     ap.add_argument("--list", action="store_true",
@@ -131,6 +149,10 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                          "none, realistic, harsh or custom")
     ap.add_argument("--report-only", action="store_true",
                     help="only redo plots and BENCHMARKS.md from --out")
+    ap.add_argument("--allow-mixed", action="store_true",
+                    help="report runs of several code versions, every row marked with its "
+                         "versions (bench/report.py; without it such runs get no report "
+                         "and the exit status is 3)")
     ap.add_argument("--resume", action="store_true",
                     help="keep the runs and tours already in --out that this command asks "
                          "for (same world, strategy, seed) and run only the missing ones; "
@@ -172,6 +194,11 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     if a.runs < 1 or a.jobs < 1:
         ap.error("--runs and --jobs must be >= 1")
     try:
+        a.world_runs = parse_world_runs(a.world_runs)
+        a.shard_kn = parse_shard(a.shard)
+    except ValueError as err:
+        ap.error(str(err))
+    try:
         a.mount = _camera_mount(a.camera_mount)
     except ValueError as err:
         ap.error(str(err))
@@ -191,6 +218,71 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     if a.redo_keys and not a.resume:
         ap.error("--redo needs --resume")
     return a
+
+
+#: Runs per world x strategy of the long generated worlds in the full matrix (the others
+#: get ``--runs``): a maze or office floor run takes 10-40 min of CPU.
+WORLD_RUNS = {"maze": 10, "office_floor": 10}
+
+
+def parse_world_runs(text: str) -> dict[str, int]:
+    """``--world-runs`` (``WORLD=N,...``) as {world: N}.
+
+    Raises
+    ------
+    ValueError
+        On an item that is not WORLD=N with N >= 1 (the message names it).
+    """
+    out: dict[str, int] = {}
+    for item in (x.strip() for x in text.split(",") if x.strip()):
+        world, _, n = item.rpartition("=")
+        try:
+            k = int(n)
+        except ValueError:
+            k = 0
+        if not world or k < 1:
+            raise ValueError(f"--world-runs: expected WORLD=N with N >= 1, got {item!r}")
+        out[world] = k
+    return out
+
+
+def parse_shard(text: str) -> tuple[int, int] | None:
+    """``--shard K/N`` as (K, N) with 1 <= K <= N, None for ''.
+
+    Raises
+    ------
+    ValueError
+        On anything else (the message names it).
+    """
+    if not text:
+        return None
+    k, _, n = text.partition("/")
+    try:
+        kn = int(k), int(n)
+    except ValueError:
+        kn = (0, 0)
+    if not 1 <= kn[0] <= kn[1]:
+        raise ValueError(f"--shard: expected K/N with 1 <= K <= N, got {text!r}")
+    return kn
+
+
+def runs_of(world: str, runs: int, world_runs: dict[str, int]) -> int:
+    """Runs per strategy of ``world``: ``runs``, at most its ``world_runs`` cap."""
+    return min(runs, world_runs.get(world, runs))
+
+
+def matrix_tasks(specs: list[str], strategies: list[str], runs: int, seed0: int,
+                 world_runs: dict[str, int], shard: tuple[int, int] | None
+                 ) -> list[tuple[str, str, int]]:
+    """(world, strategy, seed) of the matrix in world x strategy x seed order, only shard
+    K of N (every N-th from the K-th) when ``shard`` is given: the N shards together are
+    the matrix, each run in exactly one."""
+    keys = [(w, st, seed0 + k) for w in specs for st in strategies
+            for k in range(runs_of(w, runs, world_runs))]
+    if shard is None:
+        return keys
+    k, n = shard
+    return keys[k - 1::n]
 
 
 def _camera_mount(text: str) -> tuple[float, float] | None:
@@ -229,8 +321,7 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(a.out)
     if a.report_only:
         out.mkdir(parents=True, exist_ok=True)
-        report.write_all(out, Path(a.md) if a.md else None, command=None)
-        return 0
+        return 0 if _report(out, a, None) else 3
     specs = [w for w in (a.worlds.split(",") if a.worlds else default_worlds()) if w]
     strategies = [s for s in a.strategies.split(",") if s]
     resolved, missing = {}, []
@@ -244,8 +335,13 @@ def main(argv: list[str] | None = None) -> int:
     if missing:
         return 2
     if a.list:
+        keys = matrix_tasks(specs, strategies, a.runs, a.seed0, a.world_runs, a.shard_kn)
+        caps = [f"{w}: {n}" for w, n in a.world_runs.items() if w in specs and n < a.runs]
+        extra = "; ".join(([f"at most {', '.join(caps)}"] if caps else [])
+                          + ([f"shard {a.shard}"] if a.shard_kn else []))
         print(f"[bench] {len(specs)} worlds x {len(strategies)} strategies "
-              f"({', '.join(strategies)}) x {a.runs} runs:")
+              f"({', '.join(strategies)}) x {a.runs} runs"
+              + (f" ({extra}; {len(keys)} runs in all)" if extra else "") + ":")
         for s in specs:
             print(f"{s}\t{resolved[s] if resolved[s] != s else '(generated)'}")
         return 0
@@ -253,13 +349,14 @@ def main(argv: list[str] | None = None) -> int:
     command = "bench/run_bench.py " + " ".join(shlex.quote(x) for x in (argv if argv is not None
                                                                         else sys.argv[1:]))
     meta = {"command": command, "runs": a.runs, "seed0": a.seed0, "worlds": specs,
+            "world_runs": a.world_runs, "shard": a.shard or None,
             "strategies": strategies, "jobs": a.jobs, "cpus": os.cpu_count(),
             "settings": _settings(a), "code": store.code_version(),
             "lockstep_params": {k: v for k, v in vars(LockstepParams()).items()},
             "camera_mount": (list(a.mount) if a.mount is not None else
                              [SimParams().camera_mount_z_m, SimParams().camera_pitch_rad]),
             "started": time.strftime("%Y-%m-%d %H:%M:%S")}
-    t_start = time.monotonic()
+    t_start, cpu_start = time.monotonic(), _cpu_s()
     old_meta = store.read_json(out / "meta.json") if a.resume else {}
     if old_meta:
         old_settings = old_meta.get("settings")
@@ -309,7 +406,7 @@ def main(argv: list[str] | None = None) -> int:
             with pool_cm as pool:
                 try:
                     _run_all(a, out, specs, strategies, areas, pool, tours, results, counter,
-                             failed)
+                             failed, meta["code"])
                 except KeyboardInterrupt as err:
                     interrupted = int(err.args[0]) if err.args else int(signal.SIGINT)
                     pool.terminate()
@@ -331,49 +428,95 @@ def main(argv: list[str] | None = None) -> int:
                                out / "ros", a.ros_rtf,
                                sim_time_limit(areas[specs[0]], a.max_sim_time), a.mount,
                                a.nav_margin)
+        ros["code"] = meta["code"]          # the commit its runs ran on
         (out / "ros.json").write_text(json.dumps(ros, indent=1))
     part = {"command": command, "started": meta["started"], "code": meta["code"],
             "executor": a.executor,
-            "runs_run": counter[0], "wall_s": round(time.monotonic() - t_start, 1)}
+            "runs_run": counter[0], "wall_s": round(time.monotonic() - t_start, 1),
+            "cpu_s": round(_cpu_s() - cpu_start, 1)}
     if interrupted:
         part["interrupted"] = True
     if failed:
         part["failed"] = failed
     store.write_meta(out, meta, old_meta, part)
-    report.write_all(out, Path(a.md) if a.md else None, command=command)
-    print(f"[bench] {len(results)} runs in {hms(meta['wall_s'])}; results in {out}"
-          + (f", summary in {a.md}" if a.md else ""), file=sys.stderr)
+    reported = _report(out, a, command)
+    print(f"[bench] {len(results)} runs; results in {out}"
+          + (f", summary in {a.md}" if a.md and reported else ""), file=sys.stderr)
+    print(matrix_summary(results, meta, part), file=sys.stderr)
     if failed:
         print(f"[bench] {len(failed)} runs failed (not in the results; --resume runs them "
               "again): " + "; ".join(failed), file=sys.stderr)
-    return 128 + interrupted if interrupted else (1 if failed else 0)
+    return 128 + interrupted if interrupted else (1 if failed else (0 if reported else 3))
+
+
+def _report(out: Path, a: argparse.Namespace, command: str | None) -> bool:
+    """Figures and BENCHMARKS.md (:func:`bench.report.write_all`); False, with the reason
+    on stderr, when the report refuses the runs (several code versions without
+    ``--allow-mixed``, a malformed certificate): the runs are kept either way."""
+    try:
+        report.write_all(out, Path(a.md) if a.md else None, command=command,
+                         allow_mixed=a.allow_mixed)
+    except ValueError as err:
+        print(f"[bench] no report: {err}", file=sys.stderr)
+        return False
+    return True
+
+
+def _cpu_s() -> float:
+    """CPU seconds of this process and of its children that have ended (the pool's
+    workers, once the pool is closed)."""
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
+        resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+def matrix_summary(results: list[dict[str, Any]], meta: dict[str, Any],
+                   part: dict[str, Any]) -> str:
+    """The line that ends a benchmark: the matrix's wall time and CPU seconds over all
+    parts (CPU of every process of a part, tours and report included: on this machine's
+    process pool; parts from before it was recorded are counted and named), the runs'
+    own CPU seconds, and the same of this part."""
+    parts = meta.get("parts") or []
+    wall = float(meta.get("wall_s") or 0.0)
+    cpu_parts = sum(float(p.get("cpu_s") or 0.0) for p in parts)
+    no_cpu = sum(1 for p in parts if p.get("cpu_s") is None)
+    runs_cpu = [float(d["cpu_time_s"]) for d in results if d.get("cpu_time_s") is not None]
+    new = results[len(results) - int(part.get("runs_run") or 0):]
+    missing = len(results) - len(runs_cpu)
+    return (f"[bench] matrix: {len(results)} runs in {len(parts)} parts, {hms(wall)} wall "
+            f"({wall:.0f} s), {cpu_parts:.0f} CPU s"
+            + (f" ({no_cpu} parts recorded without it)" if no_cpu else "")
+            + f", {sum(runs_cpu):.0f} of them in the runs"
+            + (f" ({missing} runs recorded without a CPU figure)" if missing else "")
+            + f"; this part: {len(new)} runs, {hms(float(part.get('wall_s') or 0.0))} wall, "
+            f"{float(part.get('cpu_s') or 0.0):.0f} CPU s")
 
 
 def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: list[str],
              areas: dict[str, float], pool: Any, tours: list[dict[str, Any]],
-             results: list[dict[str, Any]], counter: list[int], failed: list[str]) -> None:
+             results: list[dict[str, Any]], counter: list[int], failed: list[str],
+             code: str) -> None:
     """Tours and runs, filling ``tours`` and ``results`` (and ``failed`` with the runs
-    that raised); ``counter[0]`` counts the runs
-    run (read it after an interrupt)."""
+    that raised); ``counter[0]`` counts the runs run (read it after an interrupt); every
+    new record gets ``code``, the code version it ran on."""
     if not a.no_tour:
         if a.resume:
             tours += [dict(r, tour_m=float(r["tour_m"]))
                       for r in store.read_csv(out / "tours.csv") if r["world"] in specs]
-        todo = [s for s in specs if s not in {r["world"] for r in tours}]
+        in_shard = {w for w, _, _ in matrix_tasks(specs, strategies, a.runs, a.seed0,
+                                                  a.world_runs, a.shard_kn)}
+        todo = [s for s in specs if s in in_shard and s not in {r["world"] for r in tours}]
         prog = Progress(len(todo), "tours")
         for row in pool.imap_unordered(tour_task, todo):
             tours.append(row)
             prog.update(f"{row['world']}: {row['tour_m']} m")
         store.write_csv(out / "tours.csv", sorted(tours, key=lambda r: specs.index(r["world"])))
     (out / "maps").mkdir(exist_ok=True)
-    tasks = []
-    for s in specs:
-        limit = sim_time_limit(areas[s], a.max_sim_time)
-        for strat in strategies:
-            for k in range(a.runs):
-                pic = (str(out / "maps" / f"{store.slug(s)}_{strat}.png") if k == 0 else None)
-                tasks.append((s, strat, a.seed0 + k, limit, pic, a.mount, a.nav_margin,
-                              a.mapping_noise))
+    tasks = [(s, strat, seed, sim_time_limit(areas[s], a.max_sim_time),
+              (str(out / "maps" / f"{store.slug(s)}_{strat}.png") if seed == a.seed0 else None),
+              a.mount, a.nav_margin, a.mapping_noise)
+             for s, strat, seed in matrix_tasks(specs, strategies, a.runs, a.seed0,
+                                                a.world_runs, a.shard_kn)]
     if a.resume:
         kept, tasks = store.resume(out, tasks, a.redo_keys)
         results += kept
@@ -387,6 +530,7 @@ def _run_all(a: argparse.Namespace, out: Path, specs: list[str], strategies: lis
             jl.write(json.dumps(d) + "\n")
         jl.flush()
         for d in run_drainable(pool, a.jobs, tasks, failed):
+            d["code"] = code       # the commit the run ran on (bench.report checks it)
             # an interrupt waits until the run is in both files and counted
             with stop_signals_deferred():
                 jl.write(json.dumps(d) + "\n")

@@ -17,6 +17,22 @@ Usage::
     .venv/bin/python bench/same_results.py compare before.json after.json
 
 Exit status of ``compare``: 0 when every run is identical, 1 otherwise.
+
+Each recorded run carries the code version it ran on (:func:`bench.store.code_version`:
+the commit, ``+modified`` when the code differs from it). ``compare --certificate FILE``
+also writes, when every run is identical and each file ran on one clean commit, a
+*certificate* that :mod:`bench.report` reads: benchmark runs of ``before`` that it lists
+count as runs of ``after``. It is JSON::
+
+    {"certificate": "same-results", "format": 1,
+     "before": "<commit>", "after": "<commit>",
+     "runs": {"WORLD/STRATEGY/SEED": {"coverage_pct": ..., "sim_time_s": ...,
+                                      "path_length_m": ..., "collisions": ...,
+                                      "goals_sent": ..., "stop_reason": ...}, ...}}
+
+The figures of each run (:data:`FINGERPRINT`) let the report check that a benchmark run
+it applies the certificate to is the run that was compared, not another run of the same
+key (other settings, another seed offset).
 """
 
 from __future__ import annotations
@@ -34,7 +50,12 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 #: Fields of RunResult.to_dict that measure the machine, not the run.
-WALL_FIELDS = ("wall_time_s", "timings_ms")
+WALL_FIELDS = ("wall_time_s", "timings_ms", "cpu_time_s")
+#: Fields of a run that a certificate lists, and the report compares with the benchmark's.
+FINGERPRINT = ("coverage_pct", "sim_time_s", "path_length_m", "collisions", "goals_sent",
+               "stop_reason")
+CERTIFICATE = "same-results"
+CERTIFICATE_FORMAT = 1
 
 
 def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int],
@@ -44,10 +65,12 @@ def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int
     The file is rewritten after every run; runs already in it are kept and not run again
     (an interrupted record continues). A run that raises is recorded with its error.
     """
+    from bench.store import code_version
     from bench.tasks import fix_explorer_params, run_task
     from bench.worlds import PAPER_CAMERA_MOUNT, load, sim_time_limit
 
     fix_explorer_params()
+    code = code_version()
     runs: list[dict[str, Any]] = (json.loads(path.read_text())["runs"] if path.is_file()
                                   else [])
     have = {r["key"] for r in runs}
@@ -70,16 +93,46 @@ def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int
                     what = result["error"]
                 wall = time.perf_counter() - t0
                 cpu = time.process_time() - c0
-                runs.append({"key": key, "wall_s": round(wall, 2), "cpu_s": round(cpu, 2),
+                runs.append({"key": key, "code": code,
+                             "wall_s": round(wall, 2), "cpu_s": round(cpu, 2),
                              "load1": round(os.getloadavg()[0], 2), "result": result})
                 path.write_text(json.dumps({"runs": runs}, indent=0))
                 print(f"{key}: {wall:.1f} s wall, {cpu:.1f} s CPU, {what}", file=sys.stderr,
                       flush=True)
 
 
-def compare(before: Path, after: Path) -> int:
+def certificate(a: dict[str, dict[str, Any]], b: dict[str, dict[str, Any]]
+                ) -> tuple[dict[str, Any] | None, str]:
+    """The certificate of two recorded files' runs (key -> run, see the module
+    docstring), or None and why there is none: a run that differs, is missing from
+    ``b``, raised, or files that did not each run on one clean commit."""
+    codes = []
+    for name, runs in (("before", a), ("after", b)):
+        c = {r.get("code") for r in runs.values()}
+        if len(c) != 1 or None in c:
+            return None, (f"the {name} file ran on {sorted(map(str, c))}: a certificate "
+                          "needs one code version per file (recorded since it exists)")
+        code = next(iter(c))
+        if code == "unknown" or "+modified" in code:
+            return None, (f"the {name} file ran on {code}: a certificate needs committed "
+                          "code (commit the change, then record)")
+        codes.append(code)
+    if codes[0] == codes[1]:
+        return None, f"both files ran on {codes[0]}: nothing to certify"
+    out: dict[str, Any] = {}
+    for key, ra in a.items():
+        rb = b.get(key)
+        if rb is None or ra["result"] != rb["result"] or "error" in ra["result"]:
+            return None, f"{key} is missing, differs or raised"
+        out[key] = {k: ra["result"].get(k) for k in FINGERPRINT}
+    return {"certificate": CERTIFICATE, "format": CERTIFICATE_FORMAT,
+            "before": codes[0], "after": codes[1], "runs": out}, ""
+
+
+def compare(before: Path, after: Path, cert_path: Path | None = None) -> int:
     """Print per run: identical or the differing fields, wall and CPU s before/after (CPU
-    where both files have it); 0 = all same."""
+    where both files have it); 0 = all same. With ``cert_path``, write the certificate
+    there when there is one (:func:`certificate`), else say why not (status 1)."""
     a = {r["key"]: r for r in json.loads(before.read_text())["runs"]}
     b = {r["key"]: r for r in json.loads(after.read_text())["runs"]}
     bad = 0
@@ -110,6 +163,15 @@ def compare(before: Path, after: Path) -> int:
     (wa, wb), (ca, cb) = tot["wall_s"], tot["cpu_s"]
     print(f"{'total':40s} {wa:11.1f} {wb:7.1f} {wa / max(wb, 1e-9):5.2f}x {ca:10.1f} {cb:7.1f} "
           f"{ca / max(cb, 1e-9):5.2f}x  {len(a) - bad}/{len(a)} identical")
+    if cert_path is not None:
+        cert, why = certificate(a, b)
+        if cert is None:
+            print(f"no certificate written: {why}", file=sys.stderr)
+            return 1
+        cert_path.parent.mkdir(parents=True, exist_ok=True)
+        cert_path.write_text(json.dumps(cert, indent=1, sort_keys=True) + "\n")
+        print(f"certificate: {len(cert['runs'])} runs of {cert['before']} count as "
+              f"{cert['after']} ({cert_path})", file=sys.stderr)
     return 1 if bad else 0
 
 
@@ -127,9 +189,15 @@ def main(argv: list[str] | None = None) -> int:
     cmp_ = sub.add_parser("compare", help="compare two recorded files")
     cmp_.add_argument("before")
     cmp_.add_argument("after")
+    cmp_.add_argument("--certificate", default="", metavar="FILE",
+                      help="when every run is identical, write the certificate that lets "
+                           "bench/report.py count benchmark runs of the before commit as "
+                           "runs of the after commit (e.g. bench/results/certificates/"
+                           "BEFORE-AFTER.json)")
     a = ap.parse_args(argv)
     if a.cmd == "compare":
-        return compare(Path(a.before), Path(a.after))
+        return compare(Path(a.before), Path(a.after),
+                       Path(a.certificate) if a.certificate else None)
     record(Path(a.out), [w for w in a.worlds.split(",") if w],
            [s for s in a.strategies.split(",") if s],
            [int(s) for s in a.seeds.split(",") if s], a.max_sim_time)

@@ -4,6 +4,8 @@
 #   scripts/run_bench.sh [OUT] [RUNS] [extra run_bench.py options...]
 # e.g. scripts/run_bench.sh out/bench 20 --worlds house,house_cluttered --jobs 2
 # BENCH_ARGS (environment) is appended too, so `make bench BENCH_ARGS="--worlds maze"` works.
+# BENCH_RESUME=1 adds --resume (what `make bench` does: running it again continues the
+# matrix where it stopped). The last line printed is the matrix's wall time and CPU seconds.
 # `scripts/run_bench.sh --quick [OUT] [extra options...]` runs bench/quick.py instead (the
 # subset of `make bench-quick`, compared with bench/results).
 set -uo pipefail
@@ -27,4 +29,6 @@ OUT=${1:-out/bench}
 RUNS=${2:-20}
 shift 2 2>/dev/null || shift $#
 # shellcheck disable=SC2086
-exec "$PY" bench/run_bench.py --out "$OUT" --runs "$RUNS" "$@" ${BENCH_ARGS:-}
+RESUME=()
+if [ "${BENCH_RESUME:-0}" = 1 ]; then RESUME=(--resume); fi
+exec "$PY" bench/run_bench.py --out "$OUT" --runs "$RUNS" "${RESUME[@]}" "$@" ${BENCH_ARGS:-}

@@ -49,8 +49,8 @@ def test_outputs(first):
     meta = json.loads((out / "meta.json").read_text())
     assert len(meta["parts"]) == 1 and meta["parts"][0]["runs_run"] == 1
     text = md.read_text()
-    assert "| small_house | nearest | 1 |" in text
-    assert "parts" not in text
+    assert "### small_house" in text and "| nearest | 1 | " in text
+    assert "Run in" not in text                                 # one part: no list
 
 
 def test_resume_runs_only_the_missing_seeds(first, tmp_path):
@@ -68,7 +68,7 @@ def test_resume_runs_only_the_missing_seeds(first, tmp_path):
     assert meta["wall_s"] == pytest.approx(sum(p["wall_s"] for p in meta["parts"]), abs=0.2)
     text = md.read_text()
     assert "Run in 2 parts" in text and "--resume" in text
-    assert "| small_house | nearest | 2 |" in text
+    assert "| nearest | 2 | " in text
 
 
 def test_same_seed_same_run(first, tmp_path):
@@ -232,7 +232,7 @@ def test_no_runs_keeps_every_run_and_adds_a_part(first, tmp_path):
     assert (out / "runs.jsonl").read_text() == before           # nothing run, nothing dropped
     parts = json.loads((out / "meta.json").read_text())["parts"]
     assert len(parts) == 2 and parts[-1]["runs_run"] == 0 and "--no-runs" in parts[-1]["command"]
-    assert "| small_house | nearest | 1 |" in md.read_text()
+    assert "| nearest | 1 | " in md.read_text()
     # runs of a world the command does not name: refused, not dropped
     other = ARGS[:1] + ["house"] + ARGS[2:]
     assert run_bench.main(other + ["--out", str(out), "--md", "", "--resume", "--no-runs"]) == 2
@@ -290,7 +290,7 @@ def test_mapping_noise_is_a_setting_and_earlier_folders_ran_without(first, tmp_p
 
     def result(t):
         return {k: v for k, v in tasks.run_task(t).items()
-                if k not in ("wall_time_s", "timings_ms")}
+                if k not in ("wall_time_s", "timings_ms", "cpu_time_s")}
 
     assert result(task) != result(plain)
     assert result(plain) == result(plain[:7])
@@ -344,18 +344,20 @@ def _run_row(path95: float, path99: float) -> dict:
             "path_to_m": {"50": 1.0, "90": 2.0, "95": path95, "99": path99}}
 
 
-def test_results_table_divides_the_path_to_95_by_the_95_tour():
+def test_world_table_divides_the_median_path_to_99_by_the_tour():
     from bench import report
 
-    runs = [_run_row(9.0, 12.0), dict(_run_row(11.0, 14.0), seed=1)]
-    head, _, row = report.results_table(runs, {"w": 10.0}, {"w": 8.0})
+    runs = [_run_row(9.0, 12.0), dict(_run_row(11.0, 14.0), seed=1),
+            dict(_run_row(11.0, None), seed=2, completed=False)]
+    g = {("w", "s"): runs}
+    head, _, row = report.world_table("w", g, ["s"], 10.0, None, {})
     cols = [c.strip() for c in head.split("|")]
     vals = [c.strip() for c in row.split("|")]
-    assert vals[cols.index("path / tour")] == "1.30 ± 0.14"         # (12, 14) / 10
-    assert vals[cols.index("path 95 / tour 95")] == "1.25 ± 0.18"   # (9, 11) / 8
-    # tours.csv written before the 95 % tour existed: the column says so
-    _, _, old = report.results_table(runs, {"w": 10.0})
-    assert [c.strip() for c in old.split("|")][cols.index("path 95 / tour 95")] == "-"
+    assert vals[cols.index("path / tour")] == "1.30 (2)"     # median(12, 14) / 10, 2 of 3
+    assert vals[cols.index("complete")] == "2/3"
+    assert "code" not in cols and not any("routed" in c for c in cols)  # no routed runs
+    _, _, no_tour = report.world_table("w", g, ["s"], None, None, {})
+    assert [c.strip() for c in no_tour.split("|")][cols.index("path / tour")] == "-"
 
 
 def test_tour_task_gives_the_95_tour_no_longer_than_the_99_one():

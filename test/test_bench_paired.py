@@ -172,20 +172,6 @@ def test_tiny_comparison_end_to_end(tmp_path):
         paired.main(args[:-1] + ["slow:lockstep.decision_period_s=2"])
 
 
-def test_benchmark_report_includes_the_kept_paired_reports_in_name_order(tmp_path):
-    from bench import report
-
-    assert report.paired_sections(tmp_path) == []
-    (tmp_path / "paired").mkdir()
-    (tmp_path / "paired" / "b_soft.md").write_text("### soft margin\n\nrows b\n")
-    (tmp_path / "paired" / "a_seg.md").write_text("### segmenter\n\nrows a\n")
-    (tmp_path / "paired" / "notes.txt").write_text("not a report")
-    text = "\n".join(report.paired_sections(tmp_path))
-    assert text.startswith("## Paired comparisons")
-    assert text.index("### segmenter") < text.index("### soft margin")
-    assert "not a report" not in text
-
-
 _SHORT = ["--worlds", "small_house", "--strategies", "nearest", "--max-sim-time", "15",
           "--jobs", "1", "--arm", "cur"]
 

@@ -24,9 +24,11 @@ ARGS = ["--worlds", "small_house", "--strategies", "nearest,paper_noseg", "--run
 
 
 def _rows(out: Path) -> list[dict[str, str]]:
-    """runs.csv without the columns that time the machine (wall time, per-update ms)."""
+    """runs.csv without the columns that time the machine (wall and CPU time, per-update
+    ms)."""
     with open(out / "runs.csv", newline="") as fh:
-        rows = [{k: v for k, v in r.items() if k != "wall_time_s" and "_ms_" not in k}
+        rows = [{k: v for k, v in r.items()
+                 if k not in ("wall_time_s", "cpu_time_s") and "_ms_" not in k}
                 for r in csv.DictReader(fh)]
     return sorted(rows, key=lambda r: (r["world"], r["strategy"], int(r["seed"])))
 

@@ -8,6 +8,7 @@ import gzip
 import json
 import math
 import shutil
+import subprocess
 import sys
 from pathlib import Path
 
@@ -90,7 +91,7 @@ def test_resume_from_the_compact_file_alone(bench2, tmp_path):
                                   "--resume"]) == 0
     meta = json.loads((res / "meta.json").read_text())
     assert [p["runs_run"] for p in meta["parts"]] == [2, 0]
-    assert "| small_house | nearest | 2 |" in md.read_text()
+    assert "| nearest | 2 | " in md.read_text()
     # the report pools the compact records' histograms
     assert "| frontier detect + cluster | -" not in md.read_text()
     rows = report.read_csv(res / "runs.csv")
@@ -176,16 +177,16 @@ def test_import_from_csv_rebuilds_the_rows_and_the_timing_table(bench2, tmp_path
                                                                 and math.isnan(got))))
                     or float(got) == pytest.approx(float(v))), (k, got, v)
     legacy = json.loads((res / records.LEGACY_TIMING).read_text())["worlds"]
-    old_cells = [ln for ln in md.read_text().splitlines()
-                 if ln.startswith("| frontier detect + cluster |")][0]
+    old_row = [ln for ln in md.read_text().splitlines() if ln.startswith("| small_house |")
+               and " / " in ln][-1]
     p50, mean, p95 = legacy["small_house"]["frontier"]
-    assert f"{p50:.1f} / {mean:.1f} / {p95:.1f}" in old_cells
+    assert f"| small_house | {p50:.1f} / {mean:.1f} / {p95:.1f} |" in old_row
     new_md = tmp_path / "new.md"
     report.write_all(res, new_md, command="x")
     text = new_md.read_text()
-    assert f"| frontier detect + cluster | {p50:.1f} / {mean:.1f} / {p95:.1f} † |" in text
+    assert f"| small_house | {p50:.1f} / {mean:.1f} / {p95:.1f} † |" in text
     assert "rebuilt from `runs.csv`" in text
-    assert "| small_house | nearest | 2 |" in text
+    assert "| nearest | 2 | " in text
 
 
 def test_merge_adds_another_folders_runs_and_parts(bench2, tmp_path):
@@ -233,67 +234,61 @@ def test_timing_table_marks_worlds_pooled_over_part_of_their_runs():
     lines = report.timing_table([full, rebuilt, only_csv], None,
                                 legacy={"strategy": "paper",
                                         "worlds": {"v": {"frontier": [4.0, 5.0, 6.0]}}})
-    row = next(ln for ln in lines if ln.startswith("| frontier detect + cluster |"))
-    cells = [c.strip() for c in row.strip("|").split("|")][1:]
+    head = next(ln for ln in lines if ln.startswith("| world |"))
+    col = [c.strip() for c in head.strip("|").split("|")].index("frontier")
+    cell = {ln.split("|")[1].strip(): [c.strip() for c in ln.strip("|").split("|")][col]
+            for ln in lines if ln.startswith(("| w |", "| v |"))}
     p50, mean, _ = records.hist_stats(records.histogram([1.0, 2.0, 3.0]))
-    assert cells == [f"{p50:.1f} / {mean:.1f} / 3.0 ‡1/2", "4.0 / 5.0 / 6.0 †"]
+    assert cell == {"w": f"{p50:.1f} / {mean:.1f} / 3.0 ‡1/2", "v": "4.0 / 5.0 / 6.0 †"}
     assert any(ln.startswith("‡k/n") for ln in lines) and any(ln.startswith("†") for ln in lines)
 
 
-def test_timing_table_has_the_decision_core_row_outside_the_total():
+def test_timing_table_has_the_decision_core_column_outside_the_total():
     run = {"world": "w", "strategy": "paper", "seed": 0,
            "timings_ms": {"frontier": [1.0, 3.0], "selection": [2.0, 4.0],
                           "core": [3.0, 7.0]}}
     lines = report.timing_table([run], None)
-    row = next(ln for ln in lines if ln.startswith("| decision core"))
+    head = [c.strip() for c in next(ln for ln in lines if ln.startswith("| world |"))
+            .strip("|").split("|")]
+    row = [c.strip() for c in next(ln for ln in lines if ln.startswith("| w |"))
+           .strip("|").split("|")]
     p50, mean, p95 = records.hist_stats(records.histogram([3.0, 7.0]))
-    assert row.endswith(f"| {p50:.1f} / {mean:.1f} / {p95:.1f} |")
-    total = next(ln for ln in lines if ln.startswith("| total (sum of means"))
+    assert row[head.index("decision core")] == f"{p50:.1f} / {mean:.1f} / {p95:.1f}"
     f_mean = records.hist_stats(records.histogram([1.0, 3.0]))[1]
     s_mean = records.hist_stats(records.histogram([2.0, 4.0]))[1]
-    assert total.endswith(f"| {f_mean + s_mean:.1f} |")         # the core is not added again
+    assert row[head.index("total")] == f"{f_mean + s_mean:.1f}"   # the core is not added again
     old = {"world": "w", "strategy": "paper", "seed": 1, "timings_ms": {"frontier": [1.0]}}
-    assert not any(ln.startswith("| decision core") for ln in report.timing_table([old], None))
+    assert not any("decision core |" in ln for ln in report.timing_table([old], None))
 
 
-def _run(world, strategy, seed, t95, completed=True, collisions=0, objects=0):
-    return {"world": world, "strategy": strategy, "seed": seed, "completed": completed,
-            "time_to_s": {"95": t95}, "collisions": collisions, "n_objects": objects}
+def test_timing_is_read_back_from_either_layout_of_the_table():
+    """The report's table (a row per world) and the one of the kept 2026-12-02 report (a
+    row per module) give the same cells for bench/results."""
+    root = Path(__file__).resolve().parents[1]
+    old_md = (root / "bench" / "results" / "experiments"
+              / "benchmarks_mixed_versions_2026-11-23_to_2026-12-02.md")
+    runs = records.read(root / "bench" / "results")
+    legacy = json.loads((root / "bench" / "results" / records.LEGACY_TIMING).read_text())
+    new_md = "## Per-module timing\n\n" + "\n".join(report.timing_table(runs, None, legacy))
+    s_old, s_new = [""], [""]
+    old, new = records.timing_from_markdown(old_md.read_text(), s_old), \
+        records.timing_from_markdown(new_md, s_new)
+    assert s_old == s_new == ["paper"]
+    assert len(old) >= 18 and all(new[w] == old[w] for w in old)
+    assert all(old[w] == legacy["worlds"][w] for w in old)
 
 
-def test_targets_answer_the_issue_questions_in_words():
-    runs = []
-    for k in range(2):
-        # furnished world: paper 0.75x explore_lite and 0.5x nearest, collisions only
-        # without the object costmap; nearest fails a run
-        runs += [_run("a", "paper", k, 75.0, objects=3), _run("a", "paper_noobj", k, 80.0,
-                                                              collisions=2 + k),
-                 _run("a", "explore_lite", k, 100.0),
-                 _run("a", "nearest", k, 150.0 if k else None, completed=k == 1)]
-        # bare world: paper slower than both baselines; explore_lite never reaches 95 %
-        runs += [_run("b", "paper", k, 120.0, collisions=k), _run("b", "paper_noobj", k, 120.0),
-                 _run("b", "explore_lite", k, None, completed=False),
-                 _run("b", "nearest", k, 100.0)]
-    lines = report.targets_summary(runs)
-    text = "\n".join(lines)
-    row_a = next(ln for ln in lines if ln.startswith("| a |"))
-    assert "0.75× (100 s)" in row_a and "0.50× (150 s, 1 of 2)" in row_a
-    assert "nearest 1/2" in row_a and row_a.endswith("| 0.0 / 2.5 |")
-    assert "baseline never reached 95 % (2 runs)" in next(ln for ln in lines
-                                                          if ln.startswith("| b |"))
-    assert ("Targets over 2 worlds: `paper` completes every run in 2; time to 95 % ≤ 0.75× "
-            "`explore_lite` in 1 and ≤ 0.75× `nearest` in 1; zero collisions with the object "
-            "costmap in 1.") in text
-    assert ("against `explore_lite`: `paper` is faster in 1 of the 1 worlds where both reached "
-            "95 %; ratio median 0.75×, from 0.75× (a) to 0.75× (a); in 1 more (b) "
-            "`explore_lite` never reached 95 % and `paper` did.") in text
-    assert ("against `nearest`: `paper` is faster in 1 of the 2 worlds where both reached "
-            "95 %; ratio median 0.85×, from 0.50× (a) to 1.20× (b).") in text
-    assert ("against `paper_noobj`: `paper` is faster in 1 of the 2 worlds where both "
-            "reached 95 % and within 1 % in 1; ratio median 0.97×") in text
-    assert "against `paper_noseg`" not in text                      # no such runs
-    assert ("`paper` 0/4 runs, `paper_noobj` 0/4 runs, `explore_lite` 2/4 runs in 1 worlds, "
-            "`nearest` 1/4 runs in 1 worlds.") in text
-    assert ("Collisions in the 1 worlds with furniture the object costmap found (a): 0.00 per "
-            "run with it (`paper`), 2.50 without (`paper_noobj`); no collision in any run with "
-            "it in 1 of them.") in text
+def test_the_code_versions_of_bench_results_are_those_its_git_history_gives():
+    root = Path(__file__).resolve().parents[1]
+    res = root / "bench" / "results"
+    try:
+        code, log = records.codes_from_history(res)
+    except (OSError, subprocess.CalledProcessError):
+        pytest.skip("no git history of bench/results here")
+    if not log:
+        pytest.skip("no git history of bench/results here (shallow clone?)")
+    recs = records.read(res)
+    old = [r for r in recs if r.get("record") == "csv" or "cpu_time_s" not in r]
+    assert old, "bench/results holds no run from before versions were recorded"
+    assert all(r["code"] == code[records.key_of(r)] for r in old)
+    assert "unknown" not in {r["code"] for r in old}

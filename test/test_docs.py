@@ -1,5 +1,6 @@
 """The user documentation holds together: README.md stays short, the docs/ pages exist, and
-every relative link (and #anchor) in README.md and docs/*.md resolves inside the repository.
+every relative link (and #anchor) in README.md, BENCHMARKS.md and docs/*.md resolves inside
+the repository.
 
 Anchors are GitHub's heading ids: the heading text without markdown, lower-cased, with
 everything but letters, digits, ``_``, ``-`` and spaces removed and spaces turned into
@@ -83,7 +84,7 @@ def links(path: Path) -> list[tuple[int, str]]:
 
 
 def _doc_files() -> list[Path]:
-    return [README] + sorted(DOCS.glob("*.md"))
+    return [README, ROOT / "BENCHMARKS.md"] + sorted(DOCS.glob("*.md"))
 
 
 def test_readme_is_short():
