@@ -121,13 +121,17 @@ def cache_dir() -> Path | None:
 
 
 def _code_hash() -> str:
-    """Hash of the source of :data:`_CODE_MODULES` (read once per process)."""
+    """Hash of the source of :data:`_CODE_MODULES` (read once per process); "" when a
+    source file cannot be read (the disk cache is then not used)."""
     if not _code_digest:
         h = hashlib.sha256()
-        for rel in _CODE_MODULES:
-            h.update(rel.encode())
-            h.update((_ROOT / rel).read_bytes())
-        _code_digest.append(h.hexdigest())
+        try:
+            for rel in _CODE_MODULES:
+                h.update(rel.encode())
+                h.update((_ROOT / rel).read_bytes())
+            _code_digest.append(h.hexdigest())
+        except OSError:
+            _code_digest.append("")
     return _code_digest[0]
 
 
@@ -150,8 +154,9 @@ def region_key(world: World, gt, lidar_params: LidarParams, robot_radius_m: floa
 
 
 def _disk_load(key: str, shape: tuple[int, ...]) -> npt.NDArray[np.bool_] | None:
+    """The stored region of ``key``, None when absent, unreadable or of another shape."""
     d = cache_dir()
-    if d is None:
+    if d is None or not _code_hash():
         return None
     try:
         with np.load(d / f"{key}.npz") as z:
@@ -167,7 +172,7 @@ def _disk_store(key: str, region: npt.NDArray[np.bool_]) -> None:
     """Write atomically (a temporary file renamed into place), so parallel workers never
     read a partial file; failures leave the cache as it was."""
     d = cache_dir()
-    if d is None:
+    if d is None or not _code_hash():
         return
     try:
         d.mkdir(parents=True, exist_ok=True)

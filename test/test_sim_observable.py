@@ -185,3 +185,18 @@ def test_a_damaged_or_disabled_disk_cache_is_recomputed(monkeypatch, tmp_path):
     assert ob.cache_dir() is None
     assert np.array_equal(observable_region(w, gt, LIDAR, robot_radius_m=0.2), good)
     assert calls[0] == 3 and not list((tmp_path / "observable").glob("*"))
+
+
+def test_unreadable_code_turns_the_disk_cache_off(monkeypatch, tmp_path):
+    """Without the source to hash, a stored region could be stale: nothing is read or
+    written on disk, the region is still right."""
+    from sim_bridge import observable as ob
+    monkeypatch.setenv("EXPLORE_SEG_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(ob, "_code_digest", [])
+    monkeypatch.setattr(ob, "_CODE_MODULES", ("no/such/module.py",))
+    calls = _count_computes(monkeypatch)
+    w = _room(False)
+    gt = ground_truth(w, 0.05)
+    got = observable_region(w, gt, LIDAR, robot_radius_m=0.2)
+    assert calls[0] == 1 and not (tmp_path / "observable").exists()
+    assert np.array_equal(got, _REAL(w, gt, LIDAR, 0.2, ob.SAMPLE_SPACING_M))

@@ -197,12 +197,15 @@ def connected_labels(n: int, a: npt.NDArray[np.integer], b: npt.NDArray[np.integ
     ``(a[i], b[i])``, numbered 0, 1, ... in the order of each component's smallest node
     (the numbering of scipy's ``connected_components``).
 
-    Hand-written: scipy's ``connected_components`` spends about 1 ms per call building and
-    validating its sparse matrix, several times this on the few hundred points of a
-    scan, where it runs hundreds of times per run. Minimum-label hooking with pointer
-    jumping: every node points to a smaller node of its component, each round hooks the
-    root of every edge's larger end to the other end's root, then flattens the pointers;
-    the smallest node of a component is its final root.
+    Hand-written: scipy's ``connected_components`` spends most of its time building and
+    validating a sparse matrix, about 350 us on a scan's few hundred points, where this
+    takes about 70 us (measured on a 360-point chain); it runs thousands of times per
+    run. On 20000 points with 30000 links the two take about the same.
+
+    Minimum-label hooking with pointer jumping: every node points to a smaller node of
+    its component, each round hooks the root of every edge's larger end to the other
+    end's root, then flattens the pointers; the smallest node of a component is its
+    final root.
 
     Examples
     --------
