@@ -115,3 +115,24 @@ def test_euclidean_clusters_link_points_exactly_at_the_tolerance():
     """Open3D's DBSCAN links only points closer than its radius."""
     pts = np.array([[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [1.5, 0.0, 0.0]])
     np.testing.assert_array_equal(euclidean_clusters(pts, 0.5, 1), [0, 0, 1])
+
+
+def test_connected_labels_equal_scipy_connected_components_on_random_graphs():
+    """The hand-written components (used by euclidean_clusters) equal scipy's, numbering
+    included, on random graphs: sparse and dense, with repeated edges and self loops."""
+    from scipy import sparse
+    from scipy.sparse.csgraph import connected_components
+
+    from explore_seg.core.objects.cloud import connected_labels
+    rng = np.random.default_rng(49)
+    for _ in range(400):
+        n = int(rng.integers(1, 300))
+        e = int(rng.integers(0, 3 * n))
+        a, b = rng.integers(0, n, e), rng.integers(0, n, e)
+        graph = sparse.coo_matrix((np.ones(e, np.int8), (a, b)), shape=(n, n))
+        want = connected_components(graph, directed=False)[1]
+        assert np.array_equal(connected_labels(n, a, b), want)
+    # A long chain in scrambled order (the most rounds of hooking).
+    perm = rng.permutation(500)
+    got = connected_labels(500, perm[:-1], perm[1:])
+    assert np.array_equal(got, np.zeros(500))

@@ -186,3 +186,24 @@ def test_scan_legs_equals_the_per_cluster_rule_on_random_scans(seed):
     ref = _scan_legs_by_cluster(scan, p, (0.0, 0.0))
     assert len(ref) > 0
     assert got.shape == ref.shape and np.array_equal(got, ref)
+
+
+def test_segment_means_equal_numpy_mean_bit_for_bit():
+    """scan_legs' cluster centres (all clusters at once) equal ``.mean(axis=0)`` of each
+    cluster's points, to the bit, on random clusters of random sizes and scales."""
+    from explore_seg.core.objects.legs import _segment_means
+    rng = np.random.default_rng(49)
+    for _ in range(300):
+        n = int(rng.integers(1, 300))
+        pts = rng.normal(0.0, 5.0, (n, 2)) * 10.0 ** rng.uniform(-2, 2)
+        labels = rng.integers(0, max(1, n // int(rng.integers(1, 30))), n)
+        counts = np.bincount(labels)
+        order = np.argsort(labels, kind="stable")
+        first = np.cumsum(counts) - counts
+        cand = np.flatnonzero(counts >= 1)
+        cand = cand[rng.random(cand.size) < 0.7]
+        want = np.array([pts[order[first[k]:first[k] + counts[k]]].mean(axis=0)
+                         for k in cand], dtype=np.float64).reshape(-1, 2)
+        got = _segment_means(pts[order], first[cand], counts[cand])
+        assert got.shape == want.shape
+        assert np.array_equal(got.view(np.uint64), want.view(np.uint64))

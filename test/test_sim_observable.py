@@ -103,3 +103,100 @@ def test_samples_cover_strips_between_lattice_lines():
     assert reach[rows, cols].all()
     for r, c in np.argwhere(reach):
         assert (np.maximum(abs(rows - r), abs(cols - c)) <= 4).any(), (r, c)
+
+
+def _count_computes(monkeypatch) -> list[int]:
+    """Counts calls of the uncached computation (and still runs it); the memory cache
+    starts empty. The real computation stays at ``_REAL``."""
+    from sim_bridge import observable as ob
+    calls = [0]
+    real = ob.compute_observable_region
+
+    def counted(*a, **k):
+        calls[0] += 1
+        return real(*a, **k)
+
+    monkeypatch.setattr(ob, "compute_observable_region", counted)
+    monkeypatch.setitem(globals(), "_REAL", real)
+    monkeypatch.setattr(ob, "_MEMORY", type(ob._MEMORY)())
+    return calls
+
+
+def test_region_is_cached_in_memory_and_on_disk(monkeypatch, tmp_path):
+    from sim_bridge import observable as ob
+    monkeypatch.setenv("EXPLORE_SEG_CACHE_DIR", str(tmp_path))
+    calls = _count_computes(monkeypatch)
+    w = _room(True)
+    gt = ground_truth(w, 0.05)
+    first = observable_region(w, gt, LIDAR, robot_radius_m=0.2)
+    assert calls[0] == 1 and len(list((tmp_path / "observable").glob("*.npz"))) == 1
+    first[:] = False                                   # the caller's copy, not the cache's
+    again = observable_region(w, gt, LIDAR, robot_radius_m=0.2)
+    assert calls[0] == 1
+    ob._MEMORY.clear()                                 # a new process: read from disk
+    from_disk = observable_region(w, gt, LIDAR, robot_radius_m=0.2)
+    assert calls[0] == 1
+    reference = _REAL(w, gt, LIDAR, 0.2, ob.SAMPLE_SPACING_M)
+    assert np.array_equal(again, reference) and np.array_equal(from_disk, reference)
+    assert reference.any()
+
+
+def test_cache_recomputes_when_the_world_or_inputs_change(monkeypatch, tmp_path):
+    from sim_bridge import observable as ob
+    monkeypatch.setenv("EXPLORE_SEG_CACHE_DIR", str(tmp_path))
+    calls = _count_computes(monkeypatch)
+    closed, opened = _room(True), _room(True)
+    # The vault's west wall without its lower half: the vault is open to the room.
+    opened.primitives = [p for p in opened.primitives if not (p.x == 2.2 and p.y == 1.125)]
+    gt_c, gt_o = ground_truth(closed, 0.05), ground_truth(opened, 0.05)
+    a = observable_region(closed, gt_c, LIDAR, robot_radius_m=0.2)
+    b = observable_region(opened, gt_o, LIDAR, robot_radius_m=0.2)
+    assert calls[0] == 2
+    vault = _vault_interior(gt_o)
+    assert (b & vault).sum() > (a & vault).sum()       # now seen: not the cached region
+    assert np.array_equal(b, _REAL(opened, gt_o, LIDAR, 0.2, ob.SAMPLE_SPACING_M))
+    observable_region(closed, gt_c, LIDAR, robot_radius_m=0.25)
+    observable_region(closed, gt_c, LidarParams(num_beams=180), robot_radius_m=0.2)
+    observable_region(closed, gt_c, LIDAR, robot_radius_m=0.2, spacing_m=0.5)
+    assert calls[0] == 5
+    # The same inputs once more, in a fresh process (memory cleared): all from disk.
+    ob._MEMORY.clear()
+    observable_region(closed, gt_c, LIDAR, robot_radius_m=0.2)
+    observable_region(opened, gt_o, LIDAR, robot_radius_m=0.2)
+    assert calls[0] == 5
+
+
+def test_a_damaged_or_disabled_disk_cache_is_recomputed(monkeypatch, tmp_path):
+    from sim_bridge import observable as ob
+    monkeypatch.setenv("EXPLORE_SEG_CACHE_DIR", str(tmp_path))
+    calls = _count_computes(monkeypatch)
+    w = _room(False)
+    gt = ground_truth(w, 0.05)
+    good = observable_region(w, gt, LIDAR, robot_radius_m=0.2)
+    (f,) = (tmp_path / "observable").glob("*.npz")
+    f.write_bytes(b"not a cache file")
+    ob._MEMORY.clear()
+    assert np.array_equal(observable_region(w, gt, LIDAR, robot_radius_m=0.2), good)
+    assert calls[0] == 2
+    monkeypatch.setenv("EXPLORE_SEG_CACHE_DIR", "")
+    ob._MEMORY.clear()
+    for p in (tmp_path / "observable").glob("*"):
+        p.unlink()
+    assert ob.cache_dir() is None
+    assert np.array_equal(observable_region(w, gt, LIDAR, robot_radius_m=0.2), good)
+    assert calls[0] == 3 and not list((tmp_path / "observable").glob("*"))
+
+
+def test_unreadable_code_turns_the_disk_cache_off(monkeypatch, tmp_path):
+    """Without the source to hash, a stored region could be stale: nothing is read or
+    written on disk, the region is still right."""
+    from sim_bridge import observable as ob
+    monkeypatch.setenv("EXPLORE_SEG_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(ob, "_code_digest", [])
+    monkeypatch.setattr(ob, "_CODE_MODULES", ("no/such/module.py",))
+    calls = _count_computes(monkeypatch)
+    w = _room(False)
+    gt = ground_truth(w, 0.05)
+    got = observable_region(w, gt, LIDAR, robot_radius_m=0.2)
+    assert calls[0] == 1 and not (tmp_path / "observable").exists()
+    assert np.array_equal(got, _REAL(w, gt, LIDAR, 0.2, ob.SAMPLE_SPACING_M))

@@ -81,3 +81,30 @@ def test_pruned_search_declines_what_it_cannot_certify():
     got = plan_path(cost, (30, 5), (30, 35), 0.05, 0.5)
     assert got[1] == ref[1] and np.array_equal(got[0], ref[0])
     assert ref[0][:, 0].min() < 5                          # around the wall's end
+
+
+def test_windows_below_the_pruned_lower_bound_are_skipped(monkeypatch):
+    """A wall makes the path a long detour: the pruned searches prove the first windows'
+    budgets too small, so fewer windows are searched, with the same result."""
+    cost = np.ones((60, 60))
+    cost[0:55, 30] = np.inf
+    calls = {"n": 0}
+    real = planner.cost_distance_field
+
+    def counting(*a, **k):
+        calls["n"] += 1
+        return real(*a, **k)
+
+    monkeypatch.setattr(planner, "cost_distance_field", counting)
+    ref = plan_path(cost, (5, 25), (5, 35), 0.05, 0.5, prune=False)
+    windows_ref = calls["n"]
+    searched = []
+    real_pruned = planner._pruned_search
+    monkeypatch.setattr(planner, "_pruned_search",
+                        lambda *a: searched.append(1) or real_pruned(*a))
+    calls["n"] = 0
+    got = plan_path(cost, (5, 25), (5, 35), 0.05, 0.5)
+    windows_got = calls["n"] - len(searched)
+    assert got[1] == ref[1] and np.array_equal(got[0], ref[0])
+    assert ref[0][:, 0].max() >= 55                        # around the wall's end
+    assert windows_ref >= 3 and windows_got < windows_ref

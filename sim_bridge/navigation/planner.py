@@ -123,13 +123,19 @@ def plan_path(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
     h, w = cost.shape
     (sr, sc), (gr, gc) = start_rc, goal_rc
     budget = 1.5 * math.hypot(gr - sr, gc - sc) * resolution_m + window_margin_m
+    lower = 0.0
     if prune:
-        found = _pruned_plan(cost, start_rc, goal_rc, resolution_m, budget, cost_hint)
+        found, lower = _pruned_plan(cost, start_rc, goal_rc, resolution_m, budget, cost_hint)
         if found is not None:
             return found
     while True:
         r0, r1, c0, c1 = _window(start_rc, goal_rc, budget, resolution_m, (h, w))
         whole = r0 == 0 and c0 == 0 and r1 == h and c1 == w
+        if not whole and budget < lower * (1.0 - _SKIP_MARGIN):
+            # The pruned searches proved every path costlier than this budget: this
+            # window's search would find none within it and go on to the next.
+            budget *= 2.0
+            continue
         dist = cost_distance_field(cost[r0:r1, c0:c1], (sr - r0, sc - c0), resolution_m,
                                    math.inf if whole else budget)
         g = float(dist[gr - r0, gc - c0])
@@ -153,10 +159,13 @@ def _window(start_rc: tuple[int, int], goal_rc: tuple[int, int], budget: float,
 
 def _pruned_plan(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
                  goal_rc: tuple[int, int], resolution_m: float, budget: float,
-                 cost_hint: float | None) -> tuple[npt.NDArray[np.int64], float] | None:
+                 cost_hint: float | None
+                 ) -> tuple[tuple[npt.NDArray[np.int64], float] | None, float]:
     """:func:`plan_path`'s result from pruned searches (:func:`_pruned_search`) for
     growing bounds, or None when none could be certified (the caller then searches the
-    windows whole).
+    windows whole); and a lower bound of the cheapest path's cost that the searches
+    proved (0 when none did): the cost itself once certified, else the certification
+    limit of a search that did not reach the goal within it (no path costs less).
 
     A certified cost ``g`` is the cheapest over the whole grid. The windows' search
     stops at the first window whose budget is ``>= g`` (a path of cost ``<= budget``
@@ -170,8 +179,13 @@ def _pruned_plan(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
         guess = max(guess, 1.1 * cost_hint + 4.0 * res)
     # A bound whose region's box (about bound / resolution cells square) covers most of
     # the grid saves little over the windows' search.
+    lower = 0.0
     while (guess / res) ** 2 < 0.5 * h * w:
         cells, g, box = _pruned_search(cost, start_rc, goal_rc, res, guess)
+        cert_lim = guess - guess * _PRUNE_SLACK
+        # A goal value within the certification limit is the cheapest cost; beyond it,
+        # every path costs more than the limit.
+        lower = max(lower, g if g <= cert_lim else cert_lim)
         if cells is not None:
             b = budget
             while True:
@@ -181,11 +195,11 @@ def _pruned_plan(cost: npt.NDArray[np.float64], start_rc: tuple[int, int],
                 b *= 2.0
             r0, r1, c0, c1 = win
             if r0 <= box[0] and box[1] <= r1 and c0 <= box[2] and box[3] <= c1:
-                return cells, g
-            return None
+                return (cells, g), lower
+            return None, lower
         # g (a path's cost) bounds the cheapest cost from above.
         guess = max(1.1 * g + 4.0 * res, 1.3 * guess) if math.isfinite(g) else 2.0 * guess
-    return None
+    return None, lower
 
 
 def _octile(a: tuple[int, int], b: tuple[int, int]) -> float:
@@ -204,6 +218,10 @@ def _octile_field(rows: npt.NDArray[np.int64], cols: npt.NDArray[np.int64],
 
 #: Relative slack of the pruning bounds (covers the rounding of summed edge costs).
 _PRUNE_SLACK = 1e-9
+
+#: :func:`plan_path` skips a window only when its budget lies this far (relative) below
+#: the proven lower bound: far more than the rounding that ``_PRUNE_SLACK`` covers.
+_SKIP_MARGIN = 1e-6
 
 
 def _pruned_search(cost: npt.NDArray[np.float64], start: tuple[int, int],

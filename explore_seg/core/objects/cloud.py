@@ -11,8 +11,6 @@ from typing import Sequence
 
 import numpy as np
 import numpy.typing as npt
-from scipy import sparse
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 
@@ -193,6 +191,45 @@ def statistical_outlier_mask(points: npt.NDArray[np.floating], k: int, std_ratio
     return mean_d <= mean_d.mean() + std_ratio * mean_d.std()
 
 
+def connected_labels(n: int, a: npt.NDArray[np.integer], b: npt.NDArray[np.integer]
+                     ) -> npt.NDArray[np.intp]:
+    """Connected components of the undirected graph on nodes ``0 .. n-1`` with edges
+    ``(a[i], b[i])``, numbered 0, 1, ... in the order of each component's smallest node
+    (the numbering of scipy's ``connected_components``).
+
+    Hand-written: scipy's ``connected_components`` spends most of its time building and
+    validating a sparse matrix, about 350 us on a scan's few hundred points, where this
+    takes about 70 us (measured on a 360-point chain); it runs thousands of times per
+    run. On 20000 points with 30000 links the two take about the same.
+
+    Minimum-label hooking with pointer jumping: every node points to a smaller node of
+    its component, each round hooks the root of every edge's larger end to the other
+    end's root, then flattens the pointers; the smallest node of a component is its
+    final root.
+
+    Examples
+    --------
+    >>> connected_labels(5, np.array([3, 1]), np.array([4, 0])).tolist()
+    [0, 0, 1, 2, 2]
+    """
+    lab = np.arange(n)
+    a = np.asarray(a, dtype=np.intp)
+    b = np.asarray(b, dtype=np.intp)
+    while a.size:
+        la, lb = lab[a], lab[b]
+        span = la != lb
+        if not span.any():
+            break
+        a, b, la, lb = a[span], b[span], la[span], lb[span]   # joined edges stay joined
+        np.minimum.at(lab, np.maximum(la, lb), np.minimum(la, lb))
+        while True:
+            up = lab[lab]
+            if np.array_equal(up, lab):
+                break
+            lab = up
+    return np.unique(lab, return_inverse=True)[1].reshape(-1)
+
+
 def euclidean_clusters(points: npt.NDArray[np.floating], tolerance_m: float, min_points: int,
                        extra_edges: npt.NDArray[np.integer] | None = None
                        ) -> npt.NDArray[np.int64]:
@@ -232,9 +269,7 @@ def euclidean_clusters(points: npt.NDArray[np.floating], tolerance_m: float, min
     pairs = cKDTree(pts).query_pairs(tolerance_m, output_type="ndarray").reshape(-1, 2)
     if extra_edges is not None and len(extra_edges):
         pairs = np.vstack([pairs, np.asarray(extra_edges, dtype=pairs.dtype).reshape(-1, 2)])
-    graph = sparse.coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])),
-                              shape=(n, n))
-    _, comp = connected_components(graph, directed=False)
+    comp = connected_labels(n, pairs[:, 0], pairs[:, 1])
     counts = np.bincount(comp)
     order = np.argsort(-counts, kind="stable")
     rank = np.empty_like(order)

@@ -67,11 +67,23 @@ def scan_legs(scan_xy: npt.NDArray[np.floating], params: ObjectParams,
     # Each cluster's points in scan order: one stable sort instead of a mask per cluster.
     order = np.argsort(labels, kind="stable")
     first = np.cumsum(counts) - counts
-    centres = np.array([pts[order[first[lab]:first[lab] + counts[lab]]].mean(axis=0)
-                        for lab in candidates], dtype=np.float64).reshape(-1, 2)
+    centres = _segment_means(pts[order], first[candidates], counts[candidates])
     radii = params.leg_isolation_m + 0.5 * widths[candidates]
     near = cKDTree(pts).query_ball_point(centres, radii, return_length=True)
     return centres[near <= counts[candidates]].reshape(-1, 2)
+
+
+def _segment_means(pts: npt.NDArray[np.float64], first: npt.NDArray[np.intp],
+                   counts: npt.NDArray[np.intp]) -> npt.NDArray[np.float64]:
+    """Mean of ``pts[first[i]:first[i] + counts[i]]`` for every i (counts >= 1), equal
+    bit for bit to ``.mean(axis=0)`` of each: the points are summed in order, all
+    segments at once (``np.add.reduceat`` sums in another order), then divided by the
+    count."""
+    sums = pts[first].copy()
+    for j in range(1, int(counts.max(initial=0))):
+        more = np.flatnonzero(counts > j)
+        sums[more] += pts[first[more] + j]
+    return (sums / counts[:, None]).reshape(-1, 2)
 
 
 def _scan_clusters(scan_xy: npt.ArrayLike, params: ObjectParams,
