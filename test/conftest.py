@@ -22,6 +22,9 @@ os.environ.setdefault("ROS_LOG_DIR", tempfile.mkdtemp(prefix="explore_seg_roslog
 # An exception in a node's periodic work fails the test instead of being logged and
 # survived (explore_seg.node_util.failsafe); test_failsafe_* switch it off.
 os.environ.setdefault("EXPLORE_SEG_STRICT", "1")
+# The observable-region disk cache (sim_bridge/observable.py) goes to a folder of this
+# run, not the user's ~/.cache.
+os.environ.setdefault("EXPLORE_SEG_CACHE_DIR", tempfile.mkdtemp(prefix="explore_seg_cache_"))
 
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
