@@ -1,7 +1,10 @@
 """Cleaning of an occupancy grid into free-space masks (DuDe spec shared/docs/dude.md §4).
 
 Raw free cells, and the cleaned free space F: free cells grown into unknown space,
-minus the obstacles (scan specks dropped) grown by the inflation radius.
+minus the obstacles (scan specks dropped) grown by the inflation radius. Small
+free-standing objects (``small_object_max_m``: chair legs, castors, chairs) are not
+inflated and count as free: rows and rings of chairs, closed by the inflation, would
+otherwise wall off strips of a room.
 """
 
 from __future__ import annotations
@@ -42,8 +45,9 @@ def clean_free_space(grid: GridMap, params: SegmentationParams
         ``0 <= occupancy < free_max_occupancy``.
     free_clean : ndarray of bool, shape (H, W)
         Free cells grown by ``free_close_m`` into non-obstacle cells, minus the obstacles
-        (occupancy > ``occupied_min_occupancy``, specks dropped) grown by
-        ``obstacle_inflation_m``.
+        (occupancy > ``occupied_min_occupancy``, specks and small free-standing objects
+        dropped) grown by ``obstacle_inflation_m``; the small objects' own cells count as
+        free where the grown free space reaches them.
     """
     return clean_masks(grid.data, params, grid.resolution_m)
 
@@ -67,12 +71,29 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
             occ_u8 = keep[lab]        # the occupied cells less the specks
         # the components left in occ_u8 are these minus the specks
         occ_cc = (lab, stats, small)
+    objects = None
+    obj_px = params.small_object_max_m / res
+    if obj_px > 0 and occ.any():
+        if occ_cc is None:
+            _n, lab, stats, _ = cv2.connectedComponentsWithStats(occ_u8, connectivity=8)
+            gone = np.zeros(len(stats), dtype=bool)
+        else:
+            lab, stats, gone = occ_cc
+        diag = np.hypot(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
+        obj = (diag <= obj_px) & ~gone
+        obj[0] = False
+        if obj.any():
+            objects = obj[lab]
+            occ_u8 = np.where(objects, np.uint8(0), occ_u8)
     r_inf = length_to_cells(params.obstacle_inflation_m, res)
     obst = cv2.dilate(occ_u8, _square(r_inf)) if r_inf > 0 else occ_u8
     r_close = length_to_cells(params.free_close_m, res)
     grown = cv2.dilate(free_raw.astype(np.uint8), _square(r_close)) if r_close > 0 \
         else free_raw.astype(np.uint8)
     free_clean = (grown > 0) & (obst == 0)
+    if objects is not None:
+        # small free-standing objects are free space for the decomposition
+        free_clean |= objects & (grown > 0) & (obst == 0)
     free_clean = fill_clutter_holes(free_clean, occ_u8, params, res, occ_cc)
     return free_raw, fill_furniture(free_clean, occ_u8, params, res)
 
@@ -129,5 +150,7 @@ def clean_influence_cells(params: SegmentationParams, res: float) -> int:
     return max(length_to_cells(params.obstacle_inflation_m, res),
                length_to_cells(params.free_close_m, res),
                int(math.ceil(params.clutter_max_extent_m / res)) + 1,
-               furniture_reach_cells(params, res)) + speck + 2
+               furniture_reach_cells(params, res),
+               int(math.ceil(params.small_object_max_m / res))
+               + length_to_cells(params.obstacle_inflation_m, res)) + speck + 2
 
