@@ -16,8 +16,14 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.segmentation.furniture import fill_furniture, furniture_reach_cells
+from explore_seg.core.segmentation.furniture import (fill_furniture, furniture_reach_cells,
+                                                     open_disk)
 from explore_seg.core.segmentation.params import SegmentationParams
+
+
+#: Share of an occupied component's cells that must be thick for it to be a solid
+#: furniture block (the rest: the opening's rounded-off corners, a few specks beside it).
+_BLOCK_SOLID_SHARE = 0.7
 
 
 def length_to_cells(length_m: float, res: float) -> int:
@@ -83,6 +89,14 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
         obj = (diag <= obj_px) & ~gone
         obj[0] = False
         if obj.any():
+            # an object whose inflation would touch a larger obstacle's is part of a row
+            # with it (a cabinet row, a broken wall) and keeps its inflation
+            r_near = 2 * length_to_cells(params.obstacle_inflation_m, res) + 1
+            big = (occ_u8 > 0) & ~obj[lab]
+            near = cv2.dilate(big.view(np.uint8), _square(r_near)) > 0
+            obj[np.unique(lab[near & (occ_u8 > 0)])] = False
+            obj[0] = False
+        if obj.any():
             objects = obj[lab]
             occ_u8 = np.where(objects, np.uint8(0), occ_u8)
     r_inf = length_to_cells(params.obstacle_inflation_m, res)
@@ -139,9 +153,31 @@ def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.ui
     diag = np.hypot(ost[:, cv2.CC_STAT_WIDTH], ost[:, cv2.CC_STAT_HEIGHT])
     big = (diag > params.clutter_max_object_m / res) & ~gone
     big[0] = False
+    if big.any() and params.furniture_min_thickness_m > 0:
+        big &= ~_thick_blocks(olab, ost, big, params, res)
     if big.any():
         small[lab[big[olab]]] = False
     return free_clean | small[lab]
+
+
+def _thick_blocks(olab: npt.NDArray[np.int32], ost: npt.NDArray[np.int32],
+                  big: npt.NDArray[np.bool_], params: SegmentationParams, res: float
+                  ) -> npt.NDArray[np.bool_]:
+    """Which of the ``big`` occupied components are solid furniture blocks: at most
+    ``furniture_max_extent_m`` wide and high, and thick nearly all over (a disk of
+    ``furniture_min_thickness_m`` fits round at least ``_BLOCK_SOLID_SHARE`` of their
+    cells), unlike a wall, which is thin."""
+    out = np.zeros(len(ost), dtype=bool)
+    ext = params.furniture_max_extent_m / res
+    d_min = params.furniture_min_thickness_m / res
+    x, y = ost[:, cv2.CC_STAT_LEFT], ost[:, cv2.CC_STAT_TOP]
+    bw, bh = ost[:, cv2.CC_STAT_WIDTH], ost[:, cv2.CC_STAT_HEIGHT]
+    for k in np.flatnonzero(big & (np.maximum(bw, bh) <= ext) & (np.minimum(bw, bh) >= d_min)):
+        m = olab[y[k]:y[k] + bh[k], x[k]:x[k] + bw[k]] == k
+        pad = int(math.ceil(d_min)) + 2
+        opened = open_disk(np.pad(m, pad), d_min)[pad:-pad, pad:-pad]
+        out[k] = (opened & m).sum() >= _BLOCK_SOLID_SHARE * m.sum()
+    return out
 
 
 def clean_influence_cells(params: SegmentationParams, res: float) -> int:

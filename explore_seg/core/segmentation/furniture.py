@@ -28,7 +28,7 @@ from explore_seg.core.segmentation.labels import bbox
 from explore_seg.core.segmentation.params import SegmentationParams
 
 
-def _open(mask: npt.NDArray[np.bool_], d_cells: float,
+def open_disk(mask: npt.NDArray[np.bool_], d_cells: float,
           dist: npt.NDArray[np.float32] | None = None) -> npt.NDArray[np.bool_]:
     """Morphological opening of ``mask`` by a disk of diameter ``d_cells``, by two
     distance transforms (their cost does not grow with the disk). ``dist``: the
@@ -77,14 +77,14 @@ def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res:
     dist = cv2.distanceTransform(o.view(np.uint8), cv2.DIST_L2, 3)
     if not (dist > 0.5 * d_min).any():
         return out                    # thin walls only
-    cand = _open(o, d_min, dist) & ~_open(o, d_max, dist)
+    cand = open_disk(o, d_min, dist) & ~open_disk(o, d_max, dist)
     # opened again so that the rounded-off corners of deep blocks (slivers thinner
     # than d_min) are no bulges; only around the candidates
     m = int(math.ceil(d_min)) + 2
     box = bbox(cand, m)
     if box is None:
         return out
-    out[box] = _open(np.pad(cand[box], m), d_min)[m:-m, m:-m]
+    out[box] = open_disk(np.pad(cand[box], m), d_min)[m:-m, m:-m]
     return out
 
 
