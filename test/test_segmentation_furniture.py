@@ -152,3 +152,63 @@ def test_ids_stay_stable_while_a_furnished_ring_is_revealed():
     e = evaluate(labels, segment(full, p))
     assert e["recall"] >= 0.9 and e["precision"] >= 0.9, (e["recall"], e["precision"])
     assert_coverage(full, labels, p)
+
+
+def chair_ring_room() -> GridMap:
+    """A 8 x 5 m room with a ring of 0.3 m chairs (0.3 m apart) round a 6.6 x 3.2 m
+    table area: inflated, the chairs close the ring."""
+    c = Canvas(9.0, 6.0).room(0.5, 0.5, 8.5, 5.5)
+    size, gap, x0, y0, x1, y1 = 0.3, 0.3, 1.2, 1.4, 7.8, 4.6
+    x = x0
+    while x + size <= x1 + 1e-9:
+        c.fill(x, y0, x + size, y0 + size, 100).fill(x, y1 - size, x + size, y1, 100)
+        x += size + gap
+    y = y0 + size + gap
+    while y + size <= y1 - size - 1e-9:
+        c.fill(x0, y, x0 + size, y + size, 100).fill(x - gap - size, y, x - gap, y + size, 100)
+        y += size + gap
+    return c.grid()
+
+
+def test_ring_of_chairs_does_not_cut_the_room():
+    g = chair_ring_room()
+    inside, outside = (4.5, 3.0), (4.5, 1.0)
+    off = segment(g, SegmentationParams())
+    assert len(region_ids(off)) > 1
+    assert _at(off, *inside) != _at(off, *outside)
+    p = SegmentationParams(small_object_max_m=0.5)
+    on = segment(g, p)
+    assert len(region_ids(on)) == 1
+    assert_coverage(g, on, p)
+
+
+def test_small_objects_count_as_free_unless_near_a_wall():
+    """A chair in the open is free space for the decomposition; one whose inflation
+    touches a wall's (a piece of a broken wall, a cabinet row) keeps it."""
+    c = Canvas(9.0, 6.0).room(0.5, 0.5, 8.5, 5.5)
+    c.fill(4.0, 3.0, 4.3, 3.3, 100)           # chair in the open
+    c.fill(2.0, 0.75, 2.3, 1.05, 100)         # chair 0.25 m off the bottom wall
+    g = c.grid()
+    no_clutter = {"clutter_max_extent_m": 0.0}     # the clutter fill would fill the chair
+    _raw, off = clean_masks(g.data, SegmentationParams(**no_clutter), RES)
+    _raw, on = clean_masks(g.data, SegmentationParams(small_object_max_m=0.5, **no_clutter),
+                           RES)
+    chair = (slice(round(3.0 / RES), round(3.3 / RES)),
+             slice(round(4.0 / RES), round(4.3 / RES)))
+    assert not off[chair].any() and on[chair].all()
+    near = (slice(0, round(1.6 / RES)), slice(round(1.4 / RES), round(2.9 / RES)))
+    assert np.array_equal(off[near], on[near])
+    assert not on[round(0.9 / RES), round(2.15 / RES)]
+
+
+def test_free_standing_solid_block_is_clutter_and_a_thin_wall_is_not():
+    """A 2.2 x 0.9 m cabinet block in the open (diagonal over clutter_max_object_m) is
+    filled as clutter when the furniture fill is on; a 2.2 x 0.15 m wall piece is not."""
+    for thick, filled in ((0.9, True), (0.15, False)):
+        g = Canvas(9.0, 6.0).room(0.5, 0.5, 8.5, 5.5).fill(3.4, 2.5, 5.6, 2.5 + thick,
+                                                             100).grid()
+        _raw, off = clean_masks(g.data, SegmentationParams(), RES)
+        _raw, on = clean_masks(g.data, SegmentationParams(furniture_min_thickness_m=0.7), RES)
+        mid = (round((2.5 + thick / 2) / RES), round(4.5 / RES))
+        assert not off[mid]
+        assert bool(on[mid]) is filled

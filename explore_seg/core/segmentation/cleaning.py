@@ -18,6 +18,7 @@ import numpy.typing as npt
 from explore_seg.core.grid import GridMap
 from explore_seg.core.segmentation.furniture import (fill_furniture, furniture_reach_cells,
                                                      open_disk)
+from explore_seg.core.segmentation.labels import bbox
 from explore_seg.core.segmentation.params import SegmentationParams
 
 
@@ -78,26 +79,9 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
         # the components left in occ_u8 are these minus the specks
         occ_cc = (lab, stats, small)
     objects = None
-    obj_px = params.small_object_max_m / res
-    if obj_px > 0 and occ.any():
-        if occ_cc is None:
-            _n, lab, stats, _ = cv2.connectedComponentsWithStats(occ_u8, connectivity=8)
-            gone = np.zeros(len(stats), dtype=bool)
-        else:
-            lab, stats, gone = occ_cc
-        diag = np.hypot(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
-        obj = (diag <= obj_px) & ~gone
-        obj[0] = False
-        if obj.any():
-            # an object whose inflation would touch a larger obstacle's is part of a row
-            # with it (a cabinet row, a broken wall) and keeps its inflation
-            r_near = 2 * length_to_cells(params.obstacle_inflation_m, res) + 1
-            big = (occ_u8 > 0) & ~obj[lab]
-            near = cv2.dilate(big.view(np.uint8), _square(r_near)) > 0
-            obj[np.unique(lab[near & (occ_u8 > 0)])] = False
-            obj[0] = False
-        if obj.any():
-            objects = obj[lab]
+    if params.small_object_max_m > 0 and occ.any():
+        objects = _small_objects(occ_u8, occ_cc, params, res)
+        if objects is not None:
             occ_u8 = np.where(objects, np.uint8(0), occ_u8)
     r_inf = length_to_cells(params.obstacle_inflation_m, res)
     obst = cv2.dilate(occ_u8, _square(r_inf)) if r_inf > 0 else occ_u8
@@ -110,6 +94,36 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
         free_clean |= objects & (grown > 0) & (obst == 0)
     free_clean = fill_clutter_holes(free_clean, occ_u8, params, res, occ_cc)
     return free_raw, fill_furniture(free_clean, occ_u8, params, res)
+
+
+def _small_objects(occ_u8: npt.NDArray[np.uint8],
+                   occ_cc: tuple[npt.NDArray[np.int32], npt.NDArray[np.int32],
+                                 npt.NDArray[np.bool_]] | None,
+                   params: SegmentationParams, res: float) -> npt.NDArray[np.bool_] | None:
+    """Cells of the small free-standing objects of ``occ_u8`` (``small_object_max_m``),
+    or None when there is none. An object whose inflation would touch a larger
+    obstacle's is part of a row with it (a cabinet row, a broken wall) and is none."""
+    if occ_cc is None:
+        _n, lab, stats, _ = cv2.connectedComponentsWithStats(occ_u8, connectivity=8)
+        gone = np.zeros(len(stats), dtype=bool)
+    else:
+        lab, stats, gone = occ_cc
+    diag = np.hypot(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
+    obj = (diag <= params.small_object_max_m / res) & ~gone
+    obj[0] = False
+    if not obj.any():
+        return None
+    objects = obj[lab]
+    r_near = 2 * length_to_cells(params.obstacle_inflation_m, res) + 1
+    box = bbox(objects, r_near)
+    assert box is not None
+    big = (occ_u8[box] > 0) & ~objects[box]
+    near = cv2.dilate(big.view(np.uint8), _square(r_near)) > 0
+    touch = near & objects[box]
+    if touch.any():
+        obj[lab[box][touch]] = False
+        objects[box] &= obj[lab[box]]
+    return objects if obj.any() else None
 
 
 def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8],
