@@ -212,3 +212,30 @@ def test_free_standing_solid_block_is_clutter_and_a_thin_wall_is_not():
         mid = (round((2.5 + thick / 2) / RES), round(4.5 / RES))
         assert not off[mid]
         assert bool(on[mid]) is filled
+
+
+def test_incremental_cleaning_equals_batch_with_the_furnished_rules_on():
+    """A 3 m long cabinet block against a wall, seen first over 1.2 m (furniture: filled)
+    then whole (longer than furniture_max_extent_m: structure): the masks the
+    incremental segmenter recleans only round the changed cells equal a full cleaning,
+    as far from the change as the fill reaches (clean_influence_cells covers it)."""
+    c = Canvas(14.0, 8.0).room(0.5, 0.5, 13.5, 7.5)
+    c.fill(3.0, 0.5, 6.0, 1.3, 100)                       # 3 x 0.8 m block on the wall
+    full = c.grid()
+    # never a full batch instead of an update (the room is small against the reveal)
+    p = SegmentationParams(small_object_max_m=0.5, inc_full_frac=1.0, **ON)
+    seg = IncrementalSegmenter(p)
+    checked = 0
+    for x_m in (4.2, 4.6, 5.0, 5.4, 6.4, 9.0, 14.0):
+        data = full.data.copy()
+        data[:, round(x_m / RES):] = -1
+        seg.update(full.with_data(data))
+        _raw, batch = clean_masks(seg._data, p, RES)
+        assert np.array_equal(seg._free_clean, batch), f"revealed up to x = {x_m} m"
+        checked += seg.last_update_info.mode == "incremental"
+    assert checked >= 3
+    # the block's footprint was filled while short, and is not once whole
+    _raw, part = clean_masks(np.where(np.arange(full.shape[1]) < round(4.2 / RES), full.data,
+                                      -1).astype(np.int8), p, RES)
+    assert part[round(1.4 / RES), round(3.5 / RES)]
+    assert not seg._free_clean[round(1.4 / RES), round(3.5 / RES)]

@@ -191,14 +191,22 @@ def _door_cells(params: SegmentationParams, res: float) -> int:
 
 
 def furniture_reach_cells(params: SegmentationParams, res: float) -> int:
-    """How far (cells) a changed obstacle cell can change the furniture fill: the deep
-    opening's disk, the second opening and the junction trim, the largest bulge, its
-    inflation and the contact ring."""
+    """How far (cells) a changed obstacle cell can change the furniture fill.
+
+    The bulges at a cell depend on the obstacles within the two openings' disks
+    (``furniture_max_thickness_m`` then ``furniture_min_thickness_m``); a bulge's fill
+    lies within its extent (at most ``furniture_max_extent_m``), the corner dilation and
+    the inflation of any of its cells. The one-free-area test sees the free space (the
+    inflation) through the door erosion and the contact band, again anywhere along the
+    bulge. The larger of the two paths, plus two cells."""
     if params.furniture_min_thickness_m <= 0:
         return 0
     d_min = int(math.ceil(params.furniture_min_thickness_m / res))
     d_max = int(math.ceil(params.furniture_max_thickness_m / res))
     ext = int(math.ceil(params.furniture_max_extent_m / res))
     r_inf = int(round(params.obstacle_inflation_m / res))
+    r_c = int(math.ceil(0.25 * params.furniture_min_thickness_m / res))
     r_door = _door_cells(params, res)
-    return d_max + 2 * d_min + ext + r_inf + 2 * r_door + 6
+    shape = d_max + d_min + ext + r_c + r_inf
+    areas = 2 * r_inf + 2 * r_door + 2 + ext + r_c
+    return max(shape, areas) + 2
