@@ -5,6 +5,7 @@ the ids stay stable while such a map is revealed."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from explore_seg.core.grid import GridMap
 from explore_seg.core.segmentation import IncrementalSegmenter, SegmentationParams, segment
@@ -39,8 +40,8 @@ def ring_with_rooms() -> GridMap:
     return c.grid()
 
 
-#: The furniture fill and the passage merge on (both off by default), as for real scans.
-ON = {"furniture_min_thickness_m": 0.7, "passage_merge_ratio": 0.7}
+#: The furniture fill, the passage merge and the small objects on, as for real scans.
+ON = {"furniture_min_thickness_m": 0.7, "passage_merge_ratio": 0.7, "small_object_max_m": 0.5}
 
 
 def _at(labels: np.ndarray, x_m: float, y_m: float) -> int:
@@ -223,7 +224,7 @@ def test_incremental_cleaning_equals_batch_with_the_furnished_rules_on():
     c.fill(3.0, 0.5, 6.0, 1.3, 100)                       # 3 x 0.8 m block on the wall
     full = c.grid()
     # never a full batch instead of an update (the room is small against the reveal)
-    p = SegmentationParams(small_object_max_m=0.5, inc_full_frac=1.0, **ON)
+    p = SegmentationParams(inc_full_frac=1.0, **ON)
     seg = IncrementalSegmenter(p)
     checked = 0
     for x_m in (4.2, 4.6, 5.0, 5.4, 6.4, 9.0, 14.0):
@@ -239,3 +240,17 @@ def test_incremental_cleaning_equals_batch_with_the_furnished_rules_on():
                                       -1).astype(np.int8), p, RES)
     assert part[round(1.4 / RES), round(3.5 / RES)]
     assert not seg._free_clean[round(1.4 / RES), round(3.5 / RES)]
+
+
+@pytest.mark.parametrize("door_m", [0.7, 1.0, 1.2])
+def test_doorways_with_chairs_beside_them_still_cut(door_m):
+    """A doorway 0.7 to 1.2 m wide, wall on both sides, with chairs standing near it on
+    both sides: the rules on, the two rooms stay two regions."""
+    c = Canvas(11.0, 6.0).room(0.3, 0.3, 5.3, 5.3).room(5.5, 0.3, 10.5, 5.3)
+    y0 = 2.8 - door_m / 2
+    c.door(5.3, y0, 5.5, y0 + door_m)
+    for x, y in ((4.3, 1.6), (4.4, 3.7), (6.2, 1.8), (6.4, 3.6)):
+        c.fill(x, y, x + 0.35, y + 0.35, 100)
+    lab = segment(c.grid(), SegmentationParams(**ON))
+    assert len(region_ids(lab)) == 2
+    assert _at(lab, 2.8, 2.8) != _at(lab, 8.0, 2.8)
