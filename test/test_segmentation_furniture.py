@@ -42,15 +42,17 @@ def ring_with_rooms() -> GridMap:
 
 #: The furniture fill, the passage merge and the small objects on, as for real scans.
 ON = {"furniture_min_thickness_m": 0.7, "passage_merge_ratio": 0.7, "small_object_max_m": 0.5}
+#: All three off (the defaults), named so that the tests do not hang on the defaults.
+OFF = {k: 0.0 for k in ON}
 
 
 def _at(labels: np.ndarray, x_m: float, y_m: float) -> int:
     return int(labels[round(y_m / RES), round(x_m / RES)])
 
 
-def test_both_rules_are_off_by_default():
+def test_the_rules_are_off_by_default():
     p = SegmentationParams()
-    assert p.furniture_min_thickness_m == 0.0 and p.passage_merge_ratio == 0.0
+    assert {k: getattr(p, k) for k in ON} == OFF
 
 
 def test_desk_against_a_wall_does_not_cut_the_room():
@@ -174,7 +176,7 @@ def chair_ring_room() -> GridMap:
 def test_ring_of_chairs_does_not_cut_the_room():
     g = chair_ring_room()
     inside, outside = (4.5, 3.0), (4.5, 1.0)
-    off = segment(g, SegmentationParams())
+    off = segment(g, SegmentationParams(**OFF))
     assert len(region_ids(off)) > 1
     assert _at(off, *inside) != _at(off, *outside)
     p = SegmentationParams(small_object_max_m=0.5)
@@ -191,7 +193,7 @@ def test_small_objects_count_as_free_unless_near_a_wall():
     c.fill(2.0, 0.75, 2.3, 1.05, 100)         # chair 0.25 m off the bottom wall
     g = c.grid()
     no_clutter = {"clutter_max_extent_m": 0.0}     # the clutter fill would fill the chair
-    _raw, off = clean_masks(g.data, SegmentationParams(**no_clutter), RES)
+    _raw, off = clean_masks(g.data, SegmentationParams(**OFF, **no_clutter), RES)
     _raw, on = clean_masks(g.data, SegmentationParams(small_object_max_m=0.5, **no_clutter),
                            RES)
     chair = (slice(round(3.0 / RES), round(3.3 / RES)),
@@ -208,8 +210,9 @@ def test_free_standing_solid_block_is_clutter_and_a_thin_wall_is_not():
     for thick, filled in ((0.9, True), (0.15, False)):
         g = Canvas(9.0, 6.0).room(0.5, 0.5, 8.5, 5.5).fill(3.4, 2.5, 5.6, 2.5 + thick,
                                                              100).grid()
-        _raw, off = clean_masks(g.data, SegmentationParams(), RES)
-        _raw, on = clean_masks(g.data, SegmentationParams(furniture_min_thickness_m=0.7), RES)
+        _raw, off = clean_masks(g.data, SegmentationParams(**OFF), RES)
+        _raw, on = clean_masks(g.data, SegmentationParams(**(OFF | {
+            "furniture_min_thickness_m": 0.7})), RES)
         mid = (round((2.5 + thick / 2) / RES), round(4.5 / RES))
         assert not off[mid]
         assert bool(on[mid]) is filled
