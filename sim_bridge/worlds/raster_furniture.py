@@ -13,6 +13,7 @@ wall have their back on row 0 and are turned so that the back touches the wall.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -315,19 +316,29 @@ def table_block(rng: np.random.Generator, res: float, length_m: float, width_m: 
     return st
 
 
-def _wall_run(rng: np.random.Generator, res: float, length: int, depth_m: tuple[float, float],
-              gap_m: tuple[float, float], fill: float) -> Stamp:
-    """Cabinets, desks and shelves along one wall (back on row 0), ``fill`` of its length,
-    with gaps between them: the niches that furniture against walls closes."""
-    depth = _cells(float(rng.uniform(*depth_m)), res)
+@dataclass(frozen=True)
+class WallRun:
+    """Furniture along a wall: item depth range (m), gap range between items (m), the
+    share of the slots that hold an item, and whether chairs stand in front."""
+
+    depth_m: tuple[float, float]
+    gap_m: tuple[float, float]
+    fill: float
+    chairs: bool = False
+
+
+def _wall_run(rng: np.random.Generator, res: float, length: int, run: WallRun) -> Stamp:
+    """Cabinets, desks and shelves along one wall (back on row 0), ``run.fill`` of the
+    slots taken, with gaps between them: the niches that furniture against walls closes."""
+    depth = _cells(float(rng.uniform(*run.depth_m)), res)
     st = np.zeros((depth, length), np.uint8)
     c = int(rng.integers(0, max(1, _cells(1.0, res))))
     while c < length:
         w = _cells(float(rng.uniform(0.8, 2.0)), res)
-        if rng.random() < fill:
-            d = min(depth, _cells(float(rng.uniform(*depth_m)), res))
+        if rng.random() < run.fill:
+            d = min(depth, _cells(float(rng.uniform(*run.depth_m)), res))
             st[:d, c:min(length, c + w)] = 1
-        c += w + _cells(float(rng.uniform(*gap_m)), res)
+        c += w + _cells(float(rng.uniform(*run.gap_m)), res)
     return st
 
 
@@ -344,20 +355,19 @@ def _put(sub: npt.NDArray[np.bool_], taken: npt.NDArray[np.bool_], st: Stamp, r:
 
 
 def _along_walls(rng: np.random.Generator, sub: npt.NDArray[np.bool_],
-                 taken: npt.NDArray[np.bool_], res: float, walls: int,
-                 depth_m: tuple[float, float], gap_m: tuple[float, float], fill: float,
-                 chairs: bool) -> None:
+                 taken: npt.NDArray[np.bool_], res: float, walls: int, spec: WallRun
+                 ) -> None:
     """Runs of furniture along ``walls`` of the room's four walls (chairs in front)."""
     H, W = sub.shape
     for side in rng.permutation(4)[:walls]:
         length = W if side in (0, 2) else H
-        run = _wall_run(rng, res, length, depth_m, gap_m, fill)
+        run = _wall_run(rng, res, length, spec)
         st = np.rot90(run, int(side))
         r = H - st.shape[0] if side == 2 else 0
         c = W - st.shape[1] if side == 3 else 0
         mask = st & ~taken[r:r + st.shape[0], c:c + st.shape[1]].astype(np.uint8)
         sub[r:r + st.shape[0], c:c + st.shape[1]] |= mask.astype(bool)
-        if not chairs:
+        if not spec.chairs:
             continue
         d = run.shape[0]
         for k in range(int(length * res / 1.5)):
@@ -407,8 +417,8 @@ def furnish_real_room(rng: np.random.Generator, occ: npt.NDArray[np.bool_],
     H, W = sub.shape
     before = sub.copy()
     if kind == "office":
-        _along_walls(rng, sub, taken, res, int(rng.integers(2, 4)), (0.4, 0.8), (0.2, 1.0),
-                     0.8, True)
+        _along_walls(rng, sub, taken, res, int(rng.integers(2, 4)),
+                     WallRun((0.4, 0.8), (0.2, 1.0), 0.8, chairs=True))
         for _ in range(int(rng.integers(0, 3))):
             ch = _ring_chair(rng, res)
             _put(sub, taken, ch, int(rng.integers(0, H)), int(rng.integers(0, W)))
@@ -417,7 +427,7 @@ def furnish_real_room(rng: np.random.Generator, occ: npt.NDArray[np.bool_],
         tl = max(_cells(1.2, res), W - 2 * clear - 2 * _cells(0.6, res))
         tw = max(_cells(0.9, res), H - 2 * clear - 2 * _cells(0.6, res))
         if rng.random() < 0.5:
-            _along_walls(rng, sub, taken, res, 1, (0.4, 0.5), (0.3, 1.0), 0.7, False)
+            _along_walls(rng, sub, taken, res, 1, WallRun((0.4, 0.5), (0.3, 1.0), 0.7))
         st = table_block(rng, res, tl * res, tw * res)
         _put(sub, taken, st, (H - st.shape[0]) // 2, (W - st.shape[1]) // 2)
     elif kind == "lab":
@@ -463,6 +473,6 @@ def furnish_real_room(rng: np.random.Generator, occ: npt.NDArray[np.bool_],
             c += thick + _cells(float(rng.uniform(0.9, 1.2)), res)
     elif kind == "corridor":
         if rng.random() < 0.5:
-            _along_walls(rng, sub, taken, res, 1, (0.3, 0.4), (2.0, 5.0), 0.4, False)
+            _along_walls(rng, sub, taken, res, 1, WallRun((0.3, 0.4), (2.0, 5.0), 0.4))
     # the door approaches stay free
     sub &= ~(taken & ~before)
