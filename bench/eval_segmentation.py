@@ -4,7 +4,8 @@
 Three modes:
 
 * furnished floor plans (``--set furnished``): the seeded maps of
-  ``sim_bridge.worlds.furnished`` (offices, open-plan offices, homes), each segmented
+  ``sim_bridge.worlds.furnished`` (offices, open-plan offices, homes; ``--kinds
+  real_office``: furnished like the real plans of the IPA set), each segmented
   plain (walls only) and furnished (furniture as a lidar sees it, scanned), side by side:
   recall, precision and segments per room (segments whose largest overlap is that room,
   averaged over rooms; max over the rooms of a map)::
@@ -118,14 +119,16 @@ def segments_per_room(e: dict) -> tuple[float, int]:
 
 
 def run_furnished(n_maps: int, first_seed: int, params: SegmentationParams,
-                  verbose: bool = True) -> dict[str, dict[str, float]]:
-    """Plain and furnished scores over the furnished evaluation set; prints per map."""
-    from sim_bridge.worlds.furnished import furnished_map, furnished_set
+                  verbose: bool = True, kinds: tuple[str, ...] | None = None
+                  ) -> dict[str, dict[str, float]]:
+    """Plain and furnished scores over the furnished evaluation set (``kinds``: the
+    floor-plan styles cycled, default ``MAP_KINDS``); prints per map."""
+    from sim_bridge.worlds.furnished import MAP_KINDS, furnished_map, furnished_set
 
     acc: dict[str, dict[str, list[float]]] = {
         k: {"recall": [], "precision": [], "spr": [], "spr_max": [], "time_ms": []}
         for k in ("plain", "furnished")}
-    for seed, kind in furnished_set(n_maps, first_seed):
+    for seed, kind in furnished_set(n_maps, first_seed, kinds or MAP_KINDS):
         m = furnished_map(seed, kind)
         line = f"  {m.name:18s}"
         for key, grid, rooms in (("plain", m.plain, m.plain_rooms),
@@ -251,6 +254,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="ipa_dev: folder with maps/ and gt/ (default <shared>/data/ipa_dev)")
     ap.add_argument("--maps", type=int, default=30, help="furnished set: number of maps")
     ap.add_argument("--first-seed", type=int, default=0, help="furnished set: first seed")
+    ap.add_argument("--kinds", default="",
+                    help="furnished set: comma-separated floor-plan styles cycled (default "
+                         "office,open_office,home; real_office: furnished like real plans)")
     ap.add_argument("--seeds", default="0-7", help="house seeds, e.g. 0-9 or 1,4,7")
     ap.add_argument("--tau", default=str(SegmentationParams().tau_m),
                     help="tau in metres, comma-separated for a sweep")
@@ -322,7 +328,12 @@ def main(argv: list[str] | None = None) -> int:
         params = SegmentationParams(**{**base.__dict__, "tau_m": taus[0]})
         print(f"furnished floor plans ({args.maps} maps from seed {args.first_seed}), tau "
               f"{taus[0]:.2f} m; IPA recall/precision, min size {args.min_px} px")
-        res_f = run_furnished(args.maps, args.first_seed, params, verbose=not args.quiet)
+        kinds = tuple(k for k in args.kinds.split(",") if k) or None
+        try:
+            res_f = run_furnished(args.maps, args.first_seed, params, verbose=not args.quiet,
+                                  kinds=kinds)
+        except ValueError as err:
+            ap.error(f"--kinds: {err}")
         for key, r in res_f.items():
             print(f"{key:9s}: recall {r['recall'] * 100:5.1f} % (min {r['recall_min'] * 100:5.1f})"
                   f"  precision {r['precision'] * 100:5.1f} %  segments per room "

@@ -20,7 +20,8 @@ def test_clean_free_space_inflates_walls_and_grows_free():
     ??????????
     """, resolution_m=0.05)
     p = SegmentationParams(obstacle_inflation_m=0.05, free_close_m=0.05,
-                           obstacle_speck_area_m2=0.0, clutter_max_extent_m=0.0)
+                           obstacle_speck_area_m2=0.0, clutter_max_extent_m=0.0,
+                           small_object_max_m=0.0)
     free_raw, free_clean = clean_free_space(g, p)
     assert free_raw.sum() == 23
     assert not free_clean[1:4, 4:7].any()       # the wall cell and its 1-cell inflation

@@ -5,6 +5,7 @@ the ids stay stable while such a map is revealed."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from explore_seg.core.grid import GridMap
 from explore_seg.core.segmentation import IncrementalSegmenter, SegmentationParams, segment
@@ -39,17 +40,19 @@ def ring_with_rooms() -> GridMap:
     return c.grid()
 
 
-#: The furniture fill and the passage merge on (both off by default), as for real scans.
-ON = {"furniture_min_thickness_m": 0.7, "passage_merge_ratio": 0.7}
+#: The furniture fill, the passage merge and the small objects on, as for real scans.
+ON = {"furniture_min_thickness_m": 0.7, "passage_merge_ratio": 0.7, "small_object_max_m": 0.5}
+#: All three off (the defaults), named so that the tests do not hang on the defaults.
+OFF = {k: 0.0 for k in ON}
 
 
 def _at(labels: np.ndarray, x_m: float, y_m: float) -> int:
     return int(labels[round(y_m / RES), round(x_m / RES)])
 
 
-def test_both_rules_are_off_by_default():
+def test_the_rules_are_off_by_default():
     p = SegmentationParams()
-    assert p.furniture_min_thickness_m == 0.0 and p.passage_merge_ratio == 0.0
+    assert {k: getattr(p, k) for k in ON} == OFF
 
 
 def test_desk_against_a_wall_does_not_cut_the_room():
@@ -152,3 +155,105 @@ def test_ids_stay_stable_while_a_furnished_ring_is_revealed():
     e = evaluate(labels, segment(full, p))
     assert e["recall"] >= 0.9 and e["precision"] >= 0.9, (e["recall"], e["precision"])
     assert_coverage(full, labels, p)
+
+
+def chair_ring_room() -> GridMap:
+    """A 8 x 5 m room with a ring of 0.3 m chairs (0.3 m apart) round a 6.6 x 3.2 m
+    table area: inflated, the chairs close the ring."""
+    c = Canvas(9.0, 6.0).room(0.5, 0.5, 8.5, 5.5)
+    size, gap, x0, y0, x1, y1 = 0.3, 0.3, 1.2, 1.4, 7.8, 4.6
+    x = x0
+    while x + size <= x1 + 1e-9:
+        c.fill(x, y0, x + size, y0 + size, 100).fill(x, y1 - size, x + size, y1, 100)
+        x += size + gap
+    y = y0 + size + gap
+    while y + size <= y1 - size - 1e-9:
+        c.fill(x0, y, x0 + size, y + size, 100).fill(x - gap - size, y, x - gap, y + size, 100)
+        y += size + gap
+    return c.grid()
+
+
+def test_ring_of_chairs_does_not_cut_the_room():
+    g = chair_ring_room()
+    inside, outside = (4.5, 3.0), (4.5, 1.0)
+    off = segment(g, SegmentationParams(**OFF))
+    assert len(region_ids(off)) > 1
+    assert _at(off, *inside) != _at(off, *outside)
+    p = SegmentationParams(small_object_max_m=0.5)
+    on = segment(g, p)
+    assert len(region_ids(on)) == 1
+    assert_coverage(g, on, p)
+
+
+def test_small_objects_count_as_free_unless_near_a_wall():
+    """A chair in the open is free space for the decomposition; one whose inflation
+    touches a wall's (a piece of a broken wall, a cabinet row) keeps it."""
+    c = Canvas(9.0, 6.0).room(0.5, 0.5, 8.5, 5.5)
+    c.fill(4.0, 3.0, 4.3, 3.3, 100)           # chair in the open
+    c.fill(2.0, 0.75, 2.3, 1.05, 100)         # chair 0.25 m off the bottom wall
+    g = c.grid()
+    no_clutter = {"clutter_max_extent_m": 0.0}     # the clutter fill would fill the chair
+    _raw, off = clean_masks(g.data, SegmentationParams(**OFF, **no_clutter), RES)
+    _raw, on = clean_masks(g.data, SegmentationParams(small_object_max_m=0.5, **no_clutter),
+                           RES)
+    chair = (slice(round(3.0 / RES), round(3.3 / RES)),
+             slice(round(4.0 / RES), round(4.3 / RES)))
+    assert not off[chair].any() and on[chair].all()
+    near = (slice(0, round(1.6 / RES)), slice(round(1.4 / RES), round(2.9 / RES)))
+    assert np.array_equal(off[near], on[near])
+    assert not on[round(0.9 / RES), round(2.15 / RES)]
+
+
+def test_free_standing_solid_block_is_clutter_and_a_thin_wall_is_not():
+    """A 2.2 x 0.9 m cabinet block in the open (diagonal over clutter_max_object_m) is
+    filled as clutter when the furniture fill is on; a 2.2 x 0.15 m wall piece is not."""
+    for thick, filled in ((0.9, True), (0.15, False)):
+        g = Canvas(9.0, 6.0).room(0.5, 0.5, 8.5, 5.5).fill(3.4, 2.5, 5.6, 2.5 + thick,
+                                                             100).grid()
+        _raw, off = clean_masks(g.data, SegmentationParams(**OFF), RES)
+        _raw, on = clean_masks(g.data, SegmentationParams(**(OFF | {
+            "furniture_min_thickness_m": 0.7})), RES)
+        mid = (round((2.5 + thick / 2) / RES), round(4.5 / RES))
+        assert not off[mid]
+        assert bool(on[mid]) is filled
+
+
+def test_incremental_cleaning_equals_batch_with_the_furnished_rules_on():
+    """A 3 m long cabinet block against a wall, seen first over 1.2 m (furniture: filled)
+    then whole (longer than furniture_max_extent_m: structure): the masks the
+    incremental segmenter recleans only round the changed cells equal a full cleaning,
+    as far from the change as the fill reaches (clean_influence_cells covers it)."""
+    c = Canvas(14.0, 8.0).room(0.5, 0.5, 13.5, 7.5)
+    c.fill(3.0, 0.5, 6.0, 1.3, 100)                       # 3 x 0.8 m block on the wall
+    full = c.grid()
+    # never a full batch instead of an update (the room is small against the reveal)
+    p = SegmentationParams(inc_full_frac=1.0, **ON)
+    seg = IncrementalSegmenter(p)
+    checked = 0
+    for x_m in (4.2, 4.6, 5.0, 5.4, 6.4, 9.0, 14.0):
+        data = full.data.copy()
+        data[:, round(x_m / RES):] = -1
+        seg.update(full.with_data(data))
+        _raw, batch = clean_masks(seg._data, p, RES)
+        assert np.array_equal(seg._free_clean, batch), f"revealed up to x = {x_m} m"
+        checked += seg.last_update_info.mode == "incremental"
+    assert checked >= 3
+    # the block's footprint was filled while short, and is not once whole
+    _raw, part = clean_masks(np.where(np.arange(full.shape[1]) < round(4.2 / RES), full.data,
+                                      -1).astype(np.int8), p, RES)
+    assert part[round(1.4 / RES), round(3.5 / RES)]
+    assert not seg._free_clean[round(1.4 / RES), round(3.5 / RES)]
+
+
+@pytest.mark.parametrize("door_m", [0.7, 1.0, 1.2])
+def test_doorways_with_chairs_beside_them_still_cut(door_m):
+    """A doorway 0.7 to 1.2 m wide, wall on both sides, with chairs standing near it on
+    both sides: the rules on, the two rooms stay two regions."""
+    c = Canvas(11.0, 6.0).room(0.3, 0.3, 5.3, 5.3).room(5.5, 0.3, 10.5, 5.3)
+    y0 = 2.8 - door_m / 2
+    c.door(5.3, y0, 5.5, y0 + door_m)
+    for x, y in ((4.3, 1.6), (4.4, 3.7), (6.2, 1.8), (6.4, 3.6)):
+        c.fill(x, y, x + 0.35, y + 0.35, 100)
+    lab = segment(c.grid(), SegmentationParams(**ON))
+    assert len(region_ids(lab)) == 2
+    assert _at(lab, 2.8, 2.8) != _at(lab, 8.0, 2.8)

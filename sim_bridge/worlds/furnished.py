@@ -3,7 +3,11 @@
 :func:`furnished_map` builds one floor plan from :func:`~sim_bridge.worlds.generate_house`
 (walls and doors only) in one of three styles (:data:`MAP_KINDS`): ``office`` (cell
 offices along a corridor), ``open_office`` (large open-plan rooms with desk islands) and
-``home`` (a smaller flat: living room, bedrooms, kitchen, bath). It returns
+``home`` (a smaller flat: living room, bedrooms, kitchen, bath), or in the style of the
+furnished plans of real buildings (:data:`REAL_KINDS`): ``real_office``, whose rooms are
+filled as those are (:func:`~sim_bridge.worlds.raster_furniture.furnish_real_room`:
+desks and cabinets along the walls closing niches, table blocks in rings of chairs, table
+rows with ~1 m aisles, shelf combs). It returns
 
 * the **plain** map: the walls, every inside cell free (what the unfurnished floor plan
   looks like), with its room labels;
@@ -29,11 +33,13 @@ from scipy import ndimage
 from explore_seg.core.grid import GridMap
 from sim_bridge.world import World
 from sim_bridge.worlds.house import generate_house
-from sim_bridge.worlds.raster_furniture import furnish_raster_room
+from sim_bridge.worlds.raster_furniture import furnish_raster_room, furnish_real_room
 from sim_bridge.worlds.truth import ground_truth
 
-#: Floor-plan styles of :func:`furnished_map`.
+#: Floor-plan styles of :func:`furnished_map` (the default evaluation set cycles them).
 MAP_KINDS = ("office", "open_office", "home")
+#: Floor-plan styles furnished like real buildings' plans (``--kinds`` of the evaluation).
+REAL_KINDS = ("real_office",)
 #: Lidar range of the scan simulation (m) and viewpoints per square metre of free space.
 SCAN_RANGE_M = 8.0
 VIEWPOINTS_PER_M2 = 1 / 6.0
@@ -69,7 +75,11 @@ def _layout(seed: int, kind: str) -> World:
         return generate_house(seed, (round(w), round(h)), room_width_m=(2.5, 5.0),
                               corridor_width_m=(1.35, 1.6), split_depth_m=5.0,
                               start_clearance_m=0.55)
-    raise ValueError(f"kind must be one of {MAP_KINDS}, got {kind!r}")
+    if kind == "real_office":
+        size = float(rng.choice([18.0, 20.0, 22.0, 24.0]))
+        return generate_house(seed, (size, size * 0.8), room_width_m=(3.0, 7.5),
+                              extra_door_prob=0.2)
+    raise ValueError(f"kind must be one of {MAP_KINDS + REAL_KINDS}, got {kind!r}")
 
 
 def _walls_only(world: World) -> World:
@@ -125,6 +135,16 @@ def _room_kind(rng: np.random.Generator, kind: str, area_m2: float, is_corridor:
     return str(rng.choice(["bedroom", "bedroom", "living"]))
 
 
+def _real_room_kind(rng: np.random.Generator, area_m2: float, is_corridor: bool) -> str:
+    if is_corridor:
+        return "corridor"
+    if area_m2 < 8:
+        return str(rng.choice(["store", "office"]))
+    if area_m2 > 25:
+        return str(rng.choice(["lab", "meeting", "lab"]))
+    return str(rng.choice(["office", "office", "meeting", "lab", "store"]))
+
+
 def scan(occ: npt.NDArray[np.bool_], inside: npt.NDArray[np.bool_],
          viewpoints: npt.NDArray[np.int64], range_cells: float, n_rays: int = 1440,
          ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
@@ -166,7 +186,8 @@ def furnished_map(seed: int, kind: str) -> FurnishedMap:
         On an unknown kind.
     """
     world = _layout(seed, kind)
-    rng = np.random.default_rng(seed * 7919 + MAP_KINDS.index(kind))
+    real = kind in REAL_KINDS
+    rng = np.random.default_rng(seed * 7919 + (MAP_KINDS + REAL_KINDS).index(kind))
     walls = _walls_only(world)
     gt = ground_truth(walls)
     res = gt.resolution_m
@@ -187,7 +208,12 @@ def furnished_map(seed: int, kind: str) -> FurnishedMap:
         if rect is None:
             continue
         area = (rect[2] - rect[0]) * (rect[3] - rect[1]) * res * res
-        rk = _room_kind(rng, kind, area, world.room_kinds.get(rid) == "corridor", used)
+        corridor = world.room_kinds.get(rid) == "corridor"
+        if real:
+            kinds[rid] = _real_room_kind(rng, area, corridor)
+            furnish_real_room(rng, occ, rect, keepout, kinds[rid], res)
+            continue
+        rk = _room_kind(rng, kind, area, corridor, used)
         used[rk] = used.get(rk, 0) + 1
         kinds[rid] = rk
         furnish_raster_room(rng, occ, rect, keepout, rk, res)
@@ -202,11 +228,15 @@ def furnished_map(seed: int, kind: str) -> FurnishedMap:
         n_vp = max(2, int(len(cand) * res * res * VIEWPOINTS_PER_M2))
         if len(cand):
             vps.append(cand[rng.choice(len(cand), size=min(n_vp, len(cand)), replace=False)])
-    seen_free, seen_occ = scan(occ, gt.inside, np.concatenate(vps), SCAN_RANGE_M / res)
+    if real:
+        # real plans are drawn: furniture and walls occupied, everything else free
+        seen_free, seen_occ = free & ~occ, occ & (gt.inside | (plain.data == 100))
+    else:
+        seen_free, seen_occ = scan(occ, gt.inside, np.concatenate(vps), SCAN_RANGE_M / res)
     data = np.full(occ.shape, -1, np.int8)
     data[seen_free] = 0
     data[seen_occ] = 100
-    salt = seen_free & (rng.random(occ.shape) < 2e-4)
+    salt = seen_free & (rng.random(occ.shape) < (0.0 if real else 2e-4))
     data[salt] = 100
     furnished = plain.with_data(data)
     return FurnishedMap(name=f"{kind}_s{seed}", kind=kind, plain=plain,
@@ -216,7 +246,17 @@ def furnished_map(seed: int, kind: str) -> FurnishedMap:
                         room_kinds=kinds, start_cell=start)
 
 
-def furnished_set(n: int = 30, first_seed: int = 0) -> list[tuple[int, str]]:
-    """(seed, kind) of the evaluation set: ``n`` maps, kinds cycling through
-    :data:`MAP_KINDS`."""
-    return [(first_seed + i, MAP_KINDS[i % len(MAP_KINDS)]) for i in range(n)]
+def furnished_set(n: int = 30, first_seed: int = 0,
+                  kinds: tuple[str, ...] = MAP_KINDS) -> list[tuple[int, str]]:
+    """(seed, kind) of the evaluation set: ``n`` maps, kinds cycling through ``kinds``
+    (default :data:`MAP_KINDS`).
+
+    Raises
+    ------
+    ValueError
+        On an empty or unknown kind.
+    """
+    bad = [k for k in kinds if k not in MAP_KINDS + REAL_KINDS]
+    if not kinds or bad:
+        raise ValueError(f"kinds must be some of {MAP_KINDS + REAL_KINDS}, got {kinds!r}")
+    return [(first_seed + i, kinds[i % len(kinds)]) for i in range(n)]

@@ -13,6 +13,7 @@ wall have their back on row 0 and are turned so that the back touches the wall.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -21,6 +22,11 @@ Stamp = npt.NDArray[np.uint8]
 #: Room kinds :func:`furnish_raster_room` knows.
 ROOM_KINDS = ("office", "open_office", "meeting", "living", "bedroom", "kitchen", "bath",
               "corridor")
+#: Room kinds of the ``real`` furnishing (:func:`furnish_real_room`), after the furnished
+#: maps of real buildings: offices with desks and cabinets along the walls, meeting rooms
+#: with a table block in a ring of chairs, labs with table rows and ~1 m aisles, store
+#: rooms with shelves standing out from a wall.
+REAL_ROOM_KINDS = ("office", "meeting", "lab", "store", "corridor")
 
 
 def _cells(m: float, res: float) -> int:
@@ -267,3 +273,206 @@ def furnish_raster_room(rng: np.random.Generator, occ: npt.NDArray[np.bool_],
             placed += 1
             break
     return placed
+
+
+def _disc_chair(res: float) -> Stamp:
+    """A chair drawn as one solid disc (0.35 to 0.45 m), as on real furnished plans."""
+    return small_disc(res, 0.2)
+
+
+def _ring_chair(rng: np.random.Generator, res: float) -> Stamp:
+    return _disc_chair(res) if rng.random() < 0.5 else _chair(rng, res)
+
+
+def table_block(rng: np.random.Generator, res: float, length_m: float, width_m: float
+                ) -> Stamp:
+    """A block of tables (legs, or solid as drawn on plans) in a ring of chairs 0.1 to
+    0.2 m off its edges, 0.55 to 0.8 m apart: the free space round it is a ring."""
+    tl, tw = _cells(length_m, res), _cells(width_m, res)
+    m = _cells(0.6, res)
+    st = np.zeros((tw + 2 * m, tl + 2 * m), np.uint8)
+    if rng.random() < 0.5:
+        for r in (m, m + tw - 1):
+            for c in range(m, m + tl, _cells(1.2, res)):
+                _speck(st, r, c, 2)
+            _speck(st, r, m + tl - 1, 2)
+    else:
+        st[m:m + tw, m:m + tl] = 1
+    gap = float(rng.uniform(0.55, 0.8))
+    for horizontal, span in ((True, tl), (False, tw)):
+        n = max(1, int(span * res / gap))
+        for k in range(n):
+            off = m + int(round((k + 0.5) * span / n))
+            for far in (False, True):
+                ch = _ring_chair(rng, res)
+                h, w = ch.shape
+                if horizontal:
+                    r0 = st.shape[0] - h if far else 0
+                    c0 = max(0, min(st.shape[1] - w, off - w // 2))
+                else:
+                    r0 = max(0, min(st.shape[0] - h, off - h // 2))
+                    c0 = st.shape[1] - w if far else 0
+                st[r0:r0 + h, c0:c0 + w] |= ch
+    return st
+
+
+@dataclass(frozen=True)
+class WallRun:
+    """Furniture along a wall: item depth range (m), gap range between items (m), the
+    share of the slots that hold an item, and whether chairs stand in front."""
+
+    depth_m: tuple[float, float]
+    gap_m: tuple[float, float]
+    fill: float
+    chairs: bool = False
+
+
+def _wall_run(rng: np.random.Generator, res: float, length: int, run: WallRun) -> Stamp:
+    """Cabinets, desks and shelves along one wall (back on row 0), ``run.fill`` of the
+    slots taken, with gaps between them: the niches that furniture against walls closes."""
+    depth = _cells(float(rng.uniform(*run.depth_m)), res)
+    st = np.zeros((depth, length), np.uint8)
+    c = int(rng.integers(0, max(1, _cells(1.0, res))))
+    while c < length:
+        w = _cells(float(rng.uniform(0.8, 2.0)), res)
+        if rng.random() < run.fill:
+            d = min(depth, _cells(float(rng.uniform(*run.depth_m)), res))
+            st[:d, c:min(length, c + w)] = 1
+        c += w + _cells(float(rng.uniform(*run.gap_m)), res)
+    return st
+
+
+def _put(sub: npt.NDArray[np.bool_], taken: npt.NDArray[np.bool_], st: Stamp, r: int, c: int
+         ) -> None:
+    """Draw ``st`` at (r, c) (clamped into the room), less the ``taken`` cells (door
+    approaches): a row of tables is shortened where it would block a door."""
+    h, w = st.shape
+    H, W = sub.shape
+    st = st[:H, :W]
+    h, w = st.shape
+    r, c = max(0, min(H - h, r)), max(0, min(W - w, c))
+    sub[r:r + h, c:c + w] |= (st > 0) & ~taken[r:r + h, c:c + w]
+
+
+def _along_walls(rng: np.random.Generator, sub: npt.NDArray[np.bool_],
+                 taken: npt.NDArray[np.bool_], res: float, walls: int, spec: WallRun
+                 ) -> None:
+    """Runs of furniture along ``walls`` of the room's four walls (chairs in front)."""
+    H, W = sub.shape
+    for side in rng.permutation(4)[:walls]:
+        length = W if side in (0, 2) else H
+        run = _wall_run(rng, res, length, spec)
+        st = np.rot90(run, int(side))
+        r = H - st.shape[0] if side == 2 else 0
+        c = W - st.shape[1] if side == 3 else 0
+        mask = st & ~taken[r:r + st.shape[0], c:c + st.shape[1]].astype(np.uint8)
+        sub[r:r + st.shape[0], c:c + st.shape[1]] |= mask.astype(bool)
+        if not spec.chairs:
+            continue
+        d = run.shape[0]
+        for k in range(int(length * res / 1.5)):
+            ch = _ring_chair(rng, res)
+            along = int(rng.integers(0, max(1, length - ch.shape[1])))
+            out = d + int(rng.integers(1, _cells(0.3, res) + 1))
+            if side == 0:
+                _put(sub, taken, ch, out, along)
+            elif side == 2:
+                _put(sub, taken, ch, H - out - ch.shape[0], along)
+            elif side == 1:
+                _put(sub, taken, ch, along, out)
+            else:
+                _put(sub, taken, ch, along, W - out - ch.shape[1])
+
+
+def furnish_real_room(rng: np.random.Generator, occ: npt.NDArray[np.bool_],
+                      rect: tuple[int, int, int, int], keepout: npt.NDArray[np.bool_],
+                      kind: str, res: float) -> None:
+    """Draw the furniture of one room of kind ``kind`` (:data:`REAL_ROOM_KINDS`) into
+    ``occ`` (in place), after the furnished plans of real buildings: the room is filled
+    with it, not dotted.
+
+    * ``office``: desks, cabinets and shelves along two or three walls with gaps (niches)
+      between them, chairs in front, a few free chairs;
+    * ``meeting``: a table block in a ring of chairs, 0.8 to 1.2 m off the walls (the
+      free space is a ring round it), cabinets along a wall;
+    * ``lab``: rows of tables across the room with ~1 m aisles, one end of every row
+      against a wall, a walkway at the other end, chairs in the aisles;
+    * ``store``: shelves standing out 1 to 1.6 m from a wall, ~1 m apart (a comb);
+    * ``corridor``: a cabinet now and then.
+
+    Parameters are those of :func:`furnish_raster_room`.
+
+    Raises
+    ------
+    ValueError
+        On an unknown kind.
+    """
+    if kind not in REAL_ROOM_KINDS:
+        raise ValueError(f"real room kind must be one of {REAL_ROOM_KINDS}, got {kind!r}")
+    r0, c0, r1, c1 = rect
+    if r1 - r0 < 8 or c1 - c0 < 8:
+        return
+    sub = occ[r0:r1, c0:c1]
+    taken = keepout[r0:r1, c0:c1]
+    H, W = sub.shape
+    before = sub.copy()
+    if kind == "office":
+        _along_walls(rng, sub, taken, res, int(rng.integers(2, 4)),
+                     WallRun((0.4, 0.8), (0.2, 1.0), 0.8, chairs=True))
+        for _ in range(int(rng.integers(0, 3))):
+            ch = _ring_chair(rng, res)
+            _put(sub, taken, ch, int(rng.integers(0, H)), int(rng.integers(0, W)))
+    elif kind == "meeting":
+        clear = _cells(float(rng.uniform(0.8, 1.2)), res) + _cells(0.6, res)
+        tl = max(_cells(1.2, res), W - 2 * clear - 2 * _cells(0.6, res))
+        tw = max(_cells(0.9, res), H - 2 * clear - 2 * _cells(0.6, res))
+        if rng.random() < 0.5:
+            _along_walls(rng, sub, taken, res, 1, WallRun((0.4, 0.5), (0.3, 1.0), 0.7))
+        st = table_block(rng, res, tl * res, tw * res)
+        _put(sub, taken, st, (H - st.shape[0]) // 2, (W - st.shape[1]) // 2)
+    elif kind == "lab":
+        across = W >= H                     # rows run along the longer side
+        n_len, n_cross = (W, H) if across else (H, W)
+        walk = _cells(float(rng.uniform(0.9, 1.3)), res)
+        pos = _cells(float(rng.uniform(0.3, 0.9)), res)
+        end_wall = bool(rng.random() < 0.5)
+        while pos < n_cross - _cells(0.6, res):
+            depth = _cells(float(rng.uniform(0.6, 0.8)), res)
+            zone = _cells(0.5, res)
+            row = np.zeros((depth + zone, n_len - walk), np.uint8)
+            if rng.random() < 0.5:
+                row[:depth] = 1
+            else:
+                for c in [*range(0, row.shape[1], _cells(1.4, res)), row.shape[1] - 1]:
+                    _speck(row, 0, c, 2)
+                    _speck(row, depth - 1, c, 2)
+            for c in range(_cells(0.3, res), row.shape[1] - _cells(0.6, res), _cells(1.2, res)):
+                if rng.random() < 0.6:
+                    ch = _ring_chair(rng, res)[:zone, :row.shape[1] - c]
+                    row[depth:depth + ch.shape[0], c:c + ch.shape[1]] |= ch
+            if not end_wall:
+                row = row[:, ::-1]
+            st = row if across else row.T
+            if across:
+                _put(sub, taken, st, pos, 0 if end_wall else walk)
+            else:
+                _put(sub, taken, st, 0 if end_wall else walk, pos)
+            pos += row.shape[0] + _cells(float(rng.uniform(0.9, 1.2)), res)
+    elif kind == "store":
+        along_w = W >= H
+        n_len = W if along_w else H
+        depth_in = _cells(float(rng.uniform(1.0, 1.6)), res)
+        thick = _cells(float(rng.uniform(0.2, 0.4)), res)
+        c = _cells(float(rng.uniform(0.8, 1.2)), res)
+        while c < n_len - _cells(0.8, res):
+            st = np.ones((depth_in, thick), np.uint8)
+            if along_w:
+                _put(sub, taken, st, 0, c)
+            else:
+                _put(sub, taken, st.T, c, 0)
+            c += thick + _cells(float(rng.uniform(0.9, 1.2)), res)
+    elif kind == "corridor":
+        if rng.random() < 0.5:
+            _along_walls(rng, sub, taken, res, 1, WallRun((0.3, 0.4), (2.0, 5.0), 0.4))
+    # the door approaches stay free
+    sub &= ~(taken & ~before)

@@ -1,7 +1,10 @@
 """Cleaning of an occupancy grid into free-space masks (DuDe spec shared/docs/dude.md §4).
 
 Raw free cells, and the cleaned free space F: free cells grown into unknown space,
-minus the obstacles (scan specks dropped) grown by the inflation radius.
+minus the obstacles (scan specks dropped) grown by the inflation radius. Small
+free-standing objects (``small_object_max_m``: chair legs, castors, chairs) are not
+inflated and count as free: rows and rings of chairs, closed by the inflation, would
+otherwise wall off strips of a room.
 """
 
 from __future__ import annotations
@@ -13,8 +16,15 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.segmentation.furniture import fill_furniture, furniture_reach_cells
+from explore_seg.core.segmentation.furniture import (fill_furniture, furniture_reach_cells,
+                                                     open_disk)
+from explore_seg.core.segmentation.labels import bbox
 from explore_seg.core.segmentation.params import SegmentationParams
+
+
+#: Share of an occupied component's cells that must be thick for it to be a solid
+#: furniture block (the rest: the opening's rounded-off corners, a few specks beside it).
+_BLOCK_SOLID_SHARE = 0.7
 
 
 def length_to_cells(length_m: float, res: float) -> int:
@@ -42,8 +52,9 @@ def clean_free_space(grid: GridMap, params: SegmentationParams
         ``0 <= occupancy < free_max_occupancy``.
     free_clean : ndarray of bool, shape (H, W)
         Free cells grown by ``free_close_m`` into non-obstacle cells, minus the obstacles
-        (occupancy > ``occupied_min_occupancy``, specks dropped) grown by
-        ``obstacle_inflation_m``.
+        (occupancy > ``occupied_min_occupancy``, specks and small free-standing objects
+        dropped) grown by ``obstacle_inflation_m``; the small objects' own cells count as
+        free where the grown free space reaches them.
     """
     return clean_masks(grid.data, params, grid.resolution_m)
 
@@ -67,14 +78,52 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
             occ_u8 = keep[lab]        # the occupied cells less the specks
         # the components left in occ_u8 are these minus the specks
         occ_cc = (lab, stats, small)
+    objects = None
+    if params.small_object_max_m > 0 and occ.any():
+        objects = _small_objects(occ_u8, occ_cc, params, res)
+        if objects is not None:
+            occ_u8 = np.where(objects, np.uint8(0), occ_u8)
     r_inf = length_to_cells(params.obstacle_inflation_m, res)
     obst = cv2.dilate(occ_u8, _square(r_inf)) if r_inf > 0 else occ_u8
     r_close = length_to_cells(params.free_close_m, res)
     grown = cv2.dilate(free_raw.astype(np.uint8), _square(r_close)) if r_close > 0 \
         else free_raw.astype(np.uint8)
     free_clean = (grown > 0) & (obst == 0)
+    if objects is not None:
+        # small free-standing objects are free space for the decomposition
+        free_clean |= objects & (grown > 0) & (obst == 0)
     free_clean = fill_clutter_holes(free_clean, occ_u8, params, res, occ_cc)
     return free_raw, fill_furniture(free_clean, occ_u8, params, res)
+
+
+def _small_objects(occ_u8: npt.NDArray[np.uint8],
+                   occ_cc: tuple[npt.NDArray[np.int32], npt.NDArray[np.int32],
+                                 npt.NDArray[np.bool_]] | None,
+                   params: SegmentationParams, res: float) -> npt.NDArray[np.bool_] | None:
+    """Cells of the small free-standing objects of ``occ_u8`` (``small_object_max_m``),
+    or None when there is none. An object whose inflation would touch a larger
+    obstacle's is part of a row with it (a cabinet row, a broken wall) and is none."""
+    if occ_cc is None:
+        _n, lab, stats, _ = cv2.connectedComponentsWithStats(occ_u8, connectivity=8)
+        gone = np.zeros(len(stats), dtype=bool)
+    else:
+        lab, stats, gone = occ_cc
+    diag = np.hypot(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
+    obj = (diag <= params.small_object_max_m / res) & ~gone
+    obj[0] = False
+    if not obj.any():
+        return None
+    objects = obj[lab]
+    r_near = 2 * length_to_cells(params.obstacle_inflation_m, res) + 1
+    box = bbox(objects, r_near)
+    assert box is not None
+    big = (occ_u8[box] > 0) & ~objects[box]
+    near = cv2.dilate(big.view(np.uint8), _square(r_near)) > 0
+    touch = near & objects[box]
+    if touch.any():
+        obj[lab[box][touch]] = False
+        objects[box] &= obj[lab[box]]
+    return objects if obj.any() else None
 
 
 def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8],
@@ -118,9 +167,31 @@ def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.ui
     diag = np.hypot(ost[:, cv2.CC_STAT_WIDTH], ost[:, cv2.CC_STAT_HEIGHT])
     big = (diag > params.clutter_max_object_m / res) & ~gone
     big[0] = False
+    if big.any() and params.furniture_min_thickness_m > 0:
+        big &= ~_thick_blocks(olab, ost, big, params, res)
     if big.any():
         small[lab[big[olab]]] = False
     return free_clean | small[lab]
+
+
+def _thick_blocks(olab: npt.NDArray[np.int32], ost: npt.NDArray[np.int32],
+                  big: npt.NDArray[np.bool_], params: SegmentationParams, res: float
+                  ) -> npt.NDArray[np.bool_]:
+    """Which of the ``big`` occupied components are solid furniture blocks: at most
+    ``furniture_max_extent_m`` wide and high, and thick nearly all over (a disk of
+    ``furniture_min_thickness_m`` fits round at least ``_BLOCK_SOLID_SHARE`` of their
+    cells), unlike a wall, which is thin."""
+    out = np.zeros(len(ost), dtype=bool)
+    ext = params.furniture_max_extent_m / res
+    d_min = params.furniture_min_thickness_m / res
+    x, y = ost[:, cv2.CC_STAT_LEFT], ost[:, cv2.CC_STAT_TOP]
+    bw, bh = ost[:, cv2.CC_STAT_WIDTH], ost[:, cv2.CC_STAT_HEIGHT]
+    for k in np.flatnonzero(big & (np.maximum(bw, bh) <= ext) & (np.minimum(bw, bh) >= d_min)):
+        m = olab[y[k]:y[k] + bh[k], x[k]:x[k] + bw[k]] == k
+        pad = int(math.ceil(d_min)) + 2
+        opened = open_disk(np.pad(m, pad), d_min)[pad:-pad, pad:-pad]
+        out[k] = (opened & m).sum() >= _BLOCK_SOLID_SHARE * m.sum()
+    return out
 
 
 def clean_influence_cells(params: SegmentationParams, res: float) -> int:
@@ -129,5 +200,7 @@ def clean_influence_cells(params: SegmentationParams, res: float) -> int:
     return max(length_to_cells(params.obstacle_inflation_m, res),
                length_to_cells(params.free_close_m, res),
                int(math.ceil(params.clutter_max_extent_m / res)) + 1,
-               furniture_reach_cells(params, res)) + speck + 2
+               furniture_reach_cells(params, res),
+               int(math.ceil(params.small_object_max_m / res))
+               + length_to_cells(params.obstacle_inflation_m, res)) + speck + 2
 

@@ -28,7 +28,7 @@ from explore_seg.core.segmentation.labels import bbox
 from explore_seg.core.segmentation.params import SegmentationParams
 
 
-def _open(mask: npt.NDArray[np.bool_], d_cells: float,
+def open_disk(mask: npt.NDArray[np.bool_], d_cells: float,
           dist: npt.NDArray[np.float32] | None = None) -> npt.NDArray[np.bool_]:
     """Morphological opening of ``mask`` by a disk of diameter ``d_cells``, by two
     distance transforms (their cost does not grow with the disk). ``dist``: the
@@ -77,14 +77,14 @@ def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res:
     dist = cv2.distanceTransform(o.view(np.uint8), cv2.DIST_L2, 3)
     if not (dist > 0.5 * d_min).any():
         return out                    # thin walls only
-    cand = _open(o, d_min, dist) & ~_open(o, d_max, dist)
+    cand = open_disk(o, d_min, dist) & ~open_disk(o, d_max, dist)
     # opened again so that the rounded-off corners of deep blocks (slivers thinner
     # than d_min) are no bulges; only around the candidates
     m = int(math.ceil(d_min)) + 2
     box = bbox(cand, m)
     if box is None:
         return out
-    out[box] = _open(np.pad(cand[box], m), d_min)[m:-m, m:-m]
+    out[box] = open_disk(np.pad(cand[box], m), d_min)[m:-m, m:-m]
     return out
 
 
@@ -191,14 +191,22 @@ def _door_cells(params: SegmentationParams, res: float) -> int:
 
 
 def furniture_reach_cells(params: SegmentationParams, res: float) -> int:
-    """How far (cells) a changed obstacle cell can change the furniture fill: the deep
-    opening's disk, the second opening and the junction trim, the largest bulge, its
-    inflation and the contact ring."""
+    """How far (cells) a changed obstacle cell can change the furniture fill.
+
+    The bulges at a cell depend on the obstacles within the two openings' disks
+    (``furniture_max_thickness_m`` then ``furniture_min_thickness_m``); a bulge's fill
+    lies within its extent (at most ``furniture_max_extent_m``), the corner dilation and
+    the inflation of any of its cells. The one-free-area test sees the free space (the
+    inflation) through the door erosion and the contact band, again anywhere along the
+    bulge. The larger of the two paths, plus two cells."""
     if params.furniture_min_thickness_m <= 0:
         return 0
     d_min = int(math.ceil(params.furniture_min_thickness_m / res))
     d_max = int(math.ceil(params.furniture_max_thickness_m / res))
     ext = int(math.ceil(params.furniture_max_extent_m / res))
     r_inf = int(round(params.obstacle_inflation_m / res))
+    r_c = int(math.ceil(0.25 * params.furniture_min_thickness_m / res))
     r_door = _door_cells(params, res)
-    return d_max + 2 * d_min + ext + r_inf + 2 * r_door + 6
+    shape = d_max + d_min + ext + r_c + r_inf
+    areas = 2 * r_inf + 2 * r_door + 2 + ext + r_c
+    return max(shape, areas) + 2

@@ -55,11 +55,20 @@ class SegmentationParams:
         "a hole holding an occupied component whose bounding-box diagonal exceeds this "
         "(a wall piece, a long sofa) is structure, never filled as clutter", "m",
         range=(0.0, math.inf)))
+    small_object_max_m: float = field(default=0.0, metadata=param_meta(
+        "free-standing obstacle components (8-connected, specks dropped) whose bounding-box "
+        "diagonal is at most this (chair legs, castors, a chair, a bin) are not inflated "
+        "and count as free space for the decomposition, so rows and rings of chairs do "
+        "not wall off parts of a room; one whose inflation would touch a larger "
+        "obstacle's (a cabinet row, a broken wall) keeps it; 0 disables", "m",
+        range=(0.0, math.inf)))
     furniture_min_thickness_m: float = field(default=0.0, metadata=param_meta(
         "obstacle bulges at least this thick (a disk of this diameter fits in them) and "
         "thinner than furniture_max_thickness_m are furniture against a wall (a pillar, "
         "a shelf, a desk): filled before decomposing when at most furniture_max_extent_m "
-        "wide and the free space along it is one stretch; walls must be thinner; 0 "
+        "wide and the free space along it is one stretch; walls must be thinner; a "
+        "free-standing block this thick nearly all over and at most "
+        "furniture_max_extent_m wide is clutter (clutter_max_object_m does not apply); 0 "
         "disables (the default until the benchmark has judged it; 0.7 for real furnished "
         "scans, docs/experiments.md#segmentation-furniture-fill)", "m",
         range=(0.0, math.inf)))
@@ -121,7 +130,7 @@ class SegmentationParams:
         pos = ("tau_m", "max_door_width_m", "merge_concavity_factor")
         nonneg = ("obstacle_inflation_m", "free_close_m", "obstacle_speck_area_m2",
                   "min_component_area_m2", "min_hole_area_m2", "clutter_max_extent_m",
-                  "clutter_max_area_m2", "clutter_max_object_m",
+                  "clutter_max_area_m2", "clutter_max_object_m", "small_object_max_m",
                   "furniture_min_thickness_m", "furniture_max_thickness_m",
                   "furniture_max_extent_m", "simplify_epsilon_m",
                   "passage_merge_ratio",
