@@ -104,3 +104,49 @@ def test_speckle_cells_counts_8_connected_pieces():
         speckle_cells(occ, -1)
     with pytest.raises(ValueError, match="occupied must be 2-D"):
         speckle_cells(occ[0], 1)
+
+
+# Room A (robot R) reaches room B around the right end of their wall; the straight way
+# down leads through a 0.3 m gap in that wall (narrower than the robot: radius 0.2 m),
+# then room B's 0.3 m doorway to room C and its unknown space. Map noise narrows a
+# doorway like these (ragged wall edges joined to the wall: no speckle).
+DETOUR = """
+########################
+#......................#
+#......................#
+#.........R............#
+#......................#
+#......................#
+#......................#
+#########...######.....#
+#......................#
+#......................#
+#......................#
+#......................#
+#......................#
+#########...############
+#......................#
+#......................#
+#??????????????????????#
+########################
+"""
+
+
+def test_a_passage_narrowed_below_the_robot_width_gets_an_approach_at_its_near_side():
+    """On the relaxed map (robot radius approach_radius_m, 0.15 m by default) both gaps
+    are open; the approach is the last reachable cell of that path (room B above its
+    doorway), not where the path first leaves the robot's reach (the gap next to it)."""
+    g, pose, ex, sp = _scene(DETOUR)
+    assert sp.approach_radius_m < 0.2
+    out = ex.step(0.0, g, pose)
+    assert out.action is Action.NEW_GOAL
+    r, c = out.goal.rc
+    assert ex._det.passable[r, c]
+    door_r = g.height - 1 - DETOUR.strip("\n").split("\n").index("#########...############")
+    assert r == door_r + 1 and 9 <= c <= 11            # next to room B's doorway
+    assert out.dist_m[0] > 2.0                           # the way around, through room B
+
+
+def test_at_the_robot_radius_only_speckle_opens_a_passage():
+    g, pose, ex, _ = _scene(DETOUR, approach_radius_m=0.2)
+    assert ex.step(0.0, g, pose).action is Action.DONE

@@ -8,11 +8,15 @@ would end ("no path") with the rest of the building unseen. The sensor removes s
 where it sees through it (every beam that passes lowers a cell's occupancy), most
 surely from close by, where a heading error moves a hit least.
 
+Drift narrows doorways too: a wall mapped twice a few centimetres apart, ragged edges
+joined to the wall (no speckle), leave a passage narrower than the robot in the map.
+
 When a decision has no selectable frontier, :func:`approaches` judges reachability once
-more on the map without speckle (occupied 8-connected pieces of at most
-``speckle_max_cells`` cells taken as free). Each unreachable frontier that this map
-reaches gets an **approach**: the last cell of that path (from the robot) that is
-reachable on the real map, i.e. where the path meets the speckle. The frontier is
+more on a relaxed map: without speckle (occupied 8-connected pieces of at most
+``speckle_max_cells`` cells taken as free), for a robot of radius ``approach_radius_m``
+(smaller than the real one). Each unreachable frontier that this map reaches gets an
+**approach**: the last cell of that path (from the robot) that the robot reaches on the
+real map, i.e. where the blockage beyond it begins. The frontier is
 returned with its cPoint moved there, so the goal manager sends, judges (arrival, then
 "frontier still there?") and blacklists it as any other goal: one look per blocked
 passage (per blacklist retry), then exploration ends as before. When the look cleared
@@ -105,7 +109,8 @@ def despeckled(grid: GridMap, params: FrontierParams, max_cells: int) -> GridMap
 def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray[np.float64],
                reach: Reach, params: FrontierParams, max_cells: int,
                extra_obstacles: npt.NDArray[np.bool_] | None = None,
-               excluded: npt.NDArray[np.bool_] | None = None
+               excluded: npt.NDArray[np.bool_] | None = None,
+               radius_m: float | None = None
                ) -> tuple[list[Frontier], npt.NDArray[np.float64]]:
     """The frontiers with an approach instead of their unreachable cPoint (module
     docstring).
@@ -127,6 +132,10 @@ def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray
         Obstacles besides the map (the object layer), kept.
     excluded : ndarray of bool, shape (N,), optional
         Blacklisted frontiers (left as they are).
+    radius_m : float, optional
+        Robot radius of the relaxed map (default ``params.robot_radius_m``; a larger value
+        counts as that radius): a passage narrowed by ragged or doubled wall edges below
+        the robot's width but wider than twice this is open there.
 
     Returns
     -------
@@ -141,31 +150,38 @@ def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray
             if not np.isfinite(d_out[i]) and not (excluded is not None and excluded[i])]
     if not todo or max_cells <= 0:
         return out, d_out
-    clean = traversable_mask(despeckled(grid, params, max_cells), extra_obstacles, params)
+    relaxed = params
+    if radius_m is not None and radius_m < params.robot_radius_m:
+        relaxed = replace(params, robot_radius_m=float(radius_m))
+    clean = traversable_mask(despeckled(grid, params, max_cells), extra_obstacles, relaxed)
     clean |= reach.passable
     field = distance_field(clean, reach.start_rc, grid.resolution_m)
-    found: dict[int, tuple[int, int]] = {}
+    paths: dict[int, npt.NDArray[np.int64]] = {}
     for i in todo:
         r, c = frontiers[i].point_rc
-        if not (grid.in_bounds(r, c) and np.isfinite(field[r, c])):
-            continue
-        path = extract_path(field, (r, c))
-        off = ~reach.passable[path[:, 0], path[:, 1]]
-        off[0] = False                     # the start cell (the robot may stand on a margin)
-        if not off.any():
-            continue
-        k = int(np.argmax(off))
-        found[i] = (int(path[k - 1, 0]), int(path[k - 1, 1]))
-    if not found:
+        if grid.in_bounds(r, c) and np.isfinite(field[r, c]):
+            paths[i] = extract_path(field, (r, c))
+    if not paths:
         return out, d_out
-    cells = np.asarray(list(found.values()), dtype=np.int64)
-    d = reach.graph.distances(reach.start_rc, cells) + reach.hop_m
-    for (i, (r, c)), di in zip(found.items(), d):
-        if not np.isfinite(di):
+    # A relaxed path may leave the robot's reach and come back (it cuts corners the robot
+    # radius keeps the robot from): the approach is the last cell of the path that the
+    # robot reaches, where the blockage beyond it begins.
+    d_all = reach.graph.distances(reach.start_rc, np.concatenate(list(paths.values())))
+    at = 0
+    for i, path in paths.items():
+        d_path = d_all[at:at + len(path)]
+        at += len(path)
+        reached = np.isfinite(d_path)
+        reached[0] = True                  # the start cell (the robot may stand on a margin)
+        if reached.all():
             continue
+        k = int(np.flatnonzero(reached)[-1])
+        if not np.isfinite(d_path[k]):
+            continue
+        r, c = int(path[k, 0]), int(path[k, 1])
         out[i] = replace(frontiers[i], point_rc=(r, c), point_xy_m=grid.cell_to_world(r, c),
                          point_passable=True)
-        d_out[i] = float(di)
+        d_out[i] = float(d_path[k]) + reach.hop_m
     return out, d_out
 
 
