@@ -32,7 +32,8 @@ class NavOutcome(enum.Enum):
     the simulator's stand-in), reported through :meth:`GoalManager.report_navigation`."""
 
     SUCCEEDED = "succeeded"          # reached: judge the goal's frontier now
-    ABORTED = "aborted"              # gave up (no path, recoveries exhausted): blacklist
+    ABORTED = "aborted"              # gave up (no path, recoveries exhausted): judged
+
     REJECTED = "rejected"            # never accepted (or not within the timeout): blacklist
     CANCELED = "canceled"            # canceled by someone else: blacklist
     CANCELED_BY_US = "canceled_by_us"  # our own cancel (stop, done): forget, no blacklist
@@ -117,7 +118,11 @@ class GoalManager:
        ``done_confirmations`` consecutive ticks: the blacklist is cleared and its
        frontiers retried (``blacklist_retries`` times, not counting a retry after which
        ``retry_reveal_m2`` more of the map became known), then DONE (or first a
-       return-to-start goal).
+       return-to-start goal). A goal the navigator aborted is judged at the next
+       decision with distances (:meth:`judge_aborted`): blacklisted when the explorer
+       still has a path to its frontier (the navigator disagrees: retrying would repeat
+       the abort), otherwise left to wait for a path (a doorway that map noise closed
+       opens again when the robot looks at it), at most ``abort_retries`` times per area.
     3. The current goal is kept unless its frontier vanished or another frontier is
        cheaper than the current goal's frontier by ``hysteresis_margin * |cost|``; a
        new goal within ``goal_change_min_m`` of the current one is not sent. Observed
@@ -141,6 +146,8 @@ class GoalManager:
         self._vanished: list[tuple[list[int], list[tuple[float, float]]]] = []
         # Areas where a reached goal's frontier remained with its cells revealed.
         self._revealed: list[tuple[list[int], list[tuple[float, float]]]] = []
+        # Areas where the navigator aborted a goal the explorer had no path to either.
+        self._aborted_areas: list[tuple[list[int], list[tuple[float, float]]]] = []
         self.reset()
 
     def reset(self, clear_blacklist: bool = False) -> None:
@@ -154,6 +161,7 @@ class GoalManager:
         self._arrived_stamp_ns = 0
         self._nav_succeeded = False
         self._outcome_reason = ""
+        self._aborted: Goal | None = None   # aborted by the navigator, judged next decision
         self._empty_ticks = 0
         self._goal_cells_xy: npt.NDArray[np.float64] | None = None
         self._retries_left = self.params.blacklist_retries
@@ -164,6 +172,7 @@ class GoalManager:
             self._clear_blacklist()
             self._vanished.clear()
             self._revealed.clear()
+            self._aborted_areas.clear()
 
     def _clear_blacklist(self) -> None:
         self._blacklist.clear()
@@ -203,9 +212,10 @@ class GoalManager:
 
         SUCCEEDED counts as arrival whatever the distance (the goal's frontier is judged
         at the next :meth:`step`, on a map newer than the arrival or after
-        ``arrival_wait_s``; a return-to-start goal ends exploration there); ABORTED,
-        REJECTED and CANCELED (by someone else) blacklist the goal at once, so the next
-        :meth:`step` picks another frontier instead of waiting ``progress_timeout_s``;
+        ``arrival_wait_s``; a return-to-start goal ends exploration there); ABORTED drops
+        the goal and leaves it to :meth:`judge_aborted` at the next decision; REJECTED
+        and CANCELED (by someone else) blacklist the goal at once. Either way the next
+        :meth:`step` picks another frontier instead of waiting ``progress_timeout_s``.
         CANCELED_BY_US drops the goal without blacklisting it.
 
         Parameters
@@ -238,9 +248,57 @@ class GoalManager:
             self.done = True
             self._outcome_reason = f"navigation {outcome.value} returning to start"
             return True
+        if outcome is NavOutcome.ABORTED and self.params.abort_retries > 0:
+            self._aborted, self.goal = goal, None
+            self._outcome_reason = "navigation aborted: judged on this map"
+            return True
         self.abandon_goal(blacklist=True)
         self._outcome_reason = f"navigation {outcome.value}: blacklisted"
         return True
+
+    def judge_aborted(self, grid: GridMap, frontiers: Sequence[Frontier],
+                      dist_m: npt.ArrayLike) -> str:
+        """Judge the goal the navigator last aborted (no-op without one).
+
+        Blacklisted when its frontier (as in :meth:`goal_frontier`) still has a path on
+        the explorer's map; otherwise not (the frontier is no candidate while it has no
+        path, and is one again once the map opens one), unless this is the
+        ``abort_retries``-th such abort in its area (the area's goals are blacklisted
+        then). Call it with the path lengths to the frontiers' own cPoints, before
+        lookouts or approaches replace the unreachable ones.
+
+        Parameters
+        ----------
+        grid : GridMap
+        frontiers : sequence of Frontier
+        dist_m : array_like of float, shape (N,)
+            Path lengths robot -> cPoints (inf: no path).
+
+        Returns
+        -------
+        str
+            What was decided, in words ("" without an aborted goal); also the reason the
+            next :meth:`step` gives.
+        """
+        goal, self._aborted = self._aborted, None
+        if goal is None:
+            return ""
+        current, self.goal = self.goal, goal
+        try:
+            i = self._matching(grid, frontiers)
+        finally:
+            self.goal = current
+        d = np.asarray(dist_m, dtype=np.float64)
+        if i is not None and i < len(d) and np.isfinite(d[i]):
+            self.add_to_blacklist(goal.xy_m)
+            reason = "navigation aborted, but the map has a path to its frontier: blacklisted"
+        elif self._note_area(self._aborted_areas, goal.xy_m, self.params.abort_retries):
+            reason = (f"navigation aborted {self.params.abort_retries} times here with no "
+                      "path on the map either: area blacklisted")
+        else:
+            reason = "navigation aborted, and the map has no path to its frontier: it waits"
+        self._outcome_reason = reason
+        return reason
 
     def set_start(self, xy_m: tuple[float, float], yaw_rad: float) -> None:
         """Remember the pose to return to (first pose, unless set again)."""
@@ -384,6 +442,8 @@ class GoalManager:
         if robot_rc is None:
             robot_rc = grid.world_to_cell(*robot_xy_m)
         version = self._blacklist_version
+        if self._aborted is not None and dist_m is not None:
+            self.judge_aborted(grid, frontiers, dist_m)
         # 1. progress and arrival on the current goal
         early, reason = self._check_progress(now_s, robot_xy_m, grid, frontiers, dist_m)
         reason, self._outcome_reason = self._outcome_reason or reason, ""
