@@ -422,9 +422,12 @@ class Explorer:
                                   self._frontier_params.occupied_threshold, excluded)
             ex_out = manager.excluded(out)
         if sp.speckle_max_cells > 0 and not self._any_selectable(out, d_out, ex_out):
+            # The navigator tries a frontier first; after it aborted there, a look.
+            through = np.asarray([not manager.aborted_near(f.point_xy_m) for f in frontiers],
+                                 dtype=bool)
             out, d_out = approaches(grid, frontiers, dist, reach, self._frontier_params,
                                     sp.speckle_max_cells, self._det.extra_obstacles, excluded,
-                                    sp.approach_radius_m)
+                                    sp.approach_radius_m, through)
             ex_out = manager.excluded(out)
         return out, d_out, ex_out
 

@@ -15,12 +15,19 @@ When a decision has no selectable frontier, :func:`approaches` judges reachabili
 more on a relaxed map: without speckle (occupied 8-connected pieces of at most
 ``speckle_max_cells`` cells taken as free), for a robot of radius ``approach_radius_m``
 (smaller than the real one). Each unreachable frontier that this map reaches gets an
-**approach**: the last cell of that path (from the robot) that the robot reaches on the
-real map, i.e. where the blockage beyond it begins. The frontier is
-returned with its cPoint moved there, so the goal manager sends, judges (arrival, then
-"frontier still there?") and blacklists it as any other goal: one look per blocked
-passage (per blacklist retry), then exploration ends as before. When the look cleared
-the speckle, the frontiers beyond have a path again and exploration goes on.
+**approach**, in two steps:
+
+1. its own cPoint, marked passable: the navigator (Nav2) decides. Its planner may pass
+   where this map's graph does not (a doorway passable only diagonally, a margin it
+   plans through), and a goal it cannot reach ends "no path" at once;
+2. once the navigator aborted a goal there while the map had no path either
+   (:meth:`~explore_seg.core.selection.goals.GoalManager.aborted_near`), a **look**:
+   the last cell of the relaxed path (from the robot) that the robot reaches on the
+   real map, i.e. where the blockage beyond it begins. The frontier is returned with its
+   cPoint moved there, so the goal manager sends, judges (arrival, then "frontier still
+   there?") and blacklists it as any other goal: one look per blocked passage (per
+   blacklist retry), then exploration ends as before. When the look cleared the noise,
+   the frontiers beyond have a path again and exploration goes on.
 
 Examples
 --------
@@ -110,7 +117,8 @@ def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray
                reach: Reach, params: FrontierParams, max_cells: int,
                extra_obstacles: npt.NDArray[np.bool_] | None = None,
                excluded: npt.NDArray[np.bool_] | None = None,
-               radius_m: float | None = None
+               radius_m: float | None = None,
+               through: npt.NDArray[np.bool_] | None = None
                ) -> tuple[list[Frontier], npt.NDArray[np.float64]]:
     """The frontiers with an approach instead of their unreachable cPoint (module
     docstring).
@@ -136,6 +144,10 @@ def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray
         Robot radius of the relaxed map (default ``params.robot_radius_m``; a larger value
         counts as that radius): a passage narrowed by ragged or doubled wall edges below
         the robot's width but wider than twice this is open there.
+    through : ndarray of bool, shape (N,), optional
+        Frontiers whose approach is their own cPoint (marked passable, at the relaxed
+        path's length): the navigator, whose planner may pass where this map's graph
+        does not, decides; the others get the look point. Default: none.
 
     Returns
     -------
@@ -177,6 +189,11 @@ def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray
             continue
         k = int(np.flatnonzero(reached)[-1])
         if not np.isfinite(d_path[k]):
+            continue
+        if through is not None and through[i]:
+            fr, fc = frontiers[i].point_rc
+            out[i] = replace(frontiers[i], point_passable=True)
+            d_out[i] = max(float(d_path[k]), float(field[fr, fc])) + reach.hop_m
             continue
         r, c = int(path[k, 0]), int(path[k, 1])
         out[i] = replace(frontiers[i], point_rc=(r, c), point_xy_m=grid.cell_to_world(r, c),

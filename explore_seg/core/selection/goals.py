@@ -340,6 +340,13 @@ class GoalManager:
             self.add_to_blacklist(pt)
         return True
 
+    def aborted_near(self, xy_m: tuple[float, float]) -> bool:
+        """True when the navigator aborted a goal the map had no path to either within
+        ``flicker_radius_m`` of ``xy_m`` (see :meth:`judge_aborted`)."""
+        r = self.params.flicker_radius_m
+        return any(math.hypot(xy_m[0] - pts[0][0], xy_m[1] - pts[0][1]) <= r
+                   for _, pts in self._aborted_areas)
+
     def excluded(self, frontiers: Sequence[Frontier]) -> npt.NDArray[np.bool_]:
         """Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted
         goal (not candidates now)."""
