@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Sequence
 
 import numpy as np
@@ -53,7 +53,7 @@ from explore_seg.core.grid import GridMap, metres_to_cells
 from explore_seg.core.rrt import RrtFrontierDetector, RrtParams
 from explore_seg.core.selection import (Action, Goal, GoalManager, NavOutcome, PathGraphs,
                                         Selection, SelectionParams, StepInputs)
-from explore_seg.core.selection.blockage import approaches
+from explore_seg.core.selection.blockage import RelaxedMap, approaches
 from explore_seg.core.selection.lookout import Reach, lookouts
 from explore_seg.core.selection.router import TourPlan
 from explore_seg.core.selection.strategies import Planner, Strategy, get_strategy
@@ -425,9 +425,11 @@ class Explorer:
             # The navigator tries a frontier first; after it aborted there, a look.
             through = np.asarray([not manager.aborted_near(f.point_xy_m) for f in frontiers],
                                  dtype=bool)
-            out, d_out = approaches(grid, frontiers, dist, reach, self._frontier_params,
-                                    sp.speckle_max_cells, self._det.extra_obstacles, excluded,
-                                    sp.approach_radius_m, through)
+            fp = self._frontier_params
+            relaxed = RelaxedMap(replace(fp, robot_radius_m=min(fp.robot_radius_m,
+                                                                sp.approach_radius_m)),
+                                 sp.speckle_max_cells, self._det.extra_obstacles)
+            out, d_out = approaches(grid, frontiers, dist, reach, relaxed, excluded, through)
             ex_out = manager.excluded(out)
         return out, d_out, ex_out
 

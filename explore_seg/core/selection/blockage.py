@@ -51,7 +51,7 @@ Examples
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Sequence
 
 import cv2
@@ -113,11 +113,23 @@ def despeckled(grid: GridMap, params: FrontierParams, max_cells: int) -> GridMap
     return replace(grid, data=data)
 
 
+@dataclass(frozen=True, eq=False)
+class RelaxedMap:
+    """How :func:`approaches` relaxes the map (module docstring)."""
+
+    #: ``occupied_threshold``, ``free_threshold`` and ``robot_radius_m`` of the relaxed
+    #: map: a radius below the robot's opens passages that noise narrowed to more than
+    #: twice it.
+    params: FrontierParams
+    #: Occupied pieces of at most this many cells are speckle; 0: no approaches.
+    max_cells: int
+    #: Obstacles besides the map (the object layer), kept; shape (H, W).
+    extra_obstacles: npt.NDArray[np.bool_] | None = None
+
+
 def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray[np.float64],
-               reach: Reach, params: FrontierParams, max_cells: int,
-               extra_obstacles: npt.NDArray[np.bool_] | None = None,
+               reach: Reach, relaxed: RelaxedMap,
                excluded: npt.NDArray[np.bool_] | None = None,
-               radius_m: float | None = None,
                through: npt.NDArray[np.bool_] | None = None
                ) -> tuple[list[Frontier], npt.NDArray[np.float64]]:
     """The frontiers with an approach instead of their unreachable cPoint (module
@@ -131,19 +143,9 @@ def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray
         Path lengths robot -> cPoints (inf: no path).
     reach : Reach
         The graph, start cell and passable cells the distances were computed on.
-    params : FrontierParams
-        ``occupied_threshold``, ``free_threshold`` and ``robot_radius_m`` (as for the
-        passable cells).
-    max_cells : int
-        Occupied pieces of at most this many cells are speckle; 0: no approaches.
-    extra_obstacles : ndarray of bool, shape (H, W), optional
-        Obstacles besides the map (the object layer), kept.
+    relaxed : RelaxedMap
     excluded : ndarray of bool, shape (N,), optional
         Blacklisted frontiers (left as they are).
-    radius_m : float, optional
-        Robot radius of the relaxed map (default ``params.robot_radius_m``; a larger value
-        counts as that radius): a passage narrowed by ragged or doubled wall edges below
-        the robot's width but wider than twice this is open there.
     through : ndarray of bool, shape (N,), optional
         Frontiers whose approach is their own cPoint (marked passable, at the relaxed
         path's length): the navigator, whose planner may pass where this map's graph
@@ -160,12 +162,10 @@ def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray
     d_out = np.asarray(dist_m, dtype=np.float64).copy()
     todo = [i for i in range(len(frontiers))
             if not np.isfinite(d_out[i]) and not (excluded is not None and excluded[i])]
-    if not todo or max_cells <= 0:
+    if not todo or relaxed.max_cells <= 0:
         return out, d_out
-    relaxed = params
-    if radius_m is not None and radius_m < params.robot_radius_m:
-        relaxed = replace(params, robot_radius_m=float(radius_m))
-    clean = traversable_mask(despeckled(grid, params, max_cells), extra_obstacles, relaxed)
+    clean = traversable_mask(despeckled(grid, relaxed.params, relaxed.max_cells),
+                             relaxed.extra_obstacles, relaxed.params)
     clean |= reach.passable
     field = distance_field(clean, reach.start_rc, grid.resolution_m)
     paths: dict[int, npt.NDArray[np.int64]] = {}
@@ -202,4 +202,4 @@ def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray
     return out, d_out
 
 
-__all__ = ["approaches", "despeckled", "speckle_cells"]
+__all__ = ["RelaxedMap", "approaches", "despeckled", "speckle_cells"]
