@@ -14,7 +14,9 @@ earlier contact. Its ``cause`` is one of :data:`CONTACT_CAUSES`:
 * ``object, unseen``: neither had it (an undetected object, a table top above the lidar).
 
 "Had the point" means an occupied cell whose centre lies within ``tolerance_m`` (default
-1.5 map cells) of the touched point.
+1.5 map cells) of the touched point. Under a mapping error model the map and the layer
+live in the map frame, the touched point in the world: the point is looked up where the
+map puts it now (``map_from_world``, the model's drift at the time of the contact).
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from explore_seg.core.grid import OCCUPIED_THRESHOLD, GridMap
+from explore_seg.core.pose_fusion import Pose2D, compose
 from sim_bridge.collision import Collider
 from sim_bridge.metrics import CollisionEvent
 
@@ -56,7 +59,8 @@ def marked_near(grid: GridMap | None, x: float, y: float, radius_m: float,
 
 def classify_contact(event: CollisionEvent, collider: Collider, grid: GridMap | None,
                      layer: GridMap | None, tolerance_m: float | None = None,
-                     threshold: int = OCCUPIED_THRESHOLD) -> dict[str, Any]:
+                     threshold: int = OCCUPIED_THRESHOLD,
+                     map_from_world: Pose2D | None = None) -> dict[str, Any]:
     """The record of one contact (see the module docstring).
 
     Parameters
@@ -72,6 +76,9 @@ def classify_contact(event: CollisionEvent, collider: Collider, grid: GridMap | 
         Search radius around the touched point; default 1.5 cells of ``grid``.
     threshold : int
         Cells at or above this value are obstacles (map and layer).
+    map_from_world : (x, y, yaw), optional
+        The map <- world transform (a mapping error model's drift) at the time of the
+        contact; None: the map frame is the world frame.
 
     Returns
     -------
@@ -83,8 +90,11 @@ def classify_contact(event: CollisionEvent, collider: Collider, grid: GridMap | 
     obj, cls, part = obj or event.object, cls or event.cls, part or event.part
     if tolerance_m is None:
         tolerance_m = 1.5 * (grid.resolution_m if grid is not None else 0.05)
-    in_map = marked_near(grid, px, py, tolerance_m, threshold)
-    in_layer = marked_near(layer, px, py, tolerance_m, threshold)
+    mx, my = px, py
+    if map_from_world is not None and math.isfinite(px) and math.isfinite(py):
+        mx, my, _ = compose(map_from_world, (px, py, 0.0))
+    in_map = marked_near(grid, mx, my, tolerance_m, threshold)
+    in_layer = marked_near(layer, mx, my, tolerance_m, threshold)
     kind = "wall" if cls == "wall" or obj == "map" else "object"
     if kind == "wall":
         cause = "wall, mapped" if in_map else "wall, unmapped"

@@ -305,14 +305,30 @@ class GifWriter:
 def engine_overlays(engine, truth: str | None = "footprint",
                     path_xy: npt.NDArray[np.float64] | None = None) -> Overlays:
     """Overlays describing a :class:`~sim_bridge.engine.SimEngine` state (pose, plan,
-    collisions, goal, ground-truth outline)."""
+    collisions, goal, ground-truth outline).
+
+    The picture is the map's: the plan and the goal are in its frame, the robot is drawn
+    at its map-frame pose (``slam_pose``), and ``path_xy`` and the collisions (world
+    points) are moved into the map frame by the mapping error's current drift. The
+    ground-truth outline stays in the world frame: under a mapping error its offset from
+    the map's walls shows the drift."""
     gt = engine.ground_truth
     truth_grid = getattr(gt, truth) if (gt is not None and truth) else None
     goal = engine.nav_status.goal
+    model = engine.slam_error
+    collisions = [(e.x_m, e.y_m) for e in engine.metrics.collisions]
+    if model is not None:
+        dx, dy, dyaw = model.drift
+        c, s = math.cos(dyaw), math.sin(dyaw)
+        if path_xy is not None and len(path_xy):
+            p = np.asarray(path_xy, dtype=np.float64)
+            path_xy = np.column_stack([dx + c * p[:, 0] - s * p[:, 1],
+                                       dy + s * p[:, 0] + c * p[:, 1]])
+        collisions = [(dx + c * x - s * y, dy + s * x + c * y) for x, y in collisions]
     return Overlays(
         truth=truth_grid,
         robot_path=path_xy,
         plan=engine.plan if len(engine.plan) else None,
-        robot_pose=engine.pose,
-        collisions=[(e.x_m, e.y_m) for e in engine.metrics.collisions],
+        robot_pose=engine.slam_pose,
+        collisions=collisions,
         goals=[(goal[0], goal[1])] if goal is not None else [])

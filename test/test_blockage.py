@@ -9,7 +9,7 @@ import pytest
 
 from explore_seg.core.explorer import Explorer
 from explore_seg.core.grid import grid_from_ascii
-from explore_seg.core.selection import Action
+from explore_seg.core.selection import Action, NavOutcome
 from explore_seg.core.selection.blockage import speckle_cells
 from selection_cases import split_params
 
@@ -50,15 +50,26 @@ def test_the_speckle_cell_walls_the_robot_in():
     assert out.action is Action.DONE
 
 
-def test_walled_in_by_speckle_the_robot_approaches_the_doorway():
+def _look(ex, g, pose):
+    """The first goal (the frontier itself: the navigator decides) is aborted by the
+    navigator with no path on the map either; the next goal is the look."""
+    first = ex.step(0.0, g, pose)
+    assert first.action is Action.NEW_GOAL
+    assert first.goal.rc == ex._frontiers[0].point_rc      # the frontier's own cPoint
+    assert ex.report_navigation(NavOutcome.ABORTED, first.goal)
+    return ex.step(0.5, g, pose)
+
+
+def test_walled_in_by_speckle_the_navigator_tries_then_the_robot_approaches_the_doorway():
     g, pose, ex, _ = _scene()
-    out = ex.step(0.0, g, pose)
-    assert out.action is Action.NEW_GOAL
+    out = _look(ex, g, pose)
+    assert out.action is Action.NEW_GOAL and out.blacklisted == 0
     r, c = out.goal.rc
     assert ex._det.passable[r, c]                     # on the robot's side, reachable
     door = np.argwhere(speckle_cells(g.data >= 65, 2))
     assert len(door) == 1
     dr, dc = door[0]
+    assert r > dr                                     # room A's side (rows grow upward)
     # where the path meets the speckle: next to it, within the inflation (0.2 m) + a cell
     assert np.hypot(r - dr, c - dc) * g.resolution_m <= 0.2 + 2 * g.resolution_m + 1e-9
     assert np.isfinite(out.dist_m).any()
@@ -66,7 +77,7 @@ def test_walled_in_by_speckle_the_robot_approaches_the_doorway():
 
 def test_an_approach_that_did_not_clear_the_speckle_is_blacklisted_once_then_done():
     g, pose, ex, sp = _scene()
-    goal = ex.step(0.0, g, pose).goal
+    goal = _look(ex, g, pose).goal
     at = (goal.xy_m[0], goal.xy_m[1], goal.yaw_rad)
     assert ex.step(1.0, g, at).action is Action.KEEP   # arrived: wait for a newer map
     judged = ex.step(1.0 + sp.arrival_wait_s + 0.1, g, at)   # map unchanged
@@ -76,7 +87,7 @@ def test_an_approach_that_did_not_clear_the_speckle_is_blacklisted_once_then_don
 
 def test_once_the_look_cleared_the_speckle_the_frontier_beyond_is_a_goal():
     g, pose, ex, sp = _scene()
-    goal = ex.step(0.0, g, pose).goal
+    goal = _look(ex, g, pose).goal
     at = (goal.xy_m[0], goal.xy_m[1], goal.yaw_rad)
     clear, _ = grid_from_ascii(DOORWAY.replace("*", "."), resolution_m=0.1)
     out = ex.step(1.0 + sp.arrival_wait_s + 0.1, clear, at)
@@ -104,3 +115,49 @@ def test_speckle_cells_counts_8_connected_pieces():
         speckle_cells(occ, -1)
     with pytest.raises(ValueError, match="occupied must be 2-D"):
         speckle_cells(occ[0], 1)
+
+
+# Room A (robot R) reaches room B around the right end of their wall; the straight way
+# down leads through a 0.3 m gap in that wall (narrower than the robot: radius 0.2 m),
+# then room B's 0.3 m doorway to room C and its unknown space. Map noise narrows a
+# doorway like these (ragged wall edges joined to the wall: no speckle).
+DETOUR = """
+########################
+#......................#
+#......................#
+#.........R............#
+#......................#
+#......................#
+#......................#
+#########...######.....#
+#......................#
+#......................#
+#......................#
+#......................#
+#......................#
+#########...############
+#......................#
+#......................#
+#??????????????????????#
+########################
+"""
+
+
+def test_a_passage_narrowed_below_the_robot_width_gets_an_approach_at_its_near_side():
+    """On the relaxed map (robot radius approach_radius_m, 0.15 m by default) both gaps
+    are open; the approach is the last reachable cell of that path (room B above its
+    doorway), not where the path first leaves the robot's reach (the gap next to it)."""
+    g, pose, ex, sp = _scene(DETOUR)
+    assert sp.approach_radius_m < 0.2
+    out = _look(ex, g, pose)
+    assert out.action is Action.NEW_GOAL
+    r, c = out.goal.rc
+    assert ex._det.passable[r, c]
+    door_r = g.height - 1 - DETOUR.strip("\n").split("\n").index("#########...############")
+    assert r == door_r + 1 and 9 <= c <= 11            # next to room B's doorway
+    assert out.dist_m[0] > 2.0                           # the way around, through room B
+
+
+def test_at_the_robot_radius_only_speckle_opens_a_passage():
+    g, pose, ex, _ = _scene(DETOUR, approach_radius_m=0.2)
+    assert ex.step(0.0, g, pose).action is Action.DONE

@@ -46,6 +46,30 @@ def test_a_contact_record_names_the_object_it_hit_and_the_map_had_it():
     assert c["in_map"] and not c["in_layer"] and c["cause"] == "object, in map only"
 
 
+def test_under_a_map_drift_the_touched_point_is_looked_up_where_the_map_has_it():
+    # The map (and the layer) live in the map frame: a map 0.5 m off the world has the
+    # bin 0.5 m further; looked up at the world point it would read "unseen".
+    eng = SimEngine(room_world(_bin(3.0, 2.0)), SimParams(**FAST))
+    got: list[tuple[dict, dict]] = []
+    drift = (0.5, 0.0, 0.0)
+
+    def record(ev):
+        g = eng.map
+        shifted = GridMap(g.data.copy(), g.resolution_m,
+                          (g.origin_xy_m[0] + 0.5, g.origin_xy_m[1]))
+        got.append((classify_contact(ev, eng.collider, shifted, None),
+                    classify_contact(ev, eng.collider, shifted, None, map_from_world=drift)))
+
+    eng.on_collision(record)
+    eng.step(0.1)
+    eng.set_cmd_vel(0.26, 0.0)
+    eng.step(12.0)
+    world_frame, map_frame = got[0]
+    assert world_frame["cause"] == "object, unseen"
+    assert map_frame["cause"] == "object, in map only" and map_frame["in_map"]
+    assert map_frame["contact_xy_m"] == world_frame["contact_xy_m"]   # reported in the world
+
+
 def test_a_contact_with_an_object_the_layer_had_is_in_layer():
     world = room_world(_bin(3.0, 2.0))
     layer = GridMap(np.zeros((80, 120), np.int8), 0.05, (0.0, 0.0))

@@ -59,7 +59,8 @@ def _niche(**kw):
 
 
 def test_without_lookouts_the_niche_ends_exploration():
-    g, pose, ex, _ = _niche(lookout_goals=False)
+    # (without approach goals too: on the relaxed map the 0.3 m corridor is open)
+    g, pose, ex, _ = _niche(lookout_goals=False, speckle_max_cells=0)
     out = ex.step(0.0, g, pose)
     assert len(out.frontiers) == 1 and np.isinf(out.dist_m[0])
     assert out.action is Action.DONE
@@ -91,7 +92,7 @@ def test_a_lookout_that_saw_nothing_is_blacklisted_once_then_done():
 
 
 def test_no_lookout_without_line_of_sight_or_view():
-    g, pose, ex, _ = _niche(min_gain_m2=100.0)       # nothing worth the drive
+    g, pose, ex, _ = _niche(min_gain_m2=100.0, speckle_max_cells=0)   # nothing worth it
     assert ex.step(0.0, g, pose).action is Action.DONE
     walled = NICHE.replace("######...#######\n######...#######\n#####",
                            "######...#######\n################\n#####", 1)
@@ -140,7 +141,9 @@ def test_lookout_completes_a_run_whose_last_frontier_lies_in_a_corridor_narrower
     base = load_explorer_params()
     rows = {}
     for on in (False, True):
-        sel = dataclasses.replace(base.selection, lookout_goals=on)
+        # (off: no approach goals either, they would look into the corridor's mouth too)
+        sel = dataclasses.replace(base.selection, lookout_goals=on,
+                                  speckle_max_cells=base.selection.speckle_max_cells * on)
         assert isinstance(sel, SelectionParams)
         res = run_exploration(world, "paper", seed, params=LockstepParams(max_sim_time_s=600.0),
                               ground_truth=gt,

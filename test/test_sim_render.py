@@ -50,3 +50,20 @@ def test_gif_writer_keeps_at_most_max_frames(tmp_path):
         assert im.n_frames == len(w) and max(im.size) <= 32
     with pytest.raises(ValueError, match="no frames"):
         GifWriter(tmp_path / "x.gif").write()
+
+
+def test_engine_overlays_draw_the_robot_and_its_path_in_the_map_frame():
+    """Under a mapping error the map is in the map frame: the robot is drawn at its SLAM
+    pose, and its (world) path moved by the current drift ends there."""
+    from sim_bridge.engine import SimEngine, SimParams
+    from sim_bridge.render import engine_overlays
+    from sim_scenes import FAST, room_world
+    eng = SimEngine(room_world([]), SimParams(**{**FAST, "mapping_error": "harsh"}))
+    eng.step(0.1)
+    eng.set_cmd_vel(0.2, 0.3)
+    eng.step(8.0)
+    assert eng.slam_error is not None and np.hypot(*eng.slam_error.drift[:2]) > 1e-4
+    ov = engine_overlays(eng, path_xy=eng.trail)
+    assert ov.robot_pose == eng.slam_pose != eng.pose
+    assert ov.robot_path[-1] == pytest.approx(eng.slam_pose[:2], abs=1e-9)
+    assert ov.robot_path[0] != pytest.approx(eng.trail[0], abs=1e-9)

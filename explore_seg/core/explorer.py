@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Sequence
 
 import numpy as np
@@ -53,7 +53,7 @@ from explore_seg.core.grid import GridMap, metres_to_cells
 from explore_seg.core.rrt import RrtFrontierDetector, RrtParams
 from explore_seg.core.selection import (Action, Goal, GoalManager, NavOutcome, PathGraphs,
                                         Selection, SelectionParams, StepInputs)
-from explore_seg.core.selection.blockage import approaches
+from explore_seg.core.selection.blockage import RelaxedMap, approaches
 from explore_seg.core.selection.lookout import Reach, lookouts
 from explore_seg.core.selection.router import TourPlan
 from explore_seg.core.selection.strategies import Planner, Strategy, get_strategy
@@ -368,7 +368,10 @@ class Explorer:
             frontiers = planner.viewpoints(grid, frontiers, self._graph, start,
                                           self._det.passable)
         dist, excluded = self._distances(start, robot_rc, frontiers)
-        if dist is not None and len(dist) and not (np.isfinite(dist) & ~excluded).any():
+        added = manager.blacklist_added
+        if dist is not None and manager.judge_aborted(grid, frontiers, dist):
+            excluded = manager.excluded(frontiers)
+        if dist is not None and len(dist) and not self._any_selectable(frontiers, dist, excluded):
             assert start is not None
             frontiers, dist, excluded = self._unreachable_goals(grid, frontiers, dist, excluded,
                                                                 start, robot_rc)
@@ -376,7 +379,6 @@ class Explorer:
             tour = planner.tour_costs(grid, frontiers, dist, excluded, self._graph, robot_rc,
                                      labels, manager.goal_frontier(grid, frontiers))
         old_goal = manager.goal
-        added = manager.blacklist_added
         res = manager.step(now_s, (x, y), grid, frontiers, dist, StepInputs(
             labels, robot_rc, excluded, tour.tour_cost_m if tour is not None else None))
         blacklisted = manager.blacklist_added - added + self._reported_blacklisted
@@ -390,6 +392,16 @@ class Explorer:
                             robot_rc, detected, blacklisted, switched, tuple(warnings),
                             t1 - t0, time.perf_counter() - t1, tour,
                             planner.viewpoint_s + planner.tour_s if planner is not None else 0.0)
+
+    def _any_selectable(self, frontiers: list[Frontier], dist: npt.NDArray[np.float64],
+                        excluded: npt.NDArray[np.bool_]) -> bool:
+        """True when a frontier has a path and is not blacklisted (``routed``: and the
+        tour would visit it; a reachable view too small to visit must not hide an
+        unreachable big one from the lookouts and approaches)."""
+        ok = np.isfinite(dist) & ~excluded
+        if self._planner is not None and ok.any():
+            ok &= self._planner.selectable(frontiers, dist, excluded)
+        return bool(ok.any())
 
     def _unreachable_goals(self, grid: GridMap, frontiers: list[Frontier],
                            dist: npt.NDArray[np.float64], excluded: npt.NDArray[np.bool_],
@@ -409,9 +421,15 @@ class Explorer:
             out, d_out = lookouts(grid, frontiers, dist, reach, sp,
                                   self._frontier_params.occupied_threshold, excluded)
             ex_out = manager.excluded(out)
-        if sp.speckle_max_cells > 0 and not (np.isfinite(d_out) & ~ex_out).any():
-            out, d_out = approaches(grid, frontiers, dist, reach, self._frontier_params,
-                                    sp.speckle_max_cells, self._det.extra_obstacles, excluded)
+        if sp.speckle_max_cells > 0 and not self._any_selectable(out, d_out, ex_out):
+            # The navigator tries a frontier first; after it aborted there, a look.
+            through = np.asarray([not manager.aborted_near(f.point_xy_m) for f in frontiers],
+                                 dtype=bool)
+            fp = self._frontier_params
+            relaxed = RelaxedMap(replace(fp, robot_radius_m=min(fp.robot_radius_m,
+                                                                sp.approach_radius_m)),
+                                 sp.speckle_max_cells, self._det.extra_obstacles)
+            out, d_out = approaches(grid, frontiers, dist, reach, relaxed, excluded, through)
             ex_out = manager.excluded(out)
         return out, d_out, ex_out
 

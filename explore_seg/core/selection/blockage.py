@@ -8,15 +8,26 @@ would end ("no path") with the rest of the building unseen. The sensor removes s
 where it sees through it (every beam that passes lowers a cell's occupancy), most
 surely from close by, where a heading error moves a hit least.
 
+Drift narrows doorways too: a wall mapped twice a few centimetres apart, ragged edges
+joined to the wall (no speckle), leave a passage narrower than the robot in the map.
+
 When a decision has no selectable frontier, :func:`approaches` judges reachability once
-more on the map without speckle (occupied 8-connected pieces of at most
-``speckle_max_cells`` cells taken as free). Each unreachable frontier that this map
-reaches gets an **approach**: the last cell of that path (from the robot) that is
-reachable on the real map, i.e. where the path meets the speckle. The frontier is
-returned with its cPoint moved there, so the goal manager sends, judges (arrival, then
-"frontier still there?") and blacklists it as any other goal: one look per blocked
-passage (per blacklist retry), then exploration ends as before. When the look cleared
-the speckle, the frontiers beyond have a path again and exploration goes on.
+more on a relaxed map: without speckle (occupied 8-connected pieces of at most
+``speckle_max_cells`` cells taken as free), for a robot of radius ``approach_radius_m``
+(smaller than the real one). Each unreachable frontier that this map reaches gets an
+**approach**, in two steps:
+
+1. its own cPoint, marked passable: the navigator (Nav2) decides. Its planner may pass
+   where this map's graph does not (a doorway passable only diagonally, a margin it
+   plans through), and a goal it cannot reach ends "no path" at once;
+2. once the navigator aborted a goal there while the map had no path either
+   (:meth:`~explore_seg.core.selection.goals.GoalManager.aborted_near`), a **look**:
+   the last cell of the relaxed path (from the robot) that the robot reaches on the
+   real map, i.e. where the blockage beyond it begins. The frontier is returned with its
+   cPoint moved there, so the goal manager sends, judges (arrival, then "frontier still
+   there?") and blacklists it as any other goal: one look per blocked passage (per
+   blacklist retry), then exploration ends as before. When the look cleared the noise,
+   the frontiers beyond have a path again and exploration goes on.
 
 Examples
 --------
@@ -40,7 +51,7 @@ Examples
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Sequence
 
 import cv2
@@ -102,10 +113,24 @@ def despeckled(grid: GridMap, params: FrontierParams, max_cells: int) -> GridMap
     return replace(grid, data=data)
 
 
+@dataclass(frozen=True, eq=False)
+class RelaxedMap:
+    """How :func:`approaches` relaxes the map (module docstring)."""
+
+    #: ``occupied_threshold``, ``free_threshold`` and ``robot_radius_m`` of the relaxed
+    #: map: a radius below the robot's opens passages that noise narrowed to more than
+    #: twice it.
+    params: FrontierParams
+    #: Occupied pieces of at most this many cells are speckle; 0: no approaches.
+    max_cells: int
+    #: Obstacles besides the map (the object layer), kept; shape (H, W).
+    extra_obstacles: npt.NDArray[np.bool_] | None = None
+
+
 def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray[np.float64],
-               reach: Reach, params: FrontierParams, max_cells: int,
-               extra_obstacles: npt.NDArray[np.bool_] | None = None,
-               excluded: npt.NDArray[np.bool_] | None = None
+               reach: Reach, relaxed: RelaxedMap,
+               excluded: npt.NDArray[np.bool_] | None = None,
+               through: npt.NDArray[np.bool_] | None = None
                ) -> tuple[list[Frontier], npt.NDArray[np.float64]]:
     """The frontiers with an approach instead of their unreachable cPoint (module
     docstring).
@@ -118,15 +143,13 @@ def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray
         Path lengths robot -> cPoints (inf: no path).
     reach : Reach
         The graph, start cell and passable cells the distances were computed on.
-    params : FrontierParams
-        ``occupied_threshold``, ``free_threshold`` and ``robot_radius_m`` (as for the
-        passable cells).
-    max_cells : int
-        Occupied pieces of at most this many cells are speckle; 0: no approaches.
-    extra_obstacles : ndarray of bool, shape (H, W), optional
-        Obstacles besides the map (the object layer), kept.
+    relaxed : RelaxedMap
     excluded : ndarray of bool, shape (N,), optional
         Blacklisted frontiers (left as they are).
+    through : ndarray of bool, shape (N,), optional
+        Frontiers whose approach is their own cPoint (marked passable, at the relaxed
+        path's length): the navigator, whose planner may pass where this map's graph
+        does not, decides; the others get the look point. Default: none.
 
     Returns
     -------
@@ -139,34 +162,44 @@ def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray
     d_out = np.asarray(dist_m, dtype=np.float64).copy()
     todo = [i for i in range(len(frontiers))
             if not np.isfinite(d_out[i]) and not (excluded is not None and excluded[i])]
-    if not todo or max_cells <= 0:
+    if not todo or relaxed.max_cells <= 0:
         return out, d_out
-    clean = traversable_mask(despeckled(grid, params, max_cells), extra_obstacles, params)
+    clean = traversable_mask(despeckled(grid, relaxed.params, relaxed.max_cells),
+                             relaxed.extra_obstacles, relaxed.params)
     clean |= reach.passable
     field = distance_field(clean, reach.start_rc, grid.resolution_m)
-    found: dict[int, tuple[int, int]] = {}
+    paths: dict[int, npt.NDArray[np.int64]] = {}
     for i in todo:
         r, c = frontiers[i].point_rc
-        if not (grid.in_bounds(r, c) and np.isfinite(field[r, c])):
-            continue
-        path = extract_path(field, (r, c))
-        off = ~reach.passable[path[:, 0], path[:, 1]]
-        off[0] = False                     # the start cell (the robot may stand on a margin)
-        if not off.any():
-            continue
-        k = int(np.argmax(off))
-        found[i] = (int(path[k - 1, 0]), int(path[k - 1, 1]))
-    if not found:
+        if grid.in_bounds(r, c) and np.isfinite(field[r, c]):
+            paths[i] = extract_path(field, (r, c))
+    if not paths:
         return out, d_out
-    cells = np.asarray(list(found.values()), dtype=np.int64)
-    d = reach.graph.distances(reach.start_rc, cells) + reach.hop_m
-    for (i, (r, c)), di in zip(found.items(), d):
-        if not np.isfinite(di):
+    # A relaxed path may leave the robot's reach and come back (it cuts corners the robot
+    # radius keeps the robot from): the approach is the last cell of the path that the
+    # robot reaches, where the blockage beyond it begins.
+    d_all = reach.graph.distances(reach.start_rc, np.concatenate(list(paths.values())))
+    at = 0
+    for i, path in paths.items():
+        d_path = d_all[at:at + len(path)]
+        at += len(path)
+        reached = np.isfinite(d_path)
+        reached[0] = True                  # the start cell (the robot may stand on a margin)
+        if reached.all():
             continue
+        k = int(np.flatnonzero(reached)[-1])
+        if not np.isfinite(d_path[k]):
+            continue
+        if through is not None and through[i]:
+            fr, fc = frontiers[i].point_rc
+            out[i] = replace(frontiers[i], point_passable=True)
+            d_out[i] = max(float(d_path[k]), float(field[fr, fc])) + reach.hop_m
+            continue
+        r, c = int(path[k, 0]), int(path[k, 1])
         out[i] = replace(frontiers[i], point_rc=(r, c), point_xy_m=grid.cell_to_world(r, c),
                          point_passable=True)
-        d_out[i] = float(di)
+        d_out[i] = float(d_path[k]) + reach.hop_m
     return out, d_out
 
 
-__all__ = ["approaches", "despeckled", "speckle_cells"]
+__all__ = ["RelaxedMap", "approaches", "despeckled", "speckle_cells"]

@@ -6,10 +6,8 @@ decision core (:mod:`explore_seg.core.explorer`) drives it once per decision.
 
 from __future__ import annotations
 
-import enum
 import math
 from collections import deque
-from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
@@ -18,6 +16,8 @@ import numpy.typing as npt
 from explore_seg.core.frontiers import Frontier
 from explore_seg.core.grid import GridMap
 from explore_seg.core.selection.costs import Selection, select_goal
+from explore_seg.core.selection.goal_types import (Action, Goal, NavOutcome, StepInputs,
+                                                   StepResult, goal_yaw)
 from explore_seg.core.selection.params import SelectionParams
 from explore_seg.core.selection.strategy import get_strategy
 
@@ -25,75 +25,6 @@ from explore_seg.core.selection.strategy import get_strategy
 #: kept per kind (oldest dropped).
 _AREA_POINTS = 20
 _AREAS_KEPT = 100
-
-
-class NavOutcome(enum.Enum):
-    """What the navigator did with a goal (Nav2's ``navigate_to_pose`` action status, or
-    the simulator's stand-in), reported through :meth:`GoalManager.report_navigation`."""
-
-    SUCCEEDED = "succeeded"          # reached: judge the goal's frontier now
-    ABORTED = "aborted"              # gave up (no path, recoveries exhausted): blacklist
-    REJECTED = "rejected"            # never accepted (or not within the timeout): blacklist
-    CANCELED = "canceled"            # canceled by someone else: blacklist
-    CANCELED_BY_US = "canceled_by_us"  # our own cancel (stop, done): forget, no blacklist
-
-
-class Action(enum.Enum):
-    """What :meth:`GoalManager.step` asks the caller to do."""
-
-    NEW_GOAL = "new_goal"    # send ``goal``
-    KEEP = "keep"            # keep driving to the current goal
-    WAIT = "wait"            # nothing to do now (no reachable frontier yet, bad input)
-    DONE = "done"            # exploration finished
-
-
-@dataclass(frozen=True)
-class Goal:
-    """A navigation goal in the map frame."""
-
-    xy_m: tuple[float, float]
-    yaw_rad: float
-    rc: tuple[int, int]
-    frontier_size_cells: int
-    cost: float
-    is_return: bool = False
-    frontier_gap_m: float = 0.0
-
-
-@dataclass(frozen=True)
-class StepResult:
-    """Outcome of one :meth:`GoalManager.step`."""
-
-    action: Action
-    goal: Goal | None
-    reason: str
-    selection: Selection | None = None
-
-
-@dataclass(frozen=True, eq=False)
-class StepInputs:
-    """What the caller of :meth:`GoalManager.step` already has for a decision (each
-    optional)."""
-
-    #: Region labels aligned with the grid, shape (H, W).
-    labels: npt.NDArray[np.integer] | None = None
-    #: Robot cell (computed from the robot position when None).
-    robot_rc: tuple[int, int] | None = None
-    #: :meth:`GoalManager.excluded` of the frontiers computed by the caller before the
-    #: call (for the path distances), shape (N,); recomputed when the blacklist changed.
-    excluded: npt.NDArray[np.bool_] | None = None
-    #: The ``routed`` strategy's tour costs (:class:`~.router.Router`), shape (N,).
-    tour_cost_m: npt.NDArray[np.float64] | None = None
-
-
-def goal_yaw(frontier: Frontier, robot_xy_m: tuple[float, float]) -> float:
-    """Heading at a frontier's cPoint toward the unknown side: cPoint -> group centroid
-    (robot -> cPoint when the two coincide)."""
-    px, py = frontier.point_xy_m
-    gx, gy = frontier.centroid_xy_m
-    if math.hypot(gx - px, gy - py) > 1e-9:
-        return math.atan2(gy - py, gx - px)
-    return math.atan2(py - robot_xy_m[1], px - robot_xy_m[0])
 
 
 class GoalManager:
@@ -117,7 +48,11 @@ class GoalManager:
        ``done_confirmations`` consecutive ticks: the blacklist is cleared and its
        frontiers retried (``blacklist_retries`` times, not counting a retry after which
        ``retry_reveal_m2`` more of the map became known), then DONE (or first a
-       return-to-start goal).
+       return-to-start goal). A goal the navigator aborted is judged at the next
+       decision with distances (:meth:`judge_aborted`): blacklisted when the explorer
+       still has a path to its frontier (the navigator disagrees: retrying would repeat
+       the abort), otherwise left to wait for a path (a doorway that map noise closed
+       opens again when the robot looks at it), at most ``abort_retries`` times per area.
     3. The current goal is kept unless its frontier vanished or another frontier is
        cheaper than the current goal's frontier by ``hysteresis_margin * |cost|``; a
        new goal within ``goal_change_min_m`` of the current one is not sent. Observed
@@ -141,6 +76,8 @@ class GoalManager:
         self._vanished: list[tuple[list[int], list[tuple[float, float]]]] = []
         # Areas where a reached goal's frontier remained with its cells revealed.
         self._revealed: list[tuple[list[int], list[tuple[float, float]]]] = []
+        # Areas where the navigator aborted a goal the explorer had no path to either.
+        self._aborted_areas: list[tuple[list[int], list[tuple[float, float]]]] = []
         self.reset()
 
     def reset(self, clear_blacklist: bool = False) -> None:
@@ -154,6 +91,7 @@ class GoalManager:
         self._arrived_stamp_ns = 0
         self._nav_succeeded = False
         self._outcome_reason = ""
+        self._aborted: Goal | None = None   # aborted by the navigator, judged next decision
         self._empty_ticks = 0
         self._goal_cells_xy: npt.NDArray[np.float64] | None = None
         self._retries_left = self.params.blacklist_retries
@@ -164,6 +102,7 @@ class GoalManager:
             self._clear_blacklist()
             self._vanished.clear()
             self._revealed.clear()
+            self._aborted_areas.clear()
 
     def _clear_blacklist(self) -> None:
         self._blacklist.clear()
@@ -203,9 +142,10 @@ class GoalManager:
 
         SUCCEEDED counts as arrival whatever the distance (the goal's frontier is judged
         at the next :meth:`step`, on a map newer than the arrival or after
-        ``arrival_wait_s``; a return-to-start goal ends exploration there); ABORTED,
-        REJECTED and CANCELED (by someone else) blacklist the goal at once, so the next
-        :meth:`step` picks another frontier instead of waiting ``progress_timeout_s``;
+        ``arrival_wait_s``; a return-to-start goal ends exploration there); ABORTED drops
+        the goal and leaves it to :meth:`judge_aborted` at the next decision; REJECTED
+        and CANCELED (by someone else) blacklist the goal at once. Either way the next
+        :meth:`step` picks another frontier instead of waiting ``progress_timeout_s``.
         CANCELED_BY_US drops the goal without blacklisting it.
 
         Parameters
@@ -238,9 +178,57 @@ class GoalManager:
             self.done = True
             self._outcome_reason = f"navigation {outcome.value} returning to start"
             return True
+        if outcome is NavOutcome.ABORTED and self.params.abort_retries > 0:
+            self._aborted, self.goal = goal, None
+            self._outcome_reason = "navigation aborted: judged on this map"
+            return True
         self.abandon_goal(blacklist=True)
         self._outcome_reason = f"navigation {outcome.value}: blacklisted"
         return True
+
+    def judge_aborted(self, grid: GridMap, frontiers: Sequence[Frontier],
+                      dist_m: npt.ArrayLike) -> str:
+        """Judge the goal the navigator last aborted (no-op without one).
+
+        Blacklisted when its frontier (as in :meth:`goal_frontier`) still has a path on
+        the explorer's map; otherwise not (the frontier is no candidate while it has no
+        path, and is one again once the map opens one), unless this is the
+        ``abort_retries``-th such abort in its area (the area's goals are blacklisted
+        then). Call it with the path lengths to the frontiers' own cPoints, before
+        lookouts or approaches replace the unreachable ones.
+
+        Parameters
+        ----------
+        grid : GridMap
+        frontiers : sequence of Frontier
+        dist_m : array_like of float, shape (N,)
+            Path lengths robot -> cPoints (inf: no path).
+
+        Returns
+        -------
+        str
+            What was decided, in words ("" without an aborted goal); also the reason the
+            next :meth:`step` gives.
+        """
+        goal, self._aborted = self._aborted, None
+        if goal is None:
+            return ""
+        current, self.goal = self.goal, goal
+        try:
+            i = self._matching(grid, frontiers)
+        finally:
+            self.goal = current
+        d = np.asarray(dist_m, dtype=np.float64)
+        if i is not None and i < len(d) and np.isfinite(d[i]):
+            self.add_to_blacklist(goal.xy_m)
+            reason = "navigation aborted, but the map has a path to its frontier: blacklisted"
+        elif self._note_area(self._aborted_areas, goal.xy_m, self.params.abort_retries):
+            reason = (f"navigation aborted {self.params.abort_retries} times here with no "
+                      "path on the map either: area blacklisted")
+        else:
+            reason = "navigation aborted, and the map has no path to its frontier: it waits"
+        self._outcome_reason = reason
+        return reason
 
     def set_start(self, xy_m: tuple[float, float], yaw_rad: float) -> None:
         """Remember the pose to return to (first pose, unless set again)."""
@@ -281,6 +269,13 @@ class GoalManager:
         for pt in pts:
             self.add_to_blacklist(pt)
         return True
+
+    def aborted_near(self, xy_m: tuple[float, float]) -> bool:
+        """True when the navigator aborted a goal the map had no path to either within
+        ``flicker_radius_m`` of ``xy_m`` (see :meth:`judge_aborted`)."""
+        r = self.params.flicker_radius_m
+        return any(math.hypot(xy_m[0] - pts[0][0], xy_m[1] - pts[0][1]) <= r
+                   for _, pts in self._aborted_areas)
 
     def excluded(self, frontiers: Sequence[Frontier]) -> npt.NDArray[np.bool_]:
         """Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted
@@ -384,6 +379,8 @@ class GoalManager:
         if robot_rc is None:
             robot_rc = grid.world_to_cell(*robot_xy_m)
         version = self._blacklist_version
+        if self._aborted is not None and dist_m is not None:
+            self.judge_aborted(grid, frontiers, dist_m)
         # 1. progress and arrival on the current goal
         early, reason = self._check_progress(now_s, robot_xy_m, grid, frontiers, dist_m)
         reason, self._outcome_reason = self._outcome_reason or reason, ""
@@ -588,3 +585,7 @@ class GoalManager:
         goal = self._new_goal(frontiers[best], best_cost, robot_xy_m, now_s)
         self._remember_cells(grid, frontiers[best])
         return StepResult(Action.NEW_GOAL, goal, reason or "new goal", sel)
+
+
+__all__ = ["Action", "Goal", "GoalManager", "NavOutcome", "StepInputs", "StepResult",
+           "goal_yaw"]

@@ -100,9 +100,16 @@ class GoalParams:
         "got there with its cells still unknown (a wall edge flickering next to unknown "
         "space). Raising it follows such a frontier longer; 0 = never",
         range=(0, INT_MAX)))
+    abort_retries: int = field(default=3, metadata=param_meta(
+        "a goal the navigator aborted (no path on its map) while the explorer's own map "
+        "has no path to its frontier either is not blacklisted: the frontier waits until "
+        "the map opens a path (map noise in a doorway) or the robot looks at it from an "
+        "approach; after this many such aborts in one area (flicker_radius_m) the area's "
+        "goals are blacklisted. An abort of a goal the explorer still has a path to is "
+        "blacklisted at once; 0 = every abort blacklists at once", range=(0, INT_MAX)))
     flicker_radius_m: float = non_negative(
         "goals within this distance of the first goal of an area count as that area for "
-        "flicker_vanish_count and revealed_arrivals_max", "m", default=1.0)
+        "flicker_vanish_count, revealed_arrivals_max and abort_retries", "m", default=1.0)
     done_confirmations: int = field(default=3, metadata=param_meta(
         "consecutive decisions without a reachable frontier before DONE",
         range=(1, INT_MAX)))
@@ -118,12 +125,18 @@ class GoalParams:
         "scan confirmed): frontiers reachable on the map without them get an approach goal "
         "where the path meets the speckle, to look at the passage before exploration ends; "
         "0 = no approach goals", range=(0, INT_MAX)))
+    approach_radius_m: float = non_negative(
+        "robot radius of the relaxed map (speckle removed) on which approach goals are "
+        "found: a passage that map noise (ragged or doubled wall edges) narrowed below the "
+        "robot's width but left wider than twice this gets an approach too. Lowering it "
+        "opens more passages to a look; at or above the robot radius only speckle does",
+        "m", default=0.15)
 
     def __post_init__(self) -> None:
         check_non_negative(self, ("hysteresis_margin", "progress_min_m",
                                   "goal_reached_tolerance_m", "frontier_match_radius_m",
                                   "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
-                                  "flicker_radius_m", "retry_reveal_m2"))
+                                  "flicker_radius_m", "retry_reveal_m2", "approach_radius_m"))
         if not (math.isfinite(self.progress_timeout_s) and self.progress_timeout_s > 0):
             raise ValueError(f"progress_timeout_s must be finite and > 0, "
                              f"got {self.progress_timeout_s}")
@@ -134,6 +147,8 @@ class GoalParams:
         if self.flicker_vanish_count < 0:
             raise ValueError(f"flicker_vanish_count must be >= 0, got "
                              f"{self.flicker_vanish_count}")
+        if self.abort_retries < 0:
+            raise ValueError(f"abort_retries must be >= 0, got {self.abort_retries}")
         if self.done_confirmations < 1:
             raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
         if self.speckle_max_cells < 0:

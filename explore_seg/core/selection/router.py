@@ -251,6 +251,14 @@ class Router:
         return TourPlan(cost_out, idx[order - 1].astype(np.int64), float(best_len), regions,
                         robot_region, gains, self._pairs.swept)
 
+    def selectable(self, frontiers: Sequence[Frontier], dist_m: npt.NDArray[np.float64],
+                   excluded: npt.NDArray[np.bool_] | None) -> npt.NDArray[np.bool_]:
+        """The groups :meth:`tour_costs` would visit now (with the last viewpoints' gains
+        when they belong to ``frontiers``), shape (N,)."""
+        have_gains = len(self.gain_m2) == len(frontiers)
+        return self._selectable(frontiers, dist_m, excluded,
+                                self.gain_m2 if have_gains else None)
+
     def _selectable(self, frontiers: Sequence[Frontier], dist_m: npt.NDArray[np.float64],
                     excluded: npt.NDArray[np.bool_] | None,
                     gains: npt.NDArray[np.float64] | None) -> npt.NDArray[np.bool_]:

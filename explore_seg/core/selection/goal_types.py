@@ -1,0 +1,86 @@
+"""What the goal manager takes and gives: navigation outcomes, actions, goals, step
+inputs and results (ROS-free; :mod:`.goals` holds :class:`~.goals.GoalManager`)."""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from explore_seg.core.frontiers import Frontier
+from explore_seg.core.selection.costs import Selection
+
+
+class NavOutcome(enum.Enum):
+    """What the navigator did with a goal (Nav2's ``navigate_to_pose`` action status, or
+    the simulator's stand-in), reported through :meth:`.goals.GoalManager.report_navigation`."""
+
+    SUCCEEDED = "succeeded"          # reached: judge the goal's frontier now
+    ABORTED = "aborted"              # gave up (no path, recoveries exhausted): judged
+    REJECTED = "rejected"            # never accepted (or not within the timeout): blacklist
+    CANCELED = "canceled"            # canceled by someone else: blacklist
+    CANCELED_BY_US = "canceled_by_us"  # our own cancel (stop, done): forget, no blacklist
+
+
+class Action(enum.Enum):
+    """What :meth:`.goals.GoalManager.step` asks the caller to do."""
+
+    NEW_GOAL = "new_goal"    # send ``goal``
+    KEEP = "keep"            # keep driving to the current goal
+    WAIT = "wait"            # nothing to do now (no reachable frontier yet, bad input)
+    DONE = "done"            # exploration finished
+
+
+@dataclass(frozen=True)
+class Goal:
+    """A navigation goal in the map frame."""
+
+    xy_m: tuple[float, float]
+    yaw_rad: float
+    rc: tuple[int, int]
+    frontier_size_cells: int
+    cost: float
+    is_return: bool = False
+    frontier_gap_m: float = 0.0
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """Outcome of one :meth:`GoalManager.step`."""
+
+    action: Action
+    goal: Goal | None
+    reason: str
+    selection: Selection | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class StepInputs:
+    """What the caller of :meth:`GoalManager.step` already has for a decision (each
+    optional)."""
+
+    #: Region labels aligned with the grid, shape (H, W).
+    labels: npt.NDArray[np.integer] | None = None
+    #: Robot cell (computed from the robot position when None).
+    robot_rc: tuple[int, int] | None = None
+    #: :meth:`GoalManager.excluded` of the frontiers computed by the caller before the
+    #: call (for the path distances), shape (N,); recomputed when the blacklist changed.
+    excluded: npt.NDArray[np.bool_] | None = None
+    #: The ``routed`` strategy's tour costs (:class:`~.router.Router`), shape (N,).
+    tour_cost_m: npt.NDArray[np.float64] | None = None
+
+
+def goal_yaw(frontier: Frontier, robot_xy_m: tuple[float, float]) -> float:
+    """Heading at a frontier's cPoint toward the unknown side: cPoint -> group centroid
+    (robot -> cPoint when the two coincide)."""
+    px, py = frontier.point_xy_m
+    gx, gy = frontier.centroid_xy_m
+    if math.hypot(gx - px, gy - py) > 1e-9:
+        return math.atan2(gy - py, gx - px)
+    return math.atan2(py - robot_xy_m[1], px - robot_xy_m[0])
+
+
+__all__ = ["Action", "Goal", "NavOutcome", "StepInputs", "StepResult", "goal_yaw"]
