@@ -65,12 +65,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=30)
     ap.add_argument("--threads", default="1,2")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--weights", default=None, help="weight file (default: the shipped one)")
     args = ap.parse_args(argv)
     print(f"world {args.world}, {args.candidates} candidates, {args.repeats} decisions per "
           f"row; CPU ms per decision (predict + gains)")
     print("threads poses  map_cells   p50_ms  p95_ms  max_ms  predict_p50_ms")
     for threads in (int(t) for t in args.threads.split(",")):
-        predictor, why = load_predictor(threads=threads)
+        predictor, why = load_predictor(args.weights, threads=threads)
         if predictor is None:
             print(f"no predictor: {why}")
             return 1

@@ -69,13 +69,13 @@ def expected_view_gain(pred: PredictedMap, cells_rc: npt.ArrayLike, range_m: flo
     dr = np.rint(np.sin(theta)[:, None] * r[None, :] / cell).astype(np.int64)
     dc = np.rint(np.cos(theta)[:, None] * r[None, :] / cell).astype(np.int64)
     free, occ, unk = pred.fractions
-    passing = np.where(occ > 0, 0.0, pred.p_free).astype(np.float64)
-    value = np.where(occ > 0, 0.0, np.clip(pred.p_free - free, 0.0, None)).astype(np.float64)
+    passing = np.where(occ > 0, 0.0, pred.p_free).astype(np.float32)
+    value = np.where(occ > 0, 0.0, np.clip(pred.p_free - free, 0.0, None)).astype(np.float32)
     # Blocking border so no ray leaves the lattice.
     pad = steps + 1
     h, w = passing.shape
     wp = w + 2 * pad
-    pass_p = np.zeros((h + 2 * pad, wp))
+    pass_p = np.zeros((h + 2 * pad, wp), dtype=np.float32)
     pass_p[pad:pad + h, pad:pad + w] = passing
     value_p = np.zeros_like(pass_p)
     value_p[pad:pad + h, pad:pad + w] = value
@@ -84,10 +84,10 @@ def expected_view_gain(pred: PredictedMap, cells_rc: npt.ArrayLike, range_m: flo
     shape = (rc.shape[0], int(rays), steps)
     t = pass_p.ravel()[flat].reshape(shape)
     v = value_p.ravel()[flat].reshape(shape)
-    before = np.cumprod(np.concatenate([np.ones(shape[:2] + (1,)), t[:, :, :-1]], axis=2),
-                        axis=2)
-    area = r * (2.0 * math.pi / int(rays)) * cell
-    return (before * v * area[None, None, :]).sum(axis=(1, 2))
+    before = np.cumprod(np.concatenate([np.ones(shape[:2] + (1,), dtype=np.float32),
+                                        t[:, :, :-1]], axis=2), axis=2)
+    area = (r * (2.0 * math.pi / int(rays)) * cell).astype(np.float32)
+    return ((before * v) @ area).sum(axis=1).astype(np.float64)
 
 
 __all__ = ["expected_view_gain"]
