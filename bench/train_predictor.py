@@ -12,8 +12,10 @@ matters). The weights go to ``--out`` (an ``.npz``, :mod:`explore_seg.core.predi
 with the seed, the command line and the evaluation figures in its ``meta.*`` entries.
 
 Evaluation, on the unknown coarse cells (unknown share > 0.5) inside the plan's bounds of
-every held-back partial map: cross-entropy, Brier score and accuracy at 0.5 of the
-network, against the constant guess (the training targets' mean over such cells).
+every held-back partial map (``all``) and on those within 1 m of a known free cell
+(``near``: what a viewpoint at a frontier looks into): cross-entropy, Brier score and
+accuracy at 0.5 of the network, against the constant guess (the training targets' mean
+over such cells). ``--evaluate WEIGHTS`` only evaluates a weight file.
 """
 
 from __future__ import annotations
@@ -40,12 +42,16 @@ def _weights(x: np.ndarray) -> np.ndarray:
     return 0.1 + x[:, 2]
 
 
-def evaluate(net, plans, widths, base_rate: float) -> dict[str, float]:
-    """Quality on the unknown cells of ``plans`` (module docstring)."""
+def evaluate(net, plans, widths, base_rate: float | None
+             ) -> dict[str, dict[str, float]]:
+    """Quality on the unknown cells of ``plans``, all and near known free space (module
+    docstring)."""
     import torch
+    from scipy import ndimage
 
     s = stride(widths)
-    ps, ys = [], []
+    ps: dict[str, list] = {"all": [], "near": []}
+    ys: dict[str, list] = {"all": [], "near": []}
     with torch.inference_mode():
         for plan in plans:
             for x, y in zip(plan.inputs.astype(np.float32), plan.targets):
@@ -56,11 +62,18 @@ def evaluate(net, plans, widths, base_rate: float) -> dict[str, float]:
                 xp[:, :h, :w] = x
                 logit = net(torch.from_numpy(xp)[None])[0].numpy()[:h, :w]
                 m = x[2] > 0.5
-                ps.append(1.0 / (1.0 + np.exp(-logit[m])))
-                ys.append(y[m])
-    p = np.clip(np.concatenate(ps).astype(np.float64), 1e-6, 1 - 1e-6)
-    y = np.concatenate(ys).astype(np.float64)
-    c = np.clip(base_rate, 1e-6, 1 - 1e-6)
+                near = m & ndimage.binary_dilation(x[0] > 0.5, iterations=5)
+                for key, mask in (("all", m), ("near", near)):
+                    ps[key].append(1.0 / (1.0 + np.exp(-logit[mask])))
+                    ys[key].append(y[mask])
+    return {key: _scores(np.concatenate(ps[key]), np.concatenate(ys[key]), base_rate)
+            for key in ps}
+
+
+def _scores(p: np.ndarray, y: np.ndarray, base_rate: float | None) -> dict[str, float]:
+    p = np.clip(p.astype(np.float64), 1e-6, 1 - 1e-6)
+    y = y.astype(np.float64)
+    c = np.clip(y.mean() if base_rate is None else base_rate, 1e-6, 1 - 1e-6)
     return {"cells": int(y.size), "target_mean": float(y.mean()),
             "bce": float(-(y * np.log(p) + (1 - y) * np.log(1 - p)).mean()),
             "bce_constant": float(-(y * np.log(c) + (1 - y) * np.log(1 - c)).mean()),
@@ -73,23 +86,38 @@ def evaluate(net, plans, widths, base_rate: float) -> dict[str, float]:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--plans", type=int, default=400, help="training plans")
+    ap.add_argument("--plans", type=int, default=120, help="training plans")
     ap.add_argument("--per-plan", type=int, default=4, help="partial maps per plan")
     ap.add_argument("--max-poses", type=int, default=40, help="most scan poses per map")
-    ap.add_argument("--eval-plans", type=int, default=40)
-    ap.add_argument("--steps", type=int, default=2500)
-    ap.add_argument("--batch", type=int, default=12)
-    ap.add_argument("--crop", type=int, default=80, help="training window (coarse cells)")
+    ap.add_argument("--eval-plans", type=int, default=20)
+    ap.add_argument("--steps", type=int, default=1000)
+    ap.add_argument("--batch", type=int, default=8)
+    ap.add_argument("--crop", type=int, default=64, help="training window (coarse cells)")
     ap.add_argument("--lr", type=float, default=2e-3)
     ap.add_argument("--factor", type=int, default=4, help="map cells per coarse cell side")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--out", type=Path, default=WEIGHTS_PATH)
+    ap.add_argument("--evaluate", type=Path, default=None,
+                    help="only evaluate this weight file (its meta.base_rate, the held-back "
+                         "plans of --seed)")
     args = ap.parse_args(argv)
     import torch
 
     torch.set_num_threads(args.threads)
     torch.manual_seed(args.seed)
     t0 = time.process_time()
+    if args.evaluate is not None:
+        from explore_seg.core.prediction.model import load_unet
+
+        net, widths, factor, meta = load_unet(args.evaluate)
+        held = make_samples(args.seed + 1, args.eval_plans, 2, args.max_poses, factor,
+                            seed_range=EVAL_SEEDS)
+        # Without a recorded training base rate, the constant is the held-back cells' own
+        # mean (the best constant there is).
+        quality = evaluate(net, held, widths,
+                           float(meta["base_rate"]) if "base_rate" in meta else None)
+        print("held-back quality:", json.dumps(quality), flush=True)
+        return 0
     train = make_samples(args.seed, args.plans, args.per_plan, args.max_poses, args.factor)
     held = make_samples(args.seed + 1, args.eval_plans, 2, args.max_poses, args.factor,
                         seed_range=EVAL_SEEDS)
@@ -132,6 +160,7 @@ def main(argv: list[str] | None = None) -> int:
     command = "bench/train_predictor.py " + shlex.join(sys.argv[1:] if argv is None else argv)
     save_unet(net, args.out, widths, args.factor,
               {"seed": args.seed, "command": command, "quality": json.dumps(quality),
+               "base_rate": base_rate,
                "torch": torch.__version__})
     print(f"wrote {args.out} ({args.out.stat().st_size} bytes)")
     return 0
