@@ -302,8 +302,9 @@ class ForesightParams:
         "foresight: unknown space added around the map before the prediction, so the "
         "predicted plan reaches past the map's current edge", "m", default=5.0)
     prediction_weights: str = field(default="", metadata=param_meta(
-        "foresight: the predictor's weight file (.npz); '' = the one shipped with the "
-        "package (explore_seg/core/prediction/weights/). Without torch or the file, "
+        "foresight: the predictor's weight file (.npz); '' = the package's "
+        "explore_seg/core/prediction/weights/floorplan_unet.npz (make train-predictor "
+        "writes it). Without torch or the file, "
         "foresight rates viewpoints as routed does and says so once in the log"))
     prediction_threads: int = field(default=1, metadata=param_meta(
         "foresight: torch CPU threads of the prediction (process-wide torch setting); "
