@@ -24,7 +24,7 @@ import numpy as np
 
 #: Channel widths of the default network, one per level.
 DEFAULT_WIDTHS = (8, 16, 32, 64)
-#: The shipped weights (trained by ``make train-predictor``).
+#: The package's weights (written by ``make train-predictor``; absent until then).
 WEIGHTS_PATH = Path(__file__).resolve().parent / "weights" / "floorplan_unet.npz"
 _META = "meta."
 
