@@ -7,7 +7,9 @@ BENCH_OUT ?= out/bench
 RUNS ?= 20
 QUICK_OUT ?= out/bench-quick
 
-.PHONY: help setup test demo bench bench-report bench-quick build clean
+PREDICTOR_SEED ?= 0
+
+.PHONY: help setup test demo bench bench-report bench-quick build clean train-predictor
 
 help:
 	@echo "make demo   - headless exploration demo on the embedded cluttered house -> $(OUT)/"
@@ -19,6 +21,7 @@ help:
 	@echo "make bench-quick - a representative subset (~10 min on 2 cores) -> $(QUICK_OUT)/QUICK.md, ratios vs bench/results"
 	@echo "make build  - colcon build of the package into build/ install/"
 	@echo "make setup  - only the idempotent set-up (venv, apt packages, detector weights)"
+	@echo "make train-predictor - train the floor-plan predictor on generated plans (seed PREDICTOR_SEED, 1 CPU thread) -> explore_seg/core/prediction/weights/"
 
 setup:
 	@bash scripts/setup_env.sh
@@ -37,6 +40,9 @@ bench-report: setup
 
 bench-quick: setup
 	@bash scripts/run_bench.sh --quick $(QUICK_OUT)
+
+train-predictor: setup
+	@nice -n 19 $(PY) bench/train_predictor.py --seed $(PREDICTOR_SEED)
 
 build: setup
 	@unset _ROS_WHEELS_BOOTSTRAP_COMPLETE; . .venv/bin/activate && colcon build --base-paths . --build-base build --install-base install

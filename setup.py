@@ -18,6 +18,8 @@ setup(
     name=PACKAGE,
     version="0.1.0",
     packages=find_packages(exclude=["test", "test.*", "bench", "scripts"]),
+    # The floor-plan predictor's weights (make train-predictor).
+    package_data={"explore_seg.core.prediction": ["weights/*.npz"]},
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml", "README.md"]),

@@ -84,6 +84,10 @@ STRATEGY_SPECS: dict[str, StrategySpec] = {
         "routed", use_objects=True,
         description="viewpoints + region-routed tour (DuDe regions, object costmap), "
                     "navigation outcome fed back"),
+    "foresight": StrategySpec.of(
+        "foresight", use_objects=True,
+        description="routed with viewpoints rated on a predicted floor plan (DuDe regions, "
+                    "object costmap), navigation outcome fed back"),
 }
 STRATEGIES: tuple[str, ...] = tuple(STRATEGY_SPECS)
 

@@ -115,13 +115,16 @@ def test_register_takes_only_strategies():
 
 def test_the_builtins_declare_what_their_callers_branched_on():
     by_name = {s.name: s for s in BUILTIN}
-    assert tuple(by_name) == ("paper", "nearest", "explore_lite", "rrt_exploration", "routed")
-    assert {n for n, s in by_name.items() if s.region_term} == {"paper", "routed"}
+    assert tuple(by_name) == ("paper", "nearest", "explore_lite", "rrt_exploration", "routed",
+                              "foresight")
+    assert {n for n, s in by_name.items() if s.region_term} == {"paper", "routed", "foresight"}
     assert {n for n, s in by_name.items() if s.candidates == "rrt"} == {"rrt_exploration"}
-    assert {n for n, s in by_name.items() if s.make_planner} == {"routed"}
-    assert by_name["routed"].goals == GoalOptions(handover=True, reveal_on_arrival=True)
-    assert all(s.goals == GoalOptions() for n, s in by_name.items() if n != "routed")
-    assert by_name["routed"].nav_feedback and STRATEGY_SPECS["routed"].nav_feedback
+    assert {n for n, s in by_name.items() if s.make_planner} == {"routed", "foresight"}
+    routing = ("routed", "foresight")
+    for n in routing:
+        assert by_name[n].goals == GoalOptions(handover=True, reveal_on_arrival=True)
+        assert by_name[n].nav_feedback and STRATEGY_SPECS[n].nav_feedback
+    assert all(s.goals == GoalOptions() for n, s in by_name.items() if n not in routing)
     assert not STRATEGY_SPECS["paper"].nav_feedback
 
 

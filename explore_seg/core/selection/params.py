@@ -19,7 +19,7 @@ from explore_seg.core.selection.strategy import get_strategy
 
 #: The built-in strategies (core/selection/strategies/), as the ``strategy`` parameter's
 #: description lists them; a test checks it against the registry.
-BUILTIN_NAMES = ("paper", "nearest", "explore_lite", "rrt_exploration", "routed")
+BUILTIN_NAMES = ("paper", "nearest", "explore_lite", "rrt_exploration", "routed", "foresight")
 
 #: Robot pose sources (one home: :mod:`explore_seg.core.pose_fusion`).
 POSE_TOPIC_TYPES = POSE_SOURCES
@@ -303,21 +303,57 @@ class RoutedParams:
             raise ValueError(f"tour_refresh_rows must be >= 0, got {self.tour_refresh_rows}")
 
 
+@dataclass(frozen=True)
+class ForesightParams:
+    """The floor-plan prediction of ``foresight`` (bound flat as ROS parameters through
+    ``SelectionParams``; its viewpoints and tour are ``routed``'s, :class:`RoutedParams`)."""
+
+    prediction_gain_weight: float = field(default=0.75, metadata=param_meta(
+        "foresight: a viewpoint's gain is this share of the free area it is expected to "
+        "newly see on the predicted floor plan plus the rest of the unknown area it sees on "
+        "the map (as routed rates it). Raising it trusts the prediction more; 0 = routed's "
+        "gains", range=(0.0, 1.0)))
+    prediction_margin_m: float = non_negative(
+        "foresight: unknown space added around the map before the prediction, so the "
+        "predicted plan reaches past the map's current edge", "m", default=5.0)
+    prediction_weights: str = field(default="", metadata=param_meta(
+        "foresight: the predictor's weight file (.npz); '' = the package's "
+        "explore_seg/core/prediction/weights/floorplan_unet.npz (make train-predictor "
+        "writes it). Without torch or the file, "
+        "foresight rates viewpoints as routed does and says so once in the log"))
+    prediction_threads: int = field(default=1, metadata=param_meta(
+        "foresight: torch CPU threads of the prediction (process-wide torch setting); "
+        "0 = leave torch's setting", range=(0, 256)))
+
+    def __post_init__(self) -> None:
+        check_non_negative(self, ("prediction_margin_m",))
+        if not 0.0 <= self.prediction_gain_weight <= 1.0:
+            raise ValueError(f"prediction_gain_weight must be in [0, 1], "
+                             f"got {self.prediction_gain_weight}")
+        if not 0 <= self.prediction_threads <= 256:
+            raise ValueError(f"prediction_threads must be in 0..256, "
+                             f"got {self.prediction_threads}")
+        if not isinstance(self.prediction_weights, str):
+            raise TypeError(f"prediction_weights must be a str, got "
+                            f"{type(self.prediction_weights).__name__}")
+
+
 #: The parts of :class:`SelectionParams`, in the order their fields (and ROS parameters)
 #: are listed; each validates its own fields.
 SELECTION_PARTS: tuple[type, ...] = (SelectionBaseParams, GoalParams, ViewParams, PaperParams,
-                                     ExploreLiteParams, RrtExplorationParams, RoutedParams)
+                                     ExploreLiteParams, RrtExplorationParams, RoutedParams,
+                                     ForesightParams)
 
 
 @dataclass(frozen=True)
-class SelectionParams(RoutedParams, RrtExplorationParams, ExploreLiteParams, PaperParams,
-                      ViewParams, GoalParams, SelectionBaseParams):
+class SelectionParams(ForesightParams, RoutedParams, RrtExplorationParams, ExploreLiteParams,
+                      PaperParams, ViewParams, GoalParams, SelectionBaseParams):
     """Parameters of target selection: the shared ones (:class:`SelectionBaseParams`), the
     goal manager's (:class:`GoalParams`), the view rating's (:class:`ViewParams`) and each
     built-in strategy's (:class:`PaperParams`, :class:`ExploreLiteParams`,
-    :class:`RrtExplorationParams`, :class:`RoutedParams`; its ``Strategy.params``). The parts
-    are bases, so every field is one flat ROS parameter (``alpha``, ``handover_m``, ...) and
-    code reads ``params.alpha``."""
+    :class:`RrtExplorationParams`, :class:`RoutedParams`, :class:`ForesightParams`; its
+    ``Strategy.params``). The parts are bases, so every field is one flat ROS parameter
+    (``alpha``, ``handover_m``, ...) and code reads ``params.alpha``."""
 
     def __post_init__(self) -> None:
         for part in SELECTION_PARTS:

@@ -58,7 +58,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, replace
-from typing import Sequence
+from typing import Protocol, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -71,6 +71,14 @@ from explore_seg.core.selection.params import SelectionParams
 from explore_seg.core.selection.regions import frontier_regions, region_at
 from explore_seg.core.selection.tour import front_costs, solve_tour
 from explore_seg.core.selection.viewpoints import GainCache, candidate_cells, pick_viewpoint
+
+
+class GainSource(Protocol):
+    """What rates viewpoint candidates: :class:`~.viewpoints.GainCache` is one."""
+
+    def gains(self, grid: GridMap, cells_rc: npt.ArrayLike) -> npt.NDArray[np.float64]: ...
+
+    def reset(self) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -116,13 +124,18 @@ class Router:
     params : SelectionParams
         The ``routed`` fields (sensor range, rays, viewpoint radius and step, region
         penalty) and ``region_search_radius_m``, ``unknown_path_factor``.
+    gains : GainSource, optional
+        Rates the viewpoint candidates (``gains(grid, cells_rc) -> m^2``, ``reset()``);
+        default a :class:`~.viewpoints.GainCache` of the unknown area in view (another
+        strategy's planner passes its own, as ``foresight`` does with the predicted plan).
     """
 
-    def __init__(self, frontier_params: FrontierParams, params: SelectionParams) -> None:
+    def __init__(self, frontier_params: FrontierParams, params: SelectionParams,
+                 gains: GainSource | None = None) -> None:
         self._frontier_params = frontier_params
         self._p = params
-        self._gains_kept = GainCache(params.sensor_range_m, params.gain_rays,
-                                     frontier_params.occupied_threshold)
+        self._gains_kept: GainSource = gains if gains is not None else GainCache(
+            params.sensor_range_m, params.gain_rays, frontier_params.occupied_threshold)
         self._pairs = PairPaths(params.tour_refresh_rows)
         #: Gain (m^2) of each group's viewpoint in the last :meth:`viewpoints` call.
         self.gain_m2: npt.NDArray[np.float64] = np.zeros(0)
@@ -333,4 +346,4 @@ class Router:
         return front, order, best_len
 
 
-__all__ = ["Router", "TourPlan"]
+__all__ = ["GainSource", "Router", "TourPlan"]

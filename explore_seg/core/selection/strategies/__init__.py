@@ -18,6 +18,7 @@ name                module                       candidates / cost
 ``explore_lite``    :mod:`.explore_lite`         frontier groups; explore_lite's frontierCost
 ``rrt_exploration`` :mod:`.rrt_exploration`      RRT cluster centres; -revenue
 ``routed``          :mod:`.routed`               viewpoints of frontier parts; tour length
+``foresight``       :mod:`.foresight`            routed, viewpoints rated on a predicted plan
 =================== ============================ ==========================================
 
 Adding a strategy: write its cost function, wrap it in a :class:`Strategy` and
@@ -40,8 +41,8 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
 
-from explore_seg.core.selection.strategies import (explore_lite, nearest, paper,
-                                                   routed, rrt_exploration)
+from explore_seg.core.selection.strategies import (explore_lite, foresight, nearest,
+                                                   paper, routed, rrt_exploration)
 from explore_seg.core.selection.strategy import (_REGISTRY, CostFunction, CostInputs,
                                                  GoalOptions, Planner, PlannerFactory,
                                                  Strategy, get_strategy, register,
@@ -49,7 +50,8 @@ from explore_seg.core.selection.strategy import (_REGISTRY, CostFunction, CostIn
 
 #: The built-in strategies, in the order the docs list them (``routed`` is the default).
 BUILTIN: tuple[Strategy, ...] = (paper.STRATEGY, nearest.STRATEGY, explore_lite.STRATEGY,
-                                 rrt_exploration.STRATEGY, routed.STRATEGY)
+                                 rrt_exploration.STRATEGY, routed.STRATEGY,
+                                 foresight.STRATEGY)
 
 for _builtin in BUILTIN:
     register(_builtin, replace=True)   # replace: a module reload registers them again
