@@ -42,7 +42,7 @@ from bench import records, same_results, store  # noqa: E402
 from bench.figures import plot_coverage, plot_time_to  # noqa: E402
 from bench.records import TIMING_ROWS, as_float, by_world_strategy  # noqa: E402
 from bench.store import read_csv, slug  # noqa: E402
-from sim_bridge.strategy_specs import STRATEGIES  # noqa: E402
+from sim_bridge.strategy_specs import MATRIX_STRATEGIES  # noqa: E402
 
 #: The strategy the ratios are against: the explorer's default.
 DEFAULT_STRATEGY = "routed"
@@ -520,7 +520,7 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
              if cpu else "") + ".", ""]
     L += parts_lines(parts)
     L += setup_lines(meta, runs)
-    missing = [s for s in STRATEGIES if s not in strategies]
+    missing = [s for s in MATRIX_STRATEGIES if s not in strategies]
     if DEFAULT_STRATEGY not in strategies:
         L += [f"**`{DEFAULT_STRATEGY}`, the default strategy, has no runs in these results**, "
               "so no ratio against it is given; its figures so far are paired comparisons "

@@ -83,6 +83,7 @@ from bench.worlds import MAX_SIM_TIME_S, MIN_SIM_TIME_S, PAPER_CAMERA_MOUNT, \
 from sim_bridge.engine import SimParams  # noqa: E402
 from sim_bridge.lockstep import STRATEGIES, LockstepParams, load_explorer_params, \
     run_exploration  # noqa: E402
+from sim_bridge.strategy_specs import MATRIX_STRATEGIES  # noqa: E402
 
 #: What scripts import from here (the benchmark's world loading and run settings).
 __all__ = ["PAPER_CAMERA_MOUNT", "Progress", "compare_with_ros", "default_worlds",
@@ -110,7 +111,7 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     ap.add_argument("--list", action="store_true",
                     help="print the worlds (with the file each loads), strategies and runs "
                          "this command would run, and run nothing")
-    ap.add_argument("--strategies", default=",".join(STRATEGIES),
+    ap.add_argument("--strategies", default=",".join(MATRIX_STRATEGIES),
                     help=f"comma-separated, from {','.join(STRATEGIES)}")
     ap.add_argument("--jobs", type=int, default=2,
                     help="worker processes; with --executor ray: runs in flight")

@@ -90,6 +90,11 @@ STRATEGY_SPECS: dict[str, StrategySpec] = {
                     "object costmap), navigation outcome fed back"),
 }
 STRATEGIES: tuple[str, ...] = tuple(STRATEGY_SPECS)
+#: Arms that run only when asked for: ``foresight`` ships without predictor weights, and
+#: without them it decides exactly as ``routed``.
+EXPERIMENTAL: tuple[str, ...] = ("foresight",)
+#: The arms of the full benchmark matrix (``bench/run_bench.py``'s default).
+MATRIX_STRATEGIES: tuple[str, ...] = tuple(s for s in STRATEGIES if s not in EXPERIMENTAL)
 
 
 def strategy_spec(name: str) -> StrategySpec:

@@ -17,7 +17,7 @@ sys.path.insert(0, str(ROOT))
 
 from bench import records, report, run_bench, same_results, store  # noqa: E402
 from bench.worlds import default_worlds  # noqa: E402
-from sim_bridge.strategy_specs import STRATEGIES  # noqa: E402
+from sim_bridge.strategy_specs import MATRIX_STRATEGIES as STRATEGIES  # noqa: E402
 
 A, B = "aaaaaaa11111", "bbbbbbb22222"
 
