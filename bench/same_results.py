@@ -16,6 +16,9 @@ Usage::
     .venv/bin/python bench/same_results.py record after.json  (same options)
     .venv/bin/python bench/same_results.py compare before.json after.json
 
+``record --set "sim.FIELD=VALUE;..."`` runs with parameters overridden (``bench/paired.py``'s
+arm syntax): a new parameter set back to the old behaviour must reproduce the old results.
+
 Exit status of ``compare``: 0 when every run is identical, 1 otherwise.
 """
 
@@ -38,7 +41,7 @@ WALL_FIELDS = ("wall_time_s", "timings_ms")
 
 
 def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int],
-           max_sim_time_s: float) -> None:
+           max_sim_time_s: float, overrides: str = "") -> None:
     """Run every world x strategy x seed and write their results (see the module doc).
 
     The file is rewritten after every run; runs already in it are kept and not run again
@@ -47,7 +50,10 @@ def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int
     from bench.tasks import fix_explorer_params, run_task
     from bench.worlds import PAPER_CAMERA_MOUNT, load, sim_time_limit
 
-    fix_explorer_params()
+    explorer = fix_explorer_params()
+    run = run_task
+    if overrides:
+        run = _overridden_run(overrides, explorer)
     runs: list[dict[str, Any]] = (json.loads(path.read_text())["runs"] if path.is_file()
                                   else [])
     have = {r["key"] for r in runs}
@@ -62,7 +68,7 @@ def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int
                 t0 = time.perf_counter()
                 c0 = time.process_time()
                 try:
-                    d = run_task((w, s, seed, limit, None, PAPER_CAMERA_MOUNT, None))
+                    d = run((w, s, seed, limit, None, PAPER_CAMERA_MOUNT, None))
                     result = {k: v for k, v in d.items() if k not in WALL_FIELDS}
                     what = f"{d['coverage_pct']:.2f} % {d['stop_reason']}"
                 except Exception as err:    # recorded: a change may fix or cause it
@@ -75,6 +81,31 @@ def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int
                 path.write_text(json.dumps({"runs": runs}, indent=0))
                 print(f"{key}: {wall:.1f} s wall, {cpu:.1f} s CPU, {what}", file=sys.stderr,
                       flush=True)
+
+
+def _overridden_run(overrides: str, explorer: Any) -> Any:
+    """A :func:`bench.tasks.run_task` with the parameters of ``overrides`` (paired.py's
+    ``KEY=VALUE;...``) changed; rejects an unknown key before any run."""
+    import dataclasses
+
+    from bench.paired import build_params, parse_arm
+    from bench.worlds import load, sim_params_for
+    from sim_bridge.lockstep import LockstepParams, run_exploration
+
+    arm = parse_arm("set:" + overrides)
+
+    def run(task: tuple[Any, ...]) -> dict[str, Any]:
+        spec, strategy, seed, max_t, _, mount, nav_margin = task
+        ex, sim, ls = build_params(arm, explorer, sim_params_for(mount, nav_margin),
+                                   LockstepParams())
+        world, gt = load(spec)
+        return run_exploration(world, strategy, seed,
+                               params=dataclasses.replace(ls, max_sim_time_s=max_t),
+                               sim_params=sim, explorer_params=ex,
+                               ground_truth=gt).to_dict()
+
+    build_params(arm, explorer, sim_params_for(None), LockstepParams())
+    return run
 
 
 def compare(before: Path, after: Path) -> int:
@@ -124,6 +155,9 @@ def main(argv: list[str] | None = None) -> int:
     rec.add_argument("--seeds", default="0,1")
     rec.add_argument("--max-sim-time", type=float, default=0.0,
                      help="sim time limit per run in s (0 = the benchmark's)")
+    rec.add_argument("--set", default="", metavar="KEY=VALUE;...",
+                     help="parameter overrides (bench/paired.py's arm syntax: sim.FIELD, "
+                          "lockstep.FIELD, explorer.SECTION.FIELD)")
     cmp_ = sub.add_parser("compare", help="compare two recorded files")
     cmp_.add_argument("before")
     cmp_.add_argument("after")
@@ -132,7 +166,7 @@ def main(argv: list[str] | None = None) -> int:
         return compare(Path(a.before), Path(a.after))
     record(Path(a.out), [w for w in a.worlds.split(",") if w],
            [s for s in a.strategies.split(",") if s],
-           [int(s) for s in a.seeds.split(",") if s], a.max_sim_time)
+           [int(s) for s in a.seeds.split(",") if s], a.max_sim_time, a.set)
     return 0
 
 

@@ -362,7 +362,7 @@ class _LockstepRun:
     def _record_contact(self, event: Any) -> None:
         """Keep every contact, classified against the map and the layer navigation has."""
         self.result.contacts.append(
-            classify_contact(event, self.engine.collider, self.engine.map, self.layer))
+            classify_contact(event, self.engine.collider, self.engine.live_map, self.layer))
 
     def _record_coverage(self) -> float:
         """The coverage now; the time and path length of each milestone it reaches first."""

@@ -20,7 +20,7 @@ def sim(ros, tmp_path):
     node = SimBridgeNode(context=ros.context, parameter_overrides=[
         Parameter("world", value="small_house"),
         Parameter("real_time_factor", value=10.0),
-        Parameter("map_rate_hz", value=2.0),
+        Parameter("map_update_interval_s", value=0.5),
         Parameter("output_dir", value=str(tmp_path)),
     ])
     return ros.add(node)

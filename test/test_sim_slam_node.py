@@ -32,7 +32,7 @@ def test_node_publishes_the_erroneous_map_and_slam_pose(ros, tmp_path):
         Parameter("mapping_error", value="harsh"),
         Parameter("slam_pose", value=True),
         Parameter("real_time_factor", value=5.0),
-        Parameter("map_rate_hz", value=5.0),
+        Parameter("map_update_interval_s", value=0.2),
         Parameter("output_dir", value=str(tmp_path)),
     ]))
     eng = sim.engine
