@@ -8,18 +8,14 @@ occupancy map (:mod:`sim_bridge.mapping`), and runs the navigation stand-in
 (:mod:`sim_bridge.navigation`). Everything is driven by :meth:`SimEngine.step`, so
 benchmarks and tests run in lock step without ROS; :mod:`sim_bridge.node` wraps it.
 
-Rates of the real stack (each a :class:`SimParams` field; 0 restores the earlier
-every-scan / every-step behaviour):
-
-* the map the explorer sees (:attr:`SimEngine.map`) is slam_toolbox's: only keyframe
-  scans enter it (``mapping_keyframe_travel_m`` / ``mapping_keyframe_turn_rad``,
-  :func:`sim_bridge.slam_error.is_keyframe`) and it is republished every
-  ``map_update_interval_s``;
-* navigation plans on :attr:`SimEngine.live_map`, updated by every scan, as Nav2's
-  costmaps mark and clear from the scan topic between two maps;
-* the path follower runs at ``nav_controller_rate_hz`` (Nav2's ``controller_frequency``),
-  its command held between two calls, while physics steps every ``physics_dt_s``;
-  replanning stays at ``nav_replan_period_s`` (Nav2's 1 Hz) or at once on a blocked plan.
+Rates of the real stack (:class:`SimParams` fields; 0 gives back every scan / every step):
+the explorer's :attr:`SimEngine.map` holds keyframe scans only, republished every
+``map_update_interval_s`` (slam_toolbox, :mod:`sim_bridge.published_map`); navigation plans
+on :attr:`SimEngine.live_map`, updated by every scan (Nav2's costmaps mark and clear from
+the scan topic), and follows its plan at ``nav_controller_rate_hz`` (Nav2's
+``controller_frequency``, the command held in between) while physics steps every
+``physics_dt_s``; it replans at ``nav_replan_period_s`` (Nav2's 1 Hz) or at once on a
+blocked plan.
 
 Robot model (TurtleBot3 waffle): the body is 281 x 306 mm, i.e. a circumscribed radius
 of about 0.21 m around ``base_footprint``; the collision disk uses 0.22 m. Limits are
@@ -50,7 +46,8 @@ from sim_bridge.navigation import NavState, NavStatus, Navigator
 from sim_bridge.observable import with_observable
 from sim_bridge.params import DEPTH_ENCODINGS, SimParams
 from sim_bridge.sensors import DepthCamera, Lidar
-from sim_bridge.slam_error import LidarGeometry, SlamErrorModel, is_keyframe
+from sim_bridge.published_map import KeyframeMapper, MapPublication
+from sim_bridge.slam_error import LidarGeometry, SlamErrorModel
 from sim_bridge.world import World
 
 #: Re-exported: SimParams and Collider moved to sim_bridge.params / sim_bridge.collision.
@@ -174,29 +171,22 @@ class SimEngine:
         self._step_count = 0
         self._accum_s = 0.0
         self._mapper = ScanMapper((x, y), p.mapping_params())
-        # The keyframe map (without a mapping error model and with keyframes on): the
-        # scans slam_toolbox would have put in its map, at the poses _mapper used.
-        keyframes = p.mapping_keyframe_travel_m > 0 or p.mapping_keyframe_turn_rad > 0
-        self._kf_mapper = (ScanMapper((x, y), p.mapping_params())
-                           if keyframes and p.mapping_error == "none" else None)
-        self._last_kf_pose: tuple[float, float, float] | None = None
+        geometry = LidarGeometry(lp.angle_min_rad, lp.angle_increment_rad, lp.range_max_m,
+                                 lp.range_min_m)
         slam = p.slam_error_params()
         self._slam_error = (None if slam is None else SlamErrorModel(
-            slam, (x, y), p.mapping_params(),
-            LidarGeometry(lp.angle_min_rad, lp.angle_increment_rad, lp.range_max_m,
-                          lp.range_min_m), p.seed))
+            slam, (x, y), p.mapping_params(), geometry, p.seed))
+        # Without a mapping error model and with keyframes on, the keyframe scans at the
+        # poses _mapper used (the SLAM map is a keyframe map already).
+        keyframes = p.mapping_keyframe_travel_m > 0 or p.mapping_keyframe_turn_rad > 0
+        self._kf_mapper = (KeyframeMapper((x, y), p.mapping_params(), geometry,
+                                          p.mapping_keyframe_travel_m,
+                                          p.mapping_keyframe_turn_rad)
+                           if keyframes and slam is None else None)
         self._nav = Navigator(p.nav_params())
         self._map_stamp_ns = 0
         self._nav.set_map(lambda: self.live_map, 0)
-        # The published map (map_update_interval_s > 0): its snapshot, the content
-        # version it was taken at, the number of publications and the next one's time.
-        self._pub_map: GridMap | None = None
-        self._pub_version = -1
-        self._map_publishes = 0
-        self._next_map_pub_s = 0.0
-        # The path follower's held command and its next call (nav_controller_rate_hz > 0).
-        self._nav_cmd = (0.0, 0.0)
-        self._next_control_s = 0.0
+        self._published = MapPublication()
         self.metrics = SimMetrics(ground_truth)
         self._in_contact = False
         self._next_scan_s = 0.0
@@ -255,44 +245,34 @@ class SimEngine:
         """The published occupancy map, slam_toolbox's ``map``: the keyframe scans (the SLAM
         map with a mapping error model), as of the last publication (every
         ``map_update_interval_s``; 0: after every scan, stamped with its time)."""
-        if self.params.map_update_interval_s > 0 and self._pub_map is not None:
-            return self._pub_map
+        if self.params.map_update_interval_s > 0 and self._published.grid is not None:
+            return self._published.grid
         return self._keyframe_map()
 
     @property
     def live_map(self) -> GridMap:
         """The map navigation plans on, updated by every scan (stamped with the last one's
         time): the SLAM map with a mapping error model, else :attr:`true_map`."""
-        if self._slam_error is not None:
-            return self._slam_error.grid(self._map_stamp_ns)
-        return self._mapper.grid(self._map_stamp_ns)
+        return (self._slam_error or self._mapper).grid(self._map_stamp_ns)
 
     @property
     def live_map_version(self) -> int:
         """Changes whenever a scan changed :attr:`live_map`."""
-        if self._slam_error is not None:
-            return self._slam_error.version
-        return self._mapper.version
+        return (self._slam_error or self._mapper).version
 
     @property
     def map_publishes(self) -> int:
         """Publications of :attr:`map` so far (one per ``map_update_interval_s``, or per
         scan with 0): a publisher sends one message per increment."""
-        return self._map_publishes
+        return self._published.count
 
     def _keyframe_map(self, stamp_ns: int | None = None) -> GridMap:
         """The keyframe map now, stamped ``stamp_ns`` (default: the last scan's time)."""
         stamp = self._map_stamp_ns if stamp_ns is None else stamp_ns
-        if self._kf_mapper is not None:
-            return self._kf_mapper.grid(stamp)
-        if self._slam_error is not None:
-            return self._slam_error.grid(stamp)
-        return self._mapper.grid(stamp)
+        return (self._kf_mapper or self._slam_error or self._mapper).grid(stamp)
 
     def _keyframe_map_version(self) -> int:
-        if self._kf_mapper is not None:
-            return self._kf_mapper.version
-        return self.live_map_version
+        return (self._kf_mapper or self._slam_error or self._mapper).version
 
     @property
     def true_map(self) -> GridMap:
@@ -303,8 +283,8 @@ class SimEngine:
     def map_version(self) -> int:
         """Changes whenever :attr:`map`'s content changed (a republished unchanged map keeps
         it)."""
-        if self.params.map_update_interval_s > 0 and self._pub_map is not None:
-            return self._pub_version
+        if self.params.map_update_interval_s > 0 and self._published.grid is not None:
+            return self._published.version
         return self._keyframe_map_version()
 
     @property
@@ -375,7 +355,6 @@ class SimEngine:
         self.metrics.goal_received()
         self._nav_prev_state = NavState.ACTIVE
         self._cmd = (0.0, 0.0)
-        self._nav_cmd = (0.0, 0.0)
 
     def cancel_goal(self) -> None:
         """Cancel the active goal; the robot stops."""
@@ -478,9 +457,10 @@ class SimEngine:
             self._next_scan_s += 1.0 / p.scan_rate_hz
             self._do_scan()
             if p.map_update_interval_s <= 0:
-                self._map_publishes += 1
-        if p.map_update_interval_s > 0 and t >= self._next_map_pub_s - 1e-9:
-            self._publish_map(t, p.map_update_interval_s)
+                self._published.count += 1
+        if self._published.due(t, p.map_update_interval_s):
+            self._published.publish(t, p.map_update_interval_s, self._keyframe_map_version(),
+                                    self._keyframe_map, self.time_ns)
         if self._camera is not None and t >= self._next_camera_s - 1e-9:
             self._next_camera_s += 1.0 / p.camera_rate_hz
             frame = self._camera.render(self._pose, self._rng)
@@ -495,7 +475,7 @@ class SimEngine:
         if backing:
             v, w = self._backup_dir * p.collision_backup_speed_mps, 0.0
         elif self._nav.status.state is NavState.ACTIVE:
-            v, w = self._control(t, p.nav_controller_rate_hz)
+            v, w = self._nav.control(self.slam_pose, t)
         else:
             v, w = self._cmd
         self._track_nav_outcome()
@@ -506,33 +486,6 @@ class SimEngine:
             self._backup_left_m = 0.0 if moved == 0.0 else self._backup_left_m - moved
         self._step_count += 1
         self._time_s = self._step_count * dt  # no drift from summing dt
-
-    def _publish_map(self, t: float, interval_s: float) -> None:
-        """Publish the keyframe map stamped now (a new grid only when its content changed;
-        else the last one restamped, as slam_toolbox republishes an unchanged map)."""
-        self._next_map_pub_s += interval_s
-        if self._next_map_pub_s <= t:           # after a change of interval: no burst
-            self._next_map_pub_s = t + interval_s
-        version = self._keyframe_map_version()
-        if self._pub_map is None or version != self._pub_version:
-            self._pub_map = self._keyframe_map(self.time_ns)
-            self._pub_version = version
-        else:
-            self._pub_map = replace(self._pub_map, stamp_ns=self.time_ns)
-        self._map_publishes += 1
-
-    def _control(self, t: float, rate_hz: float) -> tuple[float, float]:
-        """The path follower's command: a new one at the controller's rate (every physics
-        step with rate 0), else the last one held."""
-        if rate_hz <= 0:
-            return self._nav.update(self.slam_pose, t)
-        if t >= self._next_control_s - 1e-9:
-            period = 1.0 / rate_hz
-            self._next_control_s += period
-            if self._next_control_s <= t:       # after an idle spell: no burst of calls
-                self._next_control_s = t + period
-            self._nav_cmd = self._nav.update(self.slam_pose, t)
-        return self._nav_cmd
 
     def _track_nav_outcome(self) -> None:
         state = self._nav.status.state
@@ -583,7 +536,6 @@ class SimEngine:
         """Stop: zero the command, abort the goal, back off (like Nav2's BackUp recovery)
         unless already backing; count a new contact event once."""
         self._cmd = (0.0, 0.0)
-        self._nav_cmd = (0.0, 0.0)
         backing = self._backup_left_m > 0.0
         if self._backup_left_m <= 0.0 and self.params.collision_backup_m > 0.0:
             self._backup_left_m = self.params.collision_backup_m
@@ -621,12 +573,8 @@ class SimEngine:
                         map_pose[2] + nyaw * p.pose_noise_yaw_rad)
         self._mapper.integrate_scan(map_pose, ranges, g.angle_min_rad, g.angle_increment_rad,
                                     g.range_max_m, g.range_min_m)
-        if self._kf_mapper is not None and is_keyframe(
-                self._last_kf_pose, pose, p.mapping_keyframe_travel_m,
-                p.mapping_keyframe_turn_rad):
-            self._last_kf_pose = pose
-            self._kf_mapper.integrate_scan(map_pose, ranges, g.angle_min_rad,
-                                           g.angle_increment_rad, g.range_max_m, g.range_min_m)
+        if self._kf_mapper is not None:
+            self._kf_mapper.add_scan(pose, map_pose, ranges)
         if self._slam_error is not None:
             self._slam_error.add_scan(pose, sensor_pose, ranges)
         self._map_stamp_ns = self.time_ns

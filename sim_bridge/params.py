@@ -217,7 +217,7 @@ class SimParams:
         "replan at most this often while the map changes (Nav2's default behaviour tree "
         "replans at 1 Hz: RateController hz=1.0 around ComputePathToPose); a blocked plan is "
         "replaced at once", "s", range=(0.0, math.inf)))
-    nav_controller_rate_hz: float = field(default=20.0, metadata=param_meta(
+    nav_controller_rate_hz: float = field(default=NavParams.controller_rate_hz, metadata=param_meta(
         "the path follower computes a new velocity command this often, the command held in "
         "between (Nav2 controller_frequency, 20 Hz in Nav2's and TurtleBot3's params); "
         "physics keeps physics_dt_s; 0 = every physics step (the runs before the rates were "
@@ -292,7 +292,7 @@ class SimParams:
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
         non_negative = ("pose_noise_xy_m", "pose_noise_yaw_rad", "collision_backup_m",
-                        "map_update_interval_s", "nav_controller_rate_hz")
+                        "map_update_interval_s")
         for name in non_negative:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
@@ -354,7 +354,8 @@ class SimParams:
             max_angular_speed_radps=self.max_angular_speed_radps,
             progress_timeout_s=self.nav_progress_timeout_s,
             goal_timeout_s=self.nav_goal_timeout_s,
-            collision_retries=self.nav_collision_retries)
+            collision_retries=self.nav_collision_retries,
+            controller_rate_hz=self.nav_controller_rate_hz)
 
     def mapping_params(self) -> MappingParams:
         """The mapper's parameters."""
