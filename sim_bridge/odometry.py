@@ -66,7 +66,8 @@ class DriftingOdometry:
 
 class SlamPoses:
     """Which scans make a SLAM pose: the first, then one after ``min_travel_m`` of travel
-    or ``min_turn_rad`` of turning since the last (0 and 0: every scan).
+    or ``min_turn_rad`` of turning since the last (0 and 0: every scan); the keyframe rule
+    of :func:`sim_bridge.slam_error.is_keyframe`.
 
     >>> s = SlamPoses(0.5, 0.5)
     >>> [s.take((x, 0.0, 0.0)) for x in (0.0, 0.2, 0.6, 0.7)]

@@ -327,8 +327,9 @@ class Explorer:
         now_s : float
             Current time in seconds (sim or ROS clock; monotonic between resets).
         grid : GridMap
-            The occupancy map. Pass the same object while the map is unchanged: frontiers
-            and path graphs are cached on it.
+            The occupancy map. While it is the same object as the last step's or an equal
+            one (geometry, frame and cells; a republished map), frontiers and path graphs
+            are reused; the goal manager still gets this map (its stamp).
         pose : (x_m, y_m, yaw_rad)
             The robot's pose in the map frame.
         layer : GridMap, optional
