@@ -12,8 +12,8 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Callable
 
-import numpy.typing as npt
 import numpy as np
+import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap
 from explore_seg.core.pose_fusion import Pose2D
