@@ -16,6 +16,9 @@ Usage::
     .venv/bin/python bench/same_results.py record after.json  (same options)
     .venv/bin/python bench/same_results.py compare before.json after.json
 
+``record --set "sim.FIELD=VALUE;..."`` runs with parameters overridden (``bench/paired.py``'s
+arm syntax): a new parameter set back to the old behaviour must reproduce the old results.
+
 Exit status of ``compare``: 0 when every run is identical, 1 otherwise.
 
 Each recorded run carries the code version it ran on (:func:`bench.store.code_version`:
@@ -59,7 +62,7 @@ CERTIFICATE_FORMAT = 1
 
 
 def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int],
-           max_sim_time_s: float) -> None:
+           max_sim_time_s: float, overrides: str = "") -> None:
     """Run every world x strategy x seed and write their results (see the module doc).
 
     The file is rewritten after every run; runs already in it are kept and not run again
@@ -69,8 +72,11 @@ def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int
     from bench.tasks import fix_explorer_params, run_task
     from bench.worlds import PAPER_CAMERA_MOUNT, load, sim_time_limit
 
-    fix_explorer_params()
+    explorer = fix_explorer_params()
     code = code_version()
+    run = run_task
+    if overrides:
+        run = _overridden_run(overrides, explorer)
     runs: list[dict[str, Any]] = (json.loads(path.read_text())["runs"] if path.is_file()
                                   else [])
     have = {r["key"] for r in runs}
@@ -85,7 +91,7 @@ def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int
                 t0 = time.perf_counter()
                 c0 = time.process_time()
                 try:
-                    d = run_task((w, s, seed, limit, None, PAPER_CAMERA_MOUNT, None))
+                    d = run((w, s, seed, limit, None, PAPER_CAMERA_MOUNT, None))
                     result = {k: v for k, v in d.items() if k not in WALL_FIELDS}
                     what = f"{d['coverage_pct']:.2f} % {d['stop_reason']}"
                 except Exception as err:    # recorded: a change may fix or cause it
@@ -93,7 +99,7 @@ def record(path: Path, worlds: list[str], strategies: list[str], seeds: list[int
                     what = result["error"]
                 wall = time.perf_counter() - t0
                 cpu = time.process_time() - c0
-                runs.append({"key": key, "code": code,
+                runs.append({"key": key, "code": code, **({"set": overrides} if overrides else {}),
                              "wall_s": round(wall, 2), "cpu_s": round(cpu, 2),
                              "load1": round(os.getloadavg()[0], 2), "result": result})
                 path.write_text(json.dumps({"runs": runs}, indent=0))
@@ -106,6 +112,9 @@ def certificate(a: dict[str, dict[str, Any]], b: dict[str, dict[str, Any]]
     """The certificate of two recorded files' runs (key -> run, see the module
     docstring), or None and why there is none: a run that differs, is missing from
     ``b``, raised, or files that did not each run on one clean commit."""
+    if any("set" in r for r in (*a.values(), *b.values())):
+        return None, ("runs recorded with --set: a certificate vouches for the benchmark's "
+                      "own settings only")
     codes = []
     for name, runs in (("before", a), ("after", b)):
         c = {r.get("code") for r in runs.values()}
@@ -127,6 +136,31 @@ def certificate(a: dict[str, dict[str, Any]], b: dict[str, dict[str, Any]]
         out[key] = {k: ra["result"].get(k) for k in FINGERPRINT}
     return {"certificate": CERTIFICATE, "format": CERTIFICATE_FORMAT,
             "before": codes[0], "after": codes[1], "runs": out}, ""
+
+
+def _overridden_run(overrides: str, explorer: Any) -> Any:
+    """A :func:`bench.tasks.run_task` with the parameters of ``overrides`` (paired.py's
+    ``KEY=VALUE;...``) changed; rejects an unknown key before any run."""
+    import dataclasses
+
+    from bench.paired import build_params, parse_arm
+    from bench.worlds import load, sim_params_for
+    from sim_bridge.lockstep import LockstepParams, run_exploration
+
+    arm = parse_arm("set:" + overrides)
+
+    def run(task: tuple[Any, ...]) -> dict[str, Any]:
+        spec, strategy, seed, max_t, _, mount, nav_margin = task
+        ex, sim, ls = build_params(arm, explorer, sim_params_for(mount, nav_margin),
+                                   LockstepParams())
+        world, gt = load(spec)
+        return run_exploration(world, strategy, seed,
+                               params=dataclasses.replace(ls, max_sim_time_s=max_t),
+                               sim_params=sim, explorer_params=ex,
+                               ground_truth=gt).to_dict()
+
+    build_params(arm, explorer, sim_params_for(None), LockstepParams())
+    return run
 
 
 def compare(before: Path, after: Path, cert_path: Path | None = None) -> int:
@@ -186,6 +220,9 @@ def main(argv: list[str] | None = None) -> int:
     rec.add_argument("--seeds", default="0,1")
     rec.add_argument("--max-sim-time", type=float, default=0.0,
                      help="sim time limit per run in s (0 = the benchmark's)")
+    rec.add_argument("--set", default="", metavar="KEY=VALUE;...",
+                     help="parameter overrides (bench/paired.py's arm syntax: sim.FIELD, "
+                          "lockstep.FIELD, explorer.SECTION.FIELD)")
     cmp_ = sub.add_parser("compare", help="compare two recorded files")
     cmp_.add_argument("before")
     cmp_.add_argument("after")
@@ -200,7 +237,7 @@ def main(argv: list[str] | None = None) -> int:
                        Path(a.certificate) if a.certificate else None)
     record(Path(a.out), [w for w in a.worlds.split(",") if w],
            [s for s in a.strategies.split(",") if s],
-           [int(s) for s in a.seeds.split(",") if s], a.max_sim_time)
+           [int(s) for s in a.seeds.split(",") if s], a.max_sim_time, a.set)
     return 0
 
 

@@ -8,6 +8,15 @@ occupancy map (:mod:`sim_bridge.mapping`), and runs the navigation stand-in
 (:mod:`sim_bridge.navigation`). Everything is driven by :meth:`SimEngine.step`, so
 benchmarks and tests run in lock step without ROS; :mod:`sim_bridge.node` wraps it.
 
+Rates of the real stack (:class:`SimParams` fields; 0 gives back every scan / every step):
+the explorer's :attr:`SimEngine.map` holds keyframe scans only, republished every
+``map_update_interval_s`` (slam_toolbox, :mod:`sim_bridge.published_map`); navigation plans
+on :attr:`SimEngine.live_map`, updated by every scan (Nav2's costmaps mark and clear from
+the scan topic), and follows its plan at ``nav_controller_rate_hz`` (Nav2's
+``controller_frequency``, the command held in between) while physics steps every
+``physics_dt_s``; it replans at ``nav_replan_period_s`` (Nav2's 1 Hz) or at once on a
+blocked plan.
+
 Robot model (TurtleBot3 waffle): the body is 281 x 306 mm, i.e. a circumscribed radius
 of about 0.21 m around ``base_footprint``; the collision disk uses 0.22 m. Limits are
 the waffle's 0.26 m/s and 1.82 rad/s. ``robot_height_m`` defaults to 1.1 m: a waffle
@@ -37,6 +46,7 @@ from sim_bridge.navigation import NavState, NavStatus, Navigator
 from sim_bridge.observable import with_observable
 from sim_bridge.params import DEPTH_ENCODINGS, SimParams
 from sim_bridge.sensors import DepthCamera, Lidar
+from sim_bridge.published_map import KeyframeMapper, MapPublication
 from sim_bridge.slam_error import LidarGeometry, SlamErrorModel
 from sim_bridge.world import World
 
@@ -161,14 +171,22 @@ class SimEngine:
         self._step_count = 0
         self._accum_s = 0.0
         self._mapper = ScanMapper((x, y), p.mapping_params())
+        geometry = LidarGeometry(lp.angle_min_rad, lp.angle_increment_rad, lp.range_max_m,
+                                 lp.range_min_m)
         slam = p.slam_error_params()
         self._slam_error = (None if slam is None else SlamErrorModel(
-            slam, (x, y), p.mapping_params(),
-            LidarGeometry(lp.angle_min_rad, lp.angle_increment_rad, lp.range_max_m,
-                          lp.range_min_m), p.seed))
+            slam, (x, y), p.mapping_params(), geometry, p.seed))
+        # Without a mapping error model and with keyframes on, the keyframe scans at the
+        # poses _mapper used (the SLAM map is a keyframe map already).
+        keyframes = p.mapping_keyframe_travel_m > 0 or p.mapping_keyframe_turn_rad > 0
+        self._kf_mapper = (KeyframeMapper((x, y), p.mapping_params(), geometry,
+                                          p.mapping_keyframe_travel_m,
+                                          p.mapping_keyframe_turn_rad)
+                           if keyframes and slam is None else None)
         self._nav = Navigator(p.nav_params())
         self._map_stamp_ns = 0
-        self._nav.set_map(lambda: self.map, 0)
+        self._nav.set_map(lambda: self.live_map, 0)
+        self._published = MapPublication()
         self.metrics = SimMetrics(ground_truth)
         self._in_contact = False
         self._next_scan_s = 0.0
@@ -224,11 +242,37 @@ class SimEngine:
 
     @property
     def map(self) -> GridMap:
-        """The published occupancy map (stamped with the sim time of the last scan): the
-        SLAM map with a mapping error model, else :attr:`true_map`."""
-        if self._slam_error is not None:
-            return self._slam_error.grid(self._map_stamp_ns)
-        return self._mapper.grid(self._map_stamp_ns)
+        """The published occupancy map, slam_toolbox's ``map``: the keyframe scans (the SLAM
+        map with a mapping error model), as of the last publication (every
+        ``map_update_interval_s``; 0: after every scan, stamped with its time)."""
+        if self.params.map_update_interval_s > 0 and self._published.grid is not None:
+            return self._published.grid
+        return self._keyframe_map()
+
+    @property
+    def live_map(self) -> GridMap:
+        """The map navigation plans on, updated by every scan (stamped with the last one's
+        time): the SLAM map with a mapping error model, else :attr:`true_map`."""
+        return (self._slam_error or self._mapper).grid(self._map_stamp_ns)
+
+    @property
+    def live_map_version(self) -> int:
+        """Changes whenever a scan changed :attr:`live_map`."""
+        return (self._slam_error or self._mapper).version
+
+    @property
+    def map_publishes(self) -> int:
+        """Publications of :attr:`map` so far (one per ``map_update_interval_s``, or per
+        scan with 0): a publisher sends one message per increment."""
+        return self._published.count
+
+    def _keyframe_map(self, stamp_ns: int | None = None) -> GridMap:
+        """The keyframe map now, stamped ``stamp_ns`` (default: the last scan's time)."""
+        stamp = self._map_stamp_ns if stamp_ns is None else stamp_ns
+        return (self._kf_mapper or self._slam_error or self._mapper).grid(stamp)
+
+    def _keyframe_map_version(self) -> int:
+        return (self._kf_mapper or self._slam_error or self._mapper).version
 
     @property
     def true_map(self) -> GridMap:
@@ -237,10 +281,11 @@ class SimEngine:
 
     @property
     def map_version(self) -> int:
-        """Changes whenever a scan changed :attr:`map`."""
-        if self._slam_error is not None:
-            return self._slam_error.version
-        return self._mapper.version
+        """Changes whenever :attr:`map`'s content changed (a republished unchanged map keeps
+        it)."""
+        if self.params.map_update_interval_s > 0 and self._published.grid is not None:
+            return self._published.version
+        return self._keyframe_map_version()
 
     @property
     def nav_status(self) -> NavStatus:
@@ -411,6 +456,11 @@ class SimEngine:
         if t >= self._next_scan_s - 1e-9:
             self._next_scan_s += 1.0 / p.scan_rate_hz
             self._do_scan()
+            if p.map_update_interval_s <= 0:
+                self._published.count += 1
+        if self._published.due(t, p.map_update_interval_s):
+            self._published.publish(t, p.map_update_interval_s, self._keyframe_map_version(),
+                                    self._keyframe_map, self.time_ns)
         if self._camera is not None and t >= self._next_camera_s - 1e-9:
             self._next_camera_s += 1.0 / p.camera_rate_hz
             frame = self._camera.render(self._pose, self._rng)
@@ -425,7 +475,7 @@ class SimEngine:
         if backing:
             v, w = self._backup_dir * p.collision_backup_speed_mps, 0.0
         elif self._nav.status.state is NavState.ACTIVE:
-            v, w = self._nav.update(self.slam_pose, t)
+            v, w = self._nav.control(self.slam_pose, t)
         else:
             v, w = self._cmd
         self._track_nav_outcome()
@@ -523,10 +573,12 @@ class SimEngine:
                         map_pose[2] + nyaw * p.pose_noise_yaw_rad)
         self._mapper.integrate_scan(map_pose, ranges, g.angle_min_rad, g.angle_increment_rad,
                                     g.range_max_m, g.range_min_m)
+        if self._kf_mapper is not None:
+            self._kf_mapper.add_scan(pose, map_pose, ranges)
         if self._slam_error is not None:
             self._slam_error.add_scan(pose, sensor_pose, ranges)
         self._map_stamp_ns = self.time_ns
-        self._nav.set_map(lambda: self.map, self.map_version)
+        self._nav.set_map(lambda: self.live_map, self.live_map_version)
         self._latest_scan = ScanFrame(self._time_s, pose, ranges, self.slam_pose)
         self.scan_events.append(self._latest_scan)
 

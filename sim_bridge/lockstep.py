@@ -37,9 +37,14 @@ the ROS explorer use the same values; decisions run at ``SelectorNodeParams.rate
 the object costmap at ``ObjectCostmapNodeParams.rate_hz`` unless :class:`LockstepParams` says
 otherwise.
 
+The map every decision sees is the engine's published one, slam_toolbox's: keyframe scans,
+republished every ``SimParams.map_update_interval_s``; regions are recomputed when its
+content changed and the decision core reuses its frontiers and path graphs while it did not
+(see :mod:`sim_bridge.engine` for the rates).
+
 Differences from the ROS pipeline (intentional): everything is synchronous (every
-decision sees the frontiers, regions and object layer of the current map, where the
-nodes see their latest messages, possibly a cycle old); the navigation stand-in gets a
+decision sees the frontiers, regions and object layer of the latest published map, where
+the nodes see their latest messages, possibly a cycle old); the navigation stand-in gets a
 new object layer only when a box appeared, vanished or moved/grew by more than
 ``object_update_tolerance_m``; the camera is rendered only when the object costmap
 processes a frame and, by default, at half the simulator's resolution (intrinsics
@@ -362,7 +367,7 @@ class _LockstepRun:
     def _record_contact(self, event: Any) -> None:
         """Keep every contact, classified against the map and the layer navigation has."""
         self.result.contacts.append(
-            classify_contact(event, self.engine.collider, self.engine.map, self.layer,
+            classify_contact(event, self.engine.collider, self.engine.live_map, self.layer,
                              map_from_world=(self.engine.slam_error.drift
                                              if self.engine.slam_error is not None else None)))
 

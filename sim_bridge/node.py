@@ -8,7 +8,8 @@ run with ``use_sim_time: true``. Exploration nodes need none of the ``sim/*`` to
 Published: ``/clock``, ``scan``, ``odom`` (the map-frame pose in ``map``; with
 ``odom_frame`` ``odom``: drifting odometry of the true motion, :mod:`sim_bridge.odometry`),
 ``pose`` (with ``slam_pose``: the scan-rate map-frame pose slam_toolbox would publish),
-``map``, ``plan``, ``camera/*`` (with
+``map`` (the engine's published map: keyframe scans, every ``map_update_interval_s``, as
+slam_toolbox publishes it), ``plan``, ``camera/*`` (with
 ``enable_camera``), ``sim/metrics``. Subscribed: ``goal_pose`` and
 the OccupancyGrid layers named in ``costmap_layers``. Service: ``sim/save_metrics``.
 The map-frame pose is the engine's SLAM pose: the true pose, or with ``mapping_error`` the
@@ -75,7 +76,7 @@ class SimBridgeNode(Node):
         self._engine.on_collision(self._on_collision)
         self._wall = Clock(clock_type=ClockType.STEADY_TIME)
         self._last_wall_ns: int | None = None
-        self._next_map_s = 0.0
+        self._published_maps = 0
         self._next_metrics_s = 0.0
         self._published_plan_version = -1
         self._nav_state = NavState.IDLE
@@ -264,8 +265,9 @@ class SimBridgeNode(Node):
             else:
                 self._publish_camera(sample)
         self._publish_odom(t, eng.pose, eng.slam_pose)
-        if t >= self._next_map_s:
-            self._next_map_s = t + 1.0 / p.map_rate_hz
+        if eng.map_publishes != self._published_maps:
+            # One message per tick however many publications it spanned (the latest).
+            self._published_maps = eng.map_publishes
             self._map_pub.publish(convert.grid_to_msg(eng.map))
         if eng.plan_version != self._published_plan_version:
             self._published_plan_version = eng.plan_version

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 
 from explore_seg.core.pose_fusion import Pose2D, compose, inverse
+from sim_bridge.slam_error import is_keyframe
 
 #: Below this true displacement per update (m, rad) the robot counts as standing still.
 _STILL_M, _STILL_RAD = 1e-6, 1e-6
@@ -65,7 +66,8 @@ class DriftingOdometry:
 
 class SlamPoses:
     """Which scans make a SLAM pose: the first, then one after ``min_travel_m`` of travel
-    or ``min_turn_rad`` of turning since the last (0 and 0: every scan).
+    or ``min_turn_rad`` of turning since the last (0 and 0: every scan); the keyframe rule
+    of :func:`sim_bridge.slam_error.is_keyframe`.
 
     >>> s = SlamPoses(0.5, 0.5)
     >>> [s.take((x, 0.0, 0.0)) for x in (0.0, 0.2, 0.6, 0.7)]
@@ -79,11 +81,7 @@ class SlamPoses:
 
     def take(self, pose: Pose2D) -> bool:
         """True when the scan taken at ``pose`` yields a SLAM pose."""
-        last = self._last
-        if last is not None:
-            moved = math.hypot(pose[0] - last[0], pose[1] - last[1])
-            turned = abs(math.atan2(math.sin(pose[2] - last[2]), math.cos(pose[2] - last[2])))
-            if moved < self.min_travel_m and turned < self.min_turn_rad:
-                return False
+        if not is_keyframe(self._last, pose, self.min_travel_m, self.min_turn_rad):
+            return False
         self._last = pose
         return True

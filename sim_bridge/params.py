@@ -7,7 +7,7 @@ the mapper, the lidar and the camera, which validate their own fields.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from explore_seg.core.fields import param_meta
 from sim_bridge.mapping import MappingParams
@@ -111,8 +111,14 @@ class SimParams:
     # --- mapping
     map_resolution_m: float = field(default=MappingParams.resolution_m, metadata=param_meta(
         "occupancy map cell size", "m", range=(0.0, math.inf), read_only=True))
-    map_rate_hz: float = field(default=1.0, metadata=param_meta(
-        "map publish rate (sim time)", "Hz", range=(0.0, math.inf)))
+    map_update_interval_s: float = field(default=5.0, metadata=param_meta(
+        "the map the explorer sees ('map') is republished this often, as slam_toolbox's "
+        "map_update_interval: 5 s is the value of slam_toolbox's shipped "
+        "mapper_params_online_async.yaml and of Nav2's bringup, what a TurtleBot3 user "
+        "running the stock SLAM launch gets; navigation plans on every scan meanwhile (Nav2's "
+        "costmaps mark and clear from the scan topic); 0 = after every scan (the lock-step "
+        "runs before the rates were modelled; the node published at 1 s)", "s",
+        range=(0.0, math.inf)))
     pose_noise_xy_m: float = field(default=0.0, metadata=param_meta(
         "std of the position error of the pose each scan is mapped at", "m",
         range=(0.0, math.inf)))
@@ -146,12 +152,15 @@ class SimParams:
         read_only=True))
     mapping_keyframe_travel_m: float = field(
         default=SlamErrorParams.keyframe_travel_m, metadata=param_meta(
-        "(custom) a scan enters the map after this much travel (slam_toolbox "
-        "minimum_travel_distance)", "m", range=(0.0, math.inf), read_only=True))
+        "a scan enters the map ('map', with or without a mapping error model) only as a "
+        "keyframe: after this much travel since the last one (slam_toolbox "
+        "minimum_travel_distance, 0.5 m shipped); 0 with mapping_keyframe_turn_rad 0 = every "
+        "scan (the runs without mapping error before keyframes were modelled)", "m",
+        range=(0.0, math.inf), read_only=True))
     mapping_keyframe_turn_rad: float = field(
         default=SlamErrorParams.keyframe_turn_rad, metadata=param_meta(
-        "(custom) ... or this much turning (minimum_travel_heading)", "rad",
-        range=(0.0, math.inf), read_only=True))
+        "... or this much turning (slam_toolbox minimum_travel_heading, 0.5 rad shipped)",
+        "rad", range=(0.0, math.inf), read_only=True))
     mapping_loop_radius_m: float = field(
         default=SlamErrorParams.loop_radius_m, metadata=param_meta(
         "(custom) a keyframe closes a loop with an old one within this distance", "m",
@@ -205,7 +214,14 @@ class SimParams:
     nav_unknown_cost: float = field(default=NavParams.unknown_cost, metadata=param_meta(
         "extra cost per metre through unknown cells", range=(0.0, math.inf)))
     nav_replan_period_s: float = field(default=NavParams.replan_period_s, metadata=param_meta(
-        "replan at most this often while the map changes", "s", range=(0.0, math.inf)))
+        "replan at most this often while the map changes (Nav2's default behaviour tree "
+        "replans at 1 Hz: RateController hz=1.0 around ComputePathToPose); a blocked plan is "
+        "replaced at once", "s", range=(0.0, math.inf)))
+    nav_controller_rate_hz: float = field(default=NavParams.controller_rate_hz, metadata=param_meta(
+        "the path follower computes a new velocity command this often, the command held in "
+        "between (Nav2 controller_frequency, 20 Hz in Nav2's and TurtleBot3's params); "
+        "physics keeps physics_dt_s; 0 = every physics step (the runs before the rates were "
+        "modelled)", "Hz", range=(0.0, math.inf)))
     nav_plan_downsample: int = field(default=NavParams.plan_downsample, metadata=param_meta(
         "plan on cells this many times coarser than the map", range=(1, 8)))
     nav_arc_check_edges: bool = field(default=NavParams.arc_check_edges, metadata=param_meta(
@@ -268,14 +284,15 @@ class SimParams:
                              f"{self.startup_real_time_factor}")
         positive = ("physics_dt_s", "real_time_factor", "robot_radius_m", "robot_height_m",
                     "max_linear_speed_mps", "max_angular_speed_radps", "map_resolution_m",
-                    "map_rate_hz", "coverage_period_s", "lockstep_dt_s", "tick_period_s",
+                    "coverage_period_s", "lockstep_dt_s", "tick_period_s",
                     "max_sim_step_per_tick_s", "metrics_rate_hz",
                     "collision_backup_speed_mps")
         for name in positive:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
-        non_negative = ("pose_noise_xy_m", "pose_noise_yaw_rad", "collision_backup_m")
+        non_negative = ("pose_noise_xy_m", "pose_noise_yaw_rad", "collision_backup_m",
+                        "map_update_interval_s")
         for name in non_negative:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
@@ -337,7 +354,8 @@ class SimParams:
             max_angular_speed_radps=self.max_angular_speed_radps,
             progress_timeout_s=self.nav_progress_timeout_s,
             goal_timeout_s=self.nav_goal_timeout_s,
-            collision_retries=self.nav_collision_retries)
+            collision_retries=self.nav_collision_retries,
+            controller_rate_hz=self.nav_controller_rate_hz)
 
     def mapping_params(self) -> MappingParams:
         """The mapper's parameters."""
@@ -360,7 +378,8 @@ class SimParams:
 
     def slam_error_params(self) -> SlamErrorParams | None:
         """The mapping error model's numbers: the profile's, the ``mapping_*`` fields'
-        (``custom``), or None (``none``)."""
+        (``custom``), or None (``none``); the keyframes are ``mapping_keyframe_*`` in every
+        mode."""
         custom = SlamErrorParams(
             drift_xy_m=self.mapping_drift_xy_m,
             drift_yaw_per_m_rad=self.mapping_drift_yaw_per_m_rad,
@@ -372,4 +391,7 @@ class SimParams:
             loop_min_travel_m=self.mapping_loop_min_travel_m)   # validated in every mode
         if self.mapping_error == "none":
             return None
-        return PROFILES.get(self.mapping_error, custom)
+        profile = PROFILES.get(self.mapping_error, custom)
+        # One keyframe rule for every map: the profile's drift and closures, these keyframes.
+        return replace(profile, keyframe_travel_m=self.mapping_keyframe_travel_m,
+                       keyframe_turn_rad=self.mapping_keyframe_turn_rad)

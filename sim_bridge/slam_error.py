@@ -46,6 +46,29 @@ from sim_bridge.mapping import MappingParams, ScanMapper
 _STILL_M, _STILL_RAD = 1e-6, 1e-6
 
 
+def is_keyframe(last: Pose2D | None, pose: Pose2D, min_travel_m: float,
+                min_turn_rad: float) -> bool:
+    """slam_toolbox's keyframe rule: a scan taken at ``pose`` enters the pose graph and the
+    map when it is the first (``last`` None) or the robot moved at least ``min_travel_m``
+    (``minimum_travel_distance``) or turned at least ``min_turn_rad``
+    (``minimum_travel_heading``) since the last keyframe, taken at ``last``. With 0 and 0
+    every scan is a keyframe.
+
+    The one home of the rule: the mapping error model, the engine's published map and the
+    node's SLAM poses use it.
+
+    >>> is_keyframe((0.0, 0.0, 0.0), (0.3, 0.0, 0.0), 0.5, 0.5)
+    False
+    >>> is_keyframe((0.0, 0.0, 0.0), (0.3, 0.0, 0.6), 0.5, 0.5)
+    True
+    """
+    if last is None:
+        return True
+    moved = math.hypot(pose[0] - last[0], pose[1] - last[1])
+    turned = abs(wrap_angle(pose[2] - last[2]))
+    return moved >= min_travel_m or turned >= min_turn_rad
+
+
 @dataclass(frozen=True)
 class SlamErrorParams:
     """Numbers of the mapping error model (see the module docstring)."""
@@ -268,12 +291,8 @@ class SlamErrorModel:
         self._drift = compose(est, inverse(true_pose))
 
     def _is_keyframe(self, true_pose: Pose2D) -> bool:
-        if not self._kf_base:
-            return True
-        last = self._kf_base[-1]
-        moved = math.hypot(true_pose[0] - last[0], true_pose[1] - last[1])
-        turned = abs(wrap_angle(true_pose[2] - last[2]))
-        return moved >= self.params.keyframe_travel_m or turned >= self.params.keyframe_turn_rad
+        return is_keyframe(self._kf_base[-1] if self._kf_base else None, true_pose,
+                           self.params.keyframe_travel_m, self.params.keyframe_turn_rad)
 
     def _loop_candidate(self, k: int) -> int | None:
         """The nearest old keyframe keyframe ``k`` closes a loop with, or None."""

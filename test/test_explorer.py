@@ -182,7 +182,11 @@ def test_frontiers_and_paths_are_cached_per_map_and_layer_object():
     assert again.action is Action.KEEP
     layer = g.with_data(np.zeros_like(g.data))
     assert ex.step(2.0, g, pose, layer).detected          # a new layer object
-    assert ex.step(3.0, g.with_data(g.data.copy()), pose, layer).detected   # a new map
+    # an equal map (a republished one) reuses the products; a changed one does not
+    assert not ex.step(3.0, g.with_data(g.data.copy()), pose, layer).detected
+    changed = g.data.copy()
+    changed[1, 9] = 0                                    # a frontier cell seen free
+    assert ex.step(4.0, g.with_data(changed), pose, layer).detected
 
 
 def test_object_layer_blocks_and_a_layer_in_another_frame_is_ignored():

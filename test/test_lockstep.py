@@ -44,7 +44,8 @@ def test_explores_small_house_to_completion(runs, strategy):
     assert t == sorted(t) and p == sorted(p)
     assert t[-1] <= r.sim_time_s and p[-1] <= r.path_length_m + 1e-9
     assert r.goals_sent >= 1 and r.goals_sent == len(r.goals)
-    assert len(r.timings_ms["frontier"]) == len(r.timings_ms["selection"]) >= 1
+    # detection only when the published map or the object layer changed
+    assert 1 <= len(r.timings_ms["frontier"]) < len(r.timings_ms["selection"])
     # the decision core: detection + selection of each decision, inside the lock step's
     # decision (which adds segmentation and sending the goal)
     core, sel, dec = (np.asarray(r.timings_ms[k]) for k in ("core", "selection", "decision"))

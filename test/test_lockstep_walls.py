@@ -12,8 +12,10 @@ from sim_bridge.worlds import default_world
 
 
 def test_wall_mask_per_map_version_equals_a_fresh_one():
-    eng = SimEngine(default_world("small_house"), SimParams(seed=2, enable_camera=True,
-                                                             compute_coverage=False))
+    # The map changes at every scan (no keyframes, no publishing interval): many versions.
+    eng = SimEngine(default_world("small_house"), SimParams(
+        seed=2, enable_camera=True, compute_coverage=False, map_update_interval_s=0.0,
+        mapping_keyframe_travel_m=0.0, mapping_keyframe_turn_rad=0.0))
     pipe = ObjectPipeline(eng, ObjectParams(), 2, LockstepParams())
     eng.set_cmd_vel(0.0, 0.6)                     # turn in place: walls seen again and again
     reused = computed = 0

@@ -168,6 +168,8 @@ def test_same_results_writes_a_certificate_only_for_identical_runs_on_clean_comm
     dirty = _same_results_file(A + "+modified", res)
     assert "committed code" in same_results.certificate(before, dirty)[1]
     assert same_results.certificate(before, _same_results_file(B, res))[0] is None
+    overridden = {k: dict(r, set="sim.map_update_interval_s=0") for k, r in after.items()}
+    assert "--set" in same_results.certificate(before, overridden)[1]
     # compare writes it; the report reads it back
     for name, runs in (("b.json", before), ("a.json", after)):
         (tmp_path / name).write_text(json.dumps({"runs": list(runs.values())}))

@@ -20,7 +20,7 @@ def sim(ros, tmp_path):
     node = SimBridgeNode(context=ros.context, parameter_overrides=[
         Parameter("world", value="small_house"),
         Parameter("real_time_factor", value=10.0),
-        Parameter("map_rate_hz", value=2.0),
+        Parameter("map_update_interval_s", value=0.5),
         Parameter("output_dir", value=str(tmp_path)),
     ])
     return ros.add(node)
@@ -239,3 +239,31 @@ def test_camera_topics_carry_rgb_depth_semantic_and_info(ros, tmp_path, encoding
     assert np.isfinite(d).any() and np.nanmin(d) > 0
     k = convert.intrinsics_from_msg(got["camera/color/camera_info"])
     assert (k.fx, k.cx, k.width, k.height) == (131.0, 79.5, 160, 120)
+
+
+def test_map_is_published_at_map_update_interval_s_and_the_rates_reach_the_engine(
+        ros, tmp_path):
+    from nav_msgs.msg import OccupancyGrid
+
+    from sim_bridge.node import SimBridgeNode
+
+    node = ros.add(SimBridgeNode(context=ros.context, parameter_overrides=[
+        Parameter("world", value="small_house"), Parameter("lockstep", value=True),
+        Parameter("lockstep_dt_s", value=0.1), Parameter("tick_period_s", value=0.005),
+        Parameter("map_update_interval_s", value=1.0),
+        Parameter("nav_controller_rate_hz", value=10.0),
+        Parameter("mapping_keyframe_travel_m", value=0.3),
+        Parameter("output_dir", value=str(tmp_path))]))
+    p = node.engine.params
+    assert (p.map_update_interval_s, p.nav_controller_rate_hz,
+            p.mapping_keyframe_travel_m) == (1.0, 10.0, 0.3)
+    probe = ros.node("sim_rates_probe")
+    stamps: list[float] = []
+    probe.create_subscription(OccupancyGrid, "map", lambda m: stamps.append(
+        convert.stamp_to_ns(m.header.stamp) / 1e9), MAP_QOS)
+    ros.spin_until(lambda: len(stamps) >= 4, timeout_s=20.0, what="4 maps")
+    assert np.diff(stamps[:4]) == pytest.approx([1.0, 1.0, 1.0])
+    node.set_parameters([Parameter("map_update_interval_s", value=0.5)])
+    n = len(stamps)
+    ros.spin_until(lambda: len(stamps) >= n + 4, timeout_s=20.0, what="4 more maps")
+    assert np.diff(stamps[n + 1:n + 4]) == pytest.approx([0.5, 0.5])

@@ -53,7 +53,7 @@ def test_profiles_and_validation():
     assert HARSH.drift_xy_m > REALISTIC.drift_xy_m and HARSH.loop_min_travel_m > \
         REALISTIC.loop_min_travel_m
     assert SimParams().mapping_error == "none" and SimParams().slam_error_params() is None
-    assert SimParams(mapping_error="harsh").slam_error_params() is HARSH
+    assert SimParams(mapping_error="harsh").slam_error_params() == HARSH
     assert SimParams(mapping_error="custom", mapping_drift_xy_m=0.1
                      ).slam_error_params().drift_xy_m == 0.1
     with pytest.raises(ValueError, match="mapping_error must be one of"):
@@ -236,7 +236,7 @@ def test_engine_without_the_model_is_unchanged():
     e.set_cmd_vel(0.2, 0.3)
     e.step(3.0)
     assert e.slam_error is None and e.slam_pose == e.pose
-    assert e.map is e.true_map
+    assert e.live_map is e.true_map
     assert e.latest_scan.map_pose == e.latest_scan.pose
 
 

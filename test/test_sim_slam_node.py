@@ -32,7 +32,7 @@ def test_node_publishes_the_erroneous_map_and_slam_pose(ros, tmp_path):
         Parameter("mapping_error", value="harsh"),
         Parameter("slam_pose", value=True),
         Parameter("real_time_factor", value=5.0),
-        Parameter("map_rate_hz", value=5.0),
+        Parameter("map_update_interval_s", value=0.2),
         Parameter("output_dir", value=str(tmp_path)),
     ]))
     eng = sim.engine
@@ -47,7 +47,7 @@ def test_node_publishes_the_erroneous_map_and_slam_pose(ros, tmp_path):
     # Standing still: no drift yet, the map is the first keyframe's.
     assert convert.pose2d_from_odometry(last["odom"]) == pytest.approx(true, abs=1e-6)
     eng.slam_error.shift((0.3, 0.0, 0.0))
-    shifted = eng.map
+    shifted = eng.live_map          # the SLAM map now; published at the next interval
 
     def caught_up() -> bool:
         return ("map" in last and _grid_equal(convert.grid_from_msg(last["map"]), eng.map)

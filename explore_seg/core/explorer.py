@@ -4,8 +4,10 @@
 goal manager once, for every caller: the ``target_selector`` node, the lock-step benchmark
 (``sim_bridge.lockstep``) and the tests. Per :meth:`Explorer.step` it
 
-1. detects frontiers and builds the path graphs when the map or the object layer changed
-   (cached per map / layer object: a caller passes the same object while nothing changed);
+1. detects frontiers and builds the path graphs when the map or the object layer changed;
+   while both are unchanged - the same objects, or equal ones (a map republished without
+   change, as slam_toolbox does every ``map_update_interval``) - it reuses the frontiers,
+   their masks and the path graphs' distance fields, which depend on nothing else;
 2. finds the robot's cell and checks it is inside the map with a passable cell nearby;
 3. computes the path lengths robot -> cPoints (fallback through unknown space left to
    :class:`~explore_seg.core.selection.PathGraphs`), with the blacklisted frontiers excluded;
@@ -325,8 +327,9 @@ class Explorer:
         now_s : float
             Current time in seconds (sim or ROS clock; monotonic between resets).
         grid : GridMap
-            The occupancy map. Pass the same object while the map is unchanged: frontiers
-            and path graphs are cached on it.
+            The occupancy map. While it is the same object as the last step's or an equal
+            one (geometry, frame and cells; a republished map), frontiers and path graphs
+            are reused; the goal manager still gets this map (its stamp).
         pose : (x_m, y_m, yaw_rad)
             The robot's pose in the map frame.
         layer : GridMap, optional
@@ -342,9 +345,15 @@ class Explorer:
         """
         warnings: list[tuple[str, str]] = []
         t0 = time.perf_counter()
-        detected = self._key is None or self._key[0] is not grid or self._key[1] is not layer
+        key = self._key
+        detected = key is None or not (_same_map(key[0], grid) and _same_map(key[1], layer))
+        # The goal manager gets the map as given (its stamp tells a newer map); everything
+        # map-derived gets the map the products were made from (identity caches hit).
+        stamped = grid
         if detected:
             self._detect(grid, layer)
+        elif key is not None:
+            grid = key[0]
         x, y, yaw = (float(v) for v in pose)
         if self._strategy.candidates == "rrt":
             self._detect_rrt(grid, (x, y))
@@ -379,7 +388,7 @@ class Explorer:
             tour = planner.tour_costs(grid, frontiers, dist, excluded, self._graph, robot_rc,
                                      labels, manager.goal_frontier(grid, frontiers))
         old_goal = manager.goal
-        res = manager.step(now_s, (x, y), grid, frontiers, dist, StepInputs(
+        res = manager.step(now_s, (x, y), stamped, frontiers, dist, StepInputs(
             labels, robot_rc, excluded, tour.tour_cost_m if tour is not None else None))
         blacklisted = manager.blacklist_added - added + self._reported_blacklisted
         self._reported_blacklisted = 0
@@ -461,6 +470,18 @@ class Explorer:
             return None, None
         excluded = self.manager.excluded(frontiers)
         return graph.distances(robot_rc, frontiers, excluded), excluded
+
+
+def _same_map(a: GridMap | None, b: GridMap | None) -> bool:
+    """True when ``a`` and ``b`` are the same map or equal ones (geometry, frame and cells;
+    the stamp aside), so that every product derived from one holds for the other."""
+    if a is b:
+        return True
+    if a is None or b is None:
+        return False
+    return (a.shape == b.shape and a.resolution_m == b.resolution_m
+            and a.origin_xy_m == b.origin_xy_m and a.origin_yaw_rad == b.origin_yaw_rad
+            and a.frame_id == b.frame_id and np.array_equal(a.data, b.data))
 
 
 def _frontier_alive(grid: GridMap, frontiers: Sequence[Frontier],

@@ -67,9 +67,10 @@ def _disk_offsets(r: float) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64
 class Navigator(Pursuit):
     """Goal handling, planning and path following for one robot.
 
-    The engine calls :meth:`update` every physics step with the true pose and the sim
-    time; it returns the (v, w) command. Planning uses the latest map given through
-    :meth:`set_map` and the layers given through :meth:`set_layer`.
+    The engine calls :meth:`control` every physics step with the pose and the sim time;
+    it returns the (v, w) command, :meth:`update`'s at the controller's rate. Planning uses
+    the latest map given through :meth:`set_map` and the layers given through
+    :meth:`set_layer`.
     """
 
     def __init__(self, params: NavParams | None = None) -> None:
@@ -103,6 +104,9 @@ class Navigator(Pursuit):
         # (key, mask, lattice-aligned) of :meth:`_layer_blocked`.
         self._layer_mask: tuple[tuple, npt.NDArray[np.bool_], bool] | None = None
         self._costmap = CostGridCache()
+        # The controller's held command and the time of its next computation.
+        self._held = (0.0, 0.0)
+        self._next_control_s = 0.0
 
     # ---------------------------------------------------------------- inputs
     @property
@@ -190,6 +194,7 @@ class Navigator(Pursuit):
         self._final_turn = False
         self._target_xy = None
         self._retries_left = self.params.collision_retries
+        self._held = (0.0, 0.0)
 
     def cancel(self, reason: str = "canceled") -> None:
         """Cancel the active goal (no-op otherwise)."""
@@ -205,6 +210,7 @@ class Navigator(Pursuit):
         """After a collision: replan from ``pose`` at the next update and go on while
         ``collision_retries`` are left for this goal (True), else abort it (False).
         The progress checker restarts at ``pose``. No-op (False) without an active goal."""
+        self._held = (0.0, 0.0)
         if self._status.state is not NavState.ACTIVE:
             return False
         if self._retries_left <= 0:
@@ -429,6 +435,22 @@ class Navigator(Pursuit):
         return bool(blocked[rr[ok], cc[ok]].any())
 
     # ------------------------------------------------------------- following
+    def control(self, pose: tuple[float, float, float], now_s: float) -> tuple[float, float]:
+        """The command at ``now_s`` (called every physics step): :meth:`update`'s at
+        ``controller_rate_hz`` (at every call with 0), the last one held in between, as
+        Nav2's controller server runs at its ``controller_frequency`` under a faster
+        physics step. A new goal or a collision drops the held command."""
+        rate = self.params.controller_rate_hz
+        if rate <= 0:
+            return self.update(pose, now_s)
+        if now_s >= self._next_control_s - 1e-9:
+            period = 1.0 / rate
+            self._next_control_s += period
+            if self._next_control_s <= now_s:     # after an idle spell: no burst of calls
+                self._next_control_s = now_s + period
+            self._held = self.update(pose, now_s)
+        return self._held
+
     def update(self, pose: tuple[float, float, float], now_s: float
                ) -> tuple[float, float]:
         """Advance the state machine; returns the command (v m/s, w rad/s)."""

@@ -52,6 +52,10 @@ class NavParams:
     plan_window_margin_m: float = field(default=3.0, metadata=param_meta(
         "first search window: path costs up to 1.5 x straight line + this",
         "m", range=(0.0, math.inf)))
+    controller_rate_hz: float = field(default=20.0, metadata=param_meta(
+        "the path follower computes a new command this often, the last one held in between "
+        "(Nav2 controller_frequency); 0 = at every call of control()", "Hz",
+        range=(0.0, math.inf)))
     replan_period_s: float = field(default=1.0, metadata=param_meta(
         "replan when the map changed, at most this often (sim time)", "s", range=(0.0, math.inf)))
     switch_cost_ratio: float = field(default=0.8, metadata=param_meta(
@@ -114,7 +118,8 @@ class NavParams:
                         "inflation_soft_margin_m", "inflation_soft_margin_cost", "arc_clearance_m",
                         "inflation_edge_cost",
                         "planner_goal_tolerance_m", "plan_window_margin_m",
-                        "progress_timeout_s", "goal_timeout_s", "min_approach_speed_mps")
+                        "progress_timeout_s", "goal_timeout_s", "min_approach_speed_mps",
+                        "controller_rate_hz")
         for name in non_negative:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
