@@ -92,7 +92,8 @@ def test_region_at_uses_nearest_labelled_cell():
 
 def test_strategies_are_the_cost_table():
     assert STRATEGIES == tuple(COST_FUNCTIONS) == ("paper", "nearest", "explore_lite",
-                                                   "rrt_exploration", "routed")
+                                                   "rrt_exploration", "routed",
+                                                   "foresight")
     for name in STRATEGIES:
         SelectionParams(strategy=name)
 
