@@ -24,11 +24,10 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from bench.predictor_data import POSE_CLEARANCE_M, SCAN_RANGE_M, SCAN_RAYS  # noqa: E402
+from bench.predictor_data import POSE_CLEARANCE_M, SCAN_RANGE_M, scan_walk  # noqa: E402
 from explore_seg.core.prediction.gain import expected_view_gain  # noqa: E402
 from explore_seg.core.prediction.inference import load_predictor  # noqa: E402
 from sim_bridge.worlds import ground_truth, load_world  # noqa: E402
-from sim_bridge.worlds.furnished import scan  # noqa: E402
 
 
 def partial_grid(world_spec: str, poses: int, seed: int):
@@ -39,18 +38,8 @@ def partial_grid(world_spec: str, poses: int, seed: int):
     res = gt.resolution_m
     occ = gt.lidar.data >= 65
     clear = ndimage.distance_transform_edt(~occ) * res >= POSE_CLEARANCE_M
-    rng = np.random.default_rng(seed)
-    free, hit = np.zeros(occ.shape, bool), np.zeros(occ.shape, bool)
-    pose = np.asarray([gt.start_cell])
-    for _ in range(poses):
-        f, o = scan(occ, gt.inside, pose, SCAN_RANGE_M / res, SCAN_RAYS)
-        free |= f
-        hit |= o
-        near = ndimage.binary_dilation(~(free | hit), iterations=4)
-        cand = np.argwhere(free & clear & near)
-        if len(cand) == 0:
-            break
-        pose = cand[rng.integers(len(cand))][None]
+    free, hit = scan_walk(occ, gt.inside, clear, gt.start_cell, poses,
+                          np.random.default_rng(seed), SCAN_RANGE_M / res)
     data = np.full(occ.shape, -1, np.int8)
     data[free] = 0
     data[hit] = 100

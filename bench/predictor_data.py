@@ -24,6 +24,7 @@ gives the same samples (a test checks it).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -102,27 +103,38 @@ def partial_maps(world: World, rng: np.random.Generator, count: int, max_poses: 
     ins, tgs = [], []
     for _ in range(count):
         n_poses = int(rng.integers(1, max_poses + 1))
-        seen_free = np.zeros(occ.shape, bool)
-        seen_occ = np.zeros(occ.shape, bool)
-        pose = np.asarray([gt.start_cell])
-        for k in range(n_poses):
-            f, o = scan(occ, inside, pose, SCAN_RANGE_M / res, SCAN_RAYS)
-            seen_free |= f
-            seen_occ |= o
-            if k == n_poses - 1:
-                break
-            unknown = ~(seen_free | seen_occ)
-            near_unknown = ndimage.binary_dilation(unknown, iterations=4)
-            cand = np.argwhere(seen_free & clear & near_unknown)
-            if len(cand) == 0:
-                break
-            pose = cand[rng.integers(len(cand))][None]
+        seen_free, seen_occ = scan_walk(occ, inside, clear, gt.start_cell, n_poses, rng,
+                                        SCAN_RANGE_M / res)
         data = np.full(occ.shape, -1, np.int8)
         data[seen_free] = 0
         data[seen_occ] = 100
         ins.append(coarse_fractions(data, factor))
         tgs.append(target.astype(np.float32))
     return PlanSamples(np.stack(ins), np.stack(tgs), world.name)
+
+
+def scan_walk(occ: npt.NDArray[np.bool_], inside: npt.NDArray[np.bool_],
+              clear: npt.NDArray[np.bool_], start_cell: Any, n_poses: int,
+              rng: np.random.Generator, range_cells: float
+              ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
+    """Free and occupied cells seen by ``n_poses`` scans: the first from ``start_cell``,
+    each next one from a random seen-free cell with clearance (``clear``) within 4 cells of
+    unknown space. Stops early when there is no such cell."""
+    seen_free = np.zeros(occ.shape, bool)
+    seen_occ = np.zeros(occ.shape, bool)
+    pose = np.asarray([start_cell])
+    for k in range(n_poses):
+        f, o = scan(occ, inside, pose, range_cells, SCAN_RAYS)
+        seen_free |= f
+        seen_occ |= o
+        if k == n_poses - 1:
+            break
+        near_unknown = ndimage.binary_dilation(~(seen_free | seen_occ), iterations=4)
+        cand = np.argwhere(seen_free & clear & near_unknown)
+        if len(cand) == 0:
+            break
+        pose = cand[rng.integers(len(cand))][None]
+    return seen_free, seen_occ
 
 
 def crop(x: npt.NDArray[np.float32], y: npt.NDArray[np.float32], size: int,
