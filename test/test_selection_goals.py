@@ -76,9 +76,61 @@ def test_goal_reached_judged_at_once_on_a_newer_map():
     m = GoalManager(SelectionParams(strategy="nearest", arrival_wait_s=100.0))
     goal = m.step(0.0, (1.0, 1.0), g, fr, [1.0, 3.0]).goal
     assert m.step(5.0, goal.xy_m, g, fr, [0.0, 2.0]).action is Action.KEEP
-    newer = GridMap(g.data, g.resolution_m, g.origin_xy_m, stamp_ns=10)
+    newer = GridMap(g.data, g.resolution_m, g.origin_xy_m, stamp_ns=5_200_000_000)
     res = m.step(5.5, goal.xy_m, newer, [fr[1]], [2.0])
     assert res.action is Action.NEW_GOAL and m.blacklist == ()
+
+
+def _stamped(g):
+    """The map ``g`` as published at ``t_s`` (a function of ``t_s``)."""
+    return lambda t_s: GridMap(g.data, g.resolution_m, g.origin_xy_m,
+                               stamp_ns=round(t_s * 1e9))
+
+
+def test_goal_reached_is_not_judged_on_a_newer_map_stamped_before_the_arrival():
+    # A map renewed every 5 s: the one published after the arrival map (stamp 3 s) but
+    # stamped before the arrival (5 s) does not show the view from the goal.
+    g, fr = manager_world()
+    g.data[5, 10:20] = -1          # fr[0] remains on the maps of before the arrival
+    stamped = _stamped(g)
+    m = GoalManager(SelectionParams(strategy="nearest", arrival_wait_s=7.0))
+    goal = m.step(0.0, (1.0, 1.0), stamped(0.0), fr, [1.0, 3.0]).goal
+    res = m.step(5.0, goal.xy_m, stamped(3.0), fr, [0.0, 2.0])
+    assert res.action is Action.KEEP and "waiting" in res.reason
+    res = m.step(5.5, goal.xy_m, stamped(4.0), fr, [0.0, 2.0])   # newer, before arrival
+    assert res.action is Action.KEEP and "waiting" in res.reason
+    res = m.step(9.0, goal.xy_m, stamped(4.0), fr, [0.0, 2.0])   # 4 s: past the old 2 s
+    assert res.action is Action.KEEP and m.blacklist == ()
+    res = m.step(9.5, goal.xy_m, stamped(8.0), [fr[1]], [2.0])   # shows the arrival
+    assert res.action is Action.NEW_GOAL and res.reason == "goal reached"
+    assert m.blacklist == ()
+
+
+def test_goal_reached_waits_for_a_map_showing_it_at_most_arrival_wait_s():
+    # No map after the arrival (the map's clock is another one, its publisher stopped):
+    # the frontier is judged on the map at hand after arrival_wait_s.
+    g, fr = manager_world()
+    g.data[5, 10:20] = -1
+    m = GoalManager(SelectionParams(strategy="nearest", arrival_wait_s=7.0))
+    goal = m.step(0.0, (1.0, 1.0), g, fr, [1.0, 3.0]).goal
+    assert m.step(5.0, goal.xy_m, g, fr, [0.0, 2.0]).action is Action.KEEP
+    assert m.step(11.9, goal.xy_m, g, fr, [0.0, 2.0]).action is Action.KEEP
+    res = m.step(12.0, goal.xy_m, g, fr, [0.0, 2.0])
+    assert res.action is Action.NEW_GOAL and m.blacklist == (goal.xy_m,)
+    assert res.reason == "goal reached but its frontier remains: blacklisted"
+
+
+def test_goal_reached_with_maps_of_every_scan_is_judged_at_the_next_decision():
+    # A map stamped at the arrival itself is the arrival's: the next one (the scan from the
+    # goal) is judged, at the next decision as before.
+    g, fr = manager_world()
+    stamped = _stamped(g)
+    m = GoalManager(SelectionParams(strategy="nearest"))
+    goal = m.step(0.0, (1.0, 1.0), stamped(0.0), fr, [1.0, 3.0]).goal
+    res = m.step(5.0, goal.xy_m, stamped(5.0), fr, [0.0, 2.0])
+    assert res.action is Action.KEEP and "waiting" in res.reason
+    res = m.step(5.5, goal.xy_m, stamped(5.5), [fr[1]], [2.0])
+    assert res.action is Action.NEW_GOAL and res.reason == "goal reached"
 
 
 def test_goal_reached_and_frontier_cleared_is_not_blacklisted():

@@ -36,7 +36,8 @@ class GoalManager:
        ``progress_min_m``; none for ``progress_timeout_s`` blacklists the goal. Reaching
        it (``goal_reached_tolerance_m``) while its frontier (a frontier with a cell
        within ``frontier_match_radius_m`` + the goal's gap to its frontier) is still
-       there after a newer map (or ``arrival_wait_s``) blacklists it too (``routed``
+       there on a newer map stamped at or after the arrival (or after ``arrival_wait_s``)
+       blacklists it too (``routed``
        with ``reached_unknown_fraction`` > 0: unless the visit revealed the frontier's
        cells, at most ``revealed_arrivals_max`` - 1 times per area); reaching a
        return-to-start goal ends exploration (DONE). A ``routed`` goal counts as reached
@@ -141,10 +142,10 @@ class GoalManager:
         """Tell the manager what the navigator did with the current goal.
 
         SUCCEEDED counts as arrival whatever the distance (the goal's frontier is judged
-        at the next :meth:`step`, on a map newer than the arrival or after
-        ``arrival_wait_s``; a return-to-start goal ends exploration there); ABORTED drops
-        the goal and leaves it to :meth:`judge_aborted` at the next decision; REJECTED
-        and CANCELED (by someone else) blacklist the goal at once. Either way the next
+        at a later :meth:`step`, on a map newer than the arrival's and stamped at or after
+        it, or after ``arrival_wait_s``; a return-to-start goal ends exploration there);
+        ABORTED drops the goal and leaves it to :meth:`judge_aborted` at the next
+        decision; REJECTED and CANCELED (by someone else) blacklist the goal at once. Either way the next
         :meth:`step` picks another frontier instead of waiting ``progress_timeout_s``.
         CANCELED_BY_US drops the goal without blacklisting it.
 
@@ -453,7 +454,8 @@ class GoalManager:
     def _on_arrival(self, now_s: float, grid: GridMap, frontiers: Sequence[Frontier]
                     ) -> tuple[StepResult | None, str]:
         """The goal is reached: a return to start ends exploration; otherwise wait for a
-        newer map (or ``arrival_wait_s``), then judge the goal's frontier."""
+        map that shows the arrival (or ``arrival_wait_s``), then judge the goal's
+        frontier."""
         assert self.goal is not None
         if self.goal.is_return:
             self.goal = None
@@ -466,11 +468,21 @@ class GoalManager:
         return None, self._judge_reached_frontier(grid, frontiers)
 
     def _waiting_for_map(self, now_s: float, grid: GridMap) -> bool:
-        """True while the map is the one of the arrival and ``arrival_wait_s`` runs."""
+        """True until a map newer than the one of the arrival and stamped at or after the
+        arrival time comes, for at most ``arrival_wait_s``.
+
+        A map renewed every few seconds (slam_toolbox's ``map_update_interval``) is
+        usually stamped before the arrival when the robot arrives: it does not show what
+        the robot sees from the goal yet, and judging on it finds the frontier still
+        there. A newer map stamped before the arrival (built from older scans, delivered
+        late) does not show it either. Maps of every scan are newer at the next decision
+        already, so they end the wait as before.
+        """
         if self._arrived_s is None:
             self._arrived_s, self._arrived_stamp_ns = now_s, grid.stamp_ns
-        return (grid.stamp_ns == self._arrived_stamp_ns
-                and now_s - self._arrived_s < self.params.arrival_wait_s)
+        shows_arrival = (grid.stamp_ns != self._arrived_stamp_ns
+                         and grid.stamp_ns >= round(self._arrived_s * 1e9))
+        return not shows_arrival and now_s - self._arrived_s < self.params.arrival_wait_s
 
     def _judge_reached_frontier(self, grid: GridMap, frontiers: Sequence[Frontier]) -> str:
         """Drop the reached goal; blacklist it when its frontier remains (unless the

@@ -77,8 +77,11 @@ class GoalParams:
         "a frontier with a cell this close to the goal (plus the goal's distance to its "
         "frontier when set) is the goal's frontier", "m", default=0.5)
     arrival_wait_s: float = non_negative(
-        "after reaching a goal, wait this long (or for a newer map) before judging whether "
-        "its frontier was cleared", "s", default=2.0)
+        "after reaching a goal, its frontier is judged on the first newer map stamped at "
+        "or after the arrival (one that shows the view from the goal), or after this long "
+        "without one. Above the map's update period (slam_toolbox map_update_interval, "
+        "5 s) plus its delivery and a decision period, so that a renewed map ends the "
+        "wait; 0 = judge on the map of the arrival", "s", default=7.0)
     goal_change_min_m: float = non_negative(
         "a new goal closer than this to the current one is not sent", "m", default=0.3)
     blacklist_radius_m: float = non_negative(
