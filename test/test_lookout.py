@@ -122,7 +122,10 @@ def test_lookout_completes_a_run_whose_last_frontier_lies_in_a_corridor_narrower
     narrow part's frontier; its far end is seen only from the corridor's mouth); with
     them the robot drives to the mouth, looks, and reaches 99 %, without a contact.
     (eb/room_with_corridor seed 3 was this case until the inflation became metric: its
-    corridor's far end is no longer counted as observable.)"""
+    corridor's far end is no longer counted as observable.) The map follows every scan
+    here (the simulator's rates set to 0): with the keyframe map of the default rates the
+    run without lookouts reaches 99 % too (seed 0: 99.12 %), and the scene no longer
+    needs a lookout."""
     sys.path.insert(0, str(ROOT))
     from bench.worlds import PAPER_CAMERA_MOUNT, sim_params_for
     from explore_seg.core.selection import SelectionParams
@@ -139,6 +142,9 @@ def test_lookout_completes_a_run_whose_last_frontier_lies_in_a_corridor_narrower
     gt = with_observable(world, sim_worlds.ground_truth(world), sp.lidar_params(),
                          sp.robot_radius_m)
     base = load_explorer_params()
+    every_scan = dataclasses.replace(
+        sim_params_for(PAPER_CAMERA_MOUNT), map_update_interval_s=0.0,
+        mapping_keyframe_travel_m=0.0, mapping_keyframe_turn_rad=0.0)
     rows = {}
     for on in (False, True):
         # (off: no approach goals either, they would look into the corridor's mouth too)
@@ -147,7 +153,7 @@ def test_lookout_completes_a_run_whose_last_frontier_lies_in_a_corridor_narrower
         assert isinstance(sel, SelectionParams)
         res = run_exploration(world, "paper", seed, params=LockstepParams(max_sim_time_s=600.0),
                               ground_truth=gt,
-                              sim_params=sim_params_for(PAPER_CAMERA_MOUNT),
+                              sim_params=every_scan,
                               explorer_params=dataclasses.replace(base, selection=sel))
         rows[on] = res
     assert rows[False].stop_reason == "done" and rows[False].coverage_pct < 99.0
