@@ -468,16 +468,11 @@ class GoalManager:
         return None, self._judge_reached_frontier(grid, frontiers)
 
     def _waiting_for_map(self, now_s: float, grid: GridMap) -> bool:
-        """True until a map newer than the one of the arrival and stamped at or after the
-        arrival time comes, for at most ``arrival_wait_s``.
-
-        A map renewed every few seconds (slam_toolbox's ``map_update_interval``) is
-        usually stamped before the arrival when the robot arrives: it does not show what
-        the robot sees from the goal yet, and judging on it finds the frontier still
-        there. A newer map stamped before the arrival (built from older scans, delivered
-        late) does not show it either. Maps of every scan are newer at the next decision
-        already, so they end the wait as before.
-        """
+        """True until a map newer than the arrival's and stamped at or after the arrival
+        comes, for at most ``arrival_wait_s``. A map renewed every few seconds
+        (slam_toolbox's ``map_update_interval``), or a newer one built from older scans,
+        does not show what the robot sees from the goal yet: judged on it, the frontier
+        would remain. Maps of every scan are newer at the next decision already."""
         if self._arrived_s is None:
             self._arrived_s, self._arrived_stamp_ns = now_s, grid.stamp_ns
         shows_arrival = (grid.stamp_ns != self._arrived_stamp_ns
