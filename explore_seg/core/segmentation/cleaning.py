@@ -27,6 +27,15 @@ from explore_seg.core.segmentation.params import SegmentationParams
 _BLOCK_SOLID_SHARE = 0.7
 
 
+def occupied_components(occ_u8: npt.NDArray[np.uint8]
+                        ) -> tuple[npt.NDArray[np.int32], npt.NDArray[np.int32],
+                                   npt.NDArray[np.bool_]]:
+    """8-connected components of the occupied cells: labels, OpenCV's stats, and a mask
+    of removed components (none removed here)."""
+    _n, lab, stats, _ = cv2.connectedComponentsWithStats(occ_u8, connectivity=8)
+    return lab, stats, np.zeros(len(stats), dtype=bool)
+
+
 def length_to_cells(length_m: float, res: float) -> int:
     return int(round(length_m / res))
 
@@ -103,11 +112,7 @@ def _small_objects(occ_u8: npt.NDArray[np.uint8],
     """Cells of the small free-standing objects of ``occ_u8`` (``small_object_max_m``),
     or None when there is none. An object whose inflation would touch a larger
     obstacle's is part of a row with it (a cabinet row, a broken wall) and is none."""
-    if occ_cc is None:
-        _n, lab, stats, _ = cv2.connectedComponentsWithStats(occ_u8, connectivity=8)
-        gone = np.zeros(len(stats), dtype=bool)
-    else:
-        lab, stats, gone = occ_cc
+    lab, stats, gone = occ_cc if occ_cc is not None else occupied_components(occ_u8)
     diag = np.hypot(stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT])
     obj = (diag <= params.small_object_max_m / res) & ~gone
     obj[0] = False
@@ -159,11 +164,7 @@ def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.ui
     small[0] = False
     if not small.any():
         return free_clean
-    if occ_cc is None:
-        _no, olab, ost, _ = cv2.connectedComponentsWithStats(occ, connectivity=8)
-        gone = np.zeros(len(ost), dtype=bool)
-    else:
-        olab, ost, gone = occ_cc
+    olab, ost, gone = occ_cc if occ_cc is not None else occupied_components(occ)
     diag = np.hypot(ost[:, cv2.CC_STAT_WIDTH], ost[:, cv2.CC_STAT_HEIGHT])
     big = (diag > params.clutter_max_object_m / res) & ~gone
     big[0] = False
