@@ -155,7 +155,7 @@ class SimParams:
         "a scan enters the map ('map', with or without a mapping error model) only as a "
         "keyframe: after this much travel since the last one (slam_toolbox "
         "minimum_travel_distance, 0.5 m shipped); 0 with mapping_keyframe_turn_rad 0 = every "
-        "scan (the runs without mapping error before keyframes were modelled)", "m",
+        "scan enters the map", "m",
         range=(0.0, math.inf), read_only=True))
     mapping_keyframe_turn_rad: float = field(
         default=SlamErrorParams.keyframe_turn_rad, metadata=param_meta(
