@@ -3,7 +3,7 @@
 :class:`SimEngine` advances a unicycle robot at a fixed physics step, stops it on
 contact with any obstacle part that reaches below the robot's height (chair seats and
 table tops included, although the lidar at 0.17 m never sees them), produces lidar
-scans (10 Hz) and camera frames (15 Hz, optional), integrates the scans into a growing
+scans (5 Hz) and camera frames (15 Hz, optional), integrates the scans into a growing
 occupancy map (:mod:`sim_bridge.mapping`), and runs the navigation stand-in
 (:mod:`sim_bridge.navigation`). Everything is driven by :meth:`SimEngine.step`, so
 benchmarks and tests run in lock step without ROS; :mod:`sim_bridge.node` wraps it.

@@ -66,7 +66,7 @@ class SimParams:
         metadata=param_meta("turn rate limit", "rad/s", range=(0.0, math.inf)))
     # --- sensors
     scan_rate_hz: float = field(default=LidarParams.rate_hz, metadata=param_meta(
-        "lidar scan rate", "Hz", range=(0.0, math.inf)))
+        "lidar scan rate (TurtleBot3's LDS: 5 Hz)", "Hz", range=(0.0, math.inf)))
     lidar_num_beams: int = field(default=LidarParams.num_beams, metadata=param_meta(
         "beams per 360 deg scan", range=(3, 2**31 - 1), read_only=True))
     lidar_range_max_m: float = field(default=LidarParams.range_max_m, metadata=param_meta(

@@ -96,6 +96,8 @@ def test_seeds_perturb_the_start():
 
 
 def test_coverage_tour_is_below_every_strategy(runs, small_house):
+    # The tour is an estimate (greedy viewpoints, then a tour over them), not the optimum:
+    # a run may come within a few per cent below it, never far.
     w, gt = small_house
     problems = []
     for strategy, r in runs.items():
@@ -103,8 +105,8 @@ def test_coverage_tour_is_below_every_strategy(runs, small_house):
             problems.append(f"{strategy} did not complete ({r.coverage_pct:.1f} %)")
             continue
         tour = coverage_tour(w, start_xy=r.start_pose[:2], ground_truth=gt)
-        if not 0.0 < tour.length_m <= r.path_to_m["99"]:
-            problems.append(f"{strategy}: tour {tour.length_m:.1f} m > path to 99 % "
+        if not 0.0 < tour.length_m <= 1.05 * r.path_to_m["99"]:
+            problems.append(f"{strategy}: tour {tour.length_m:.1f} m > 1.05 x path to 99 % "
                             f"{r.path_to_m['99']:.1f} m")
     assert not problems, problems
 

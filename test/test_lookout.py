@@ -123,7 +123,7 @@ def test_lookout_completes_a_run_whose_last_frontier_lies_in_a_corridor_narrower
     them the robot drives to the mouth, looks, and reaches 99 %, without a contact.
     (eb/room_with_corridor seed 3 was this case until the inflation became metric: its
     corridor's far end is no longer counted as observable.) The map follows every scan
-    here (the simulator's rates set to 0): with the keyframe map of the default rates the
+    of a 10 Hz lidar here (the simulator's rates before they were modelled): with the keyframe map of the default rates the
     run without lookouts reaches 99 % too (seed 0: 99.12 %), and the scene no longer
     needs a lookout."""
     sys.path.insert(0, str(ROOT))
@@ -144,7 +144,7 @@ def test_lookout_completes_a_run_whose_last_frontier_lies_in_a_corridor_narrower
     base = load_explorer_params()
     every_scan = dataclasses.replace(
         sim_params_for(PAPER_CAMERA_MOUNT), map_update_interval_s=0.0,
-        mapping_keyframe_travel_m=0.0, mapping_keyframe_turn_rad=0.0)
+        mapping_keyframe_travel_m=0.0, mapping_keyframe_turn_rad=0.0, scan_rate_hz=10.0)
     rows = {}
     for on in (False, True):
         # (off: no approach goals either, they would look into the corridor's mouth too)

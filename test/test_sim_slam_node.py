@@ -50,7 +50,8 @@ def test_node_publishes_the_erroneous_map_and_slam_pose(ros, tmp_path):
     shifted = eng.live_map          # the SLAM map now; published at the next interval
 
     def caught_up() -> bool:
-        return ("map" in last and _grid_equal(convert.grid_from_msg(last["map"]), eng.map)
+        return (all(k in last for k in ("map", "odom", "pose"))
+                and _grid_equal(convert.grid_from_msg(last["map"]), eng.map)
                 and convert.pose2d_from_odometry(last["odom"])[0] > true[0] + 0.29
                 and last["pose"].pose.pose.position.x > true[0] + 0.29)
 
