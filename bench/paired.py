@@ -39,6 +39,7 @@ the same over all worlds; ``--md FILE`` also writes that report.
 from __future__ import annotations
 
 import argparse
+import importlib
 import dataclasses
 import fcntl
 import json
@@ -64,7 +65,7 @@ from bench.tasks import catch_stop_signals, restore_signals, run_drainable, \
 from bench.worlds import PAPER_CAMERA_MOUNT, load, sim_params_for, sim_time_limit  # noqa: E402
 from sim_bridge.engine import SimParams  # noqa: E402
 from sim_bridge.lockstep import STRATEGIES, ExplorerParams, LockstepParams, \
-    load_explorer_params, run_exploration  # noqa: E402
+    load_explorer_params, run_exploration, strategy_spec  # noqa: E402
 
 #: ExplorerParams sections an ``explorer.SECTION.FIELD`` override may name.
 SECTIONS = tuple(f.name for f in dataclasses.fields(ExplorerParams))
@@ -344,13 +345,26 @@ def load_tours(path: Path) -> dict[str, float]:
     return {w: t for w, t in tours.items() if math.isfinite(t) and t > 0}
 
 
+def _known_strategy(name: str) -> bool:
+    """True when ``name`` is a benchmark arm or a registered strategy."""
+    try:
+        strategy_spec(name)
+    except ValueError:
+        return False
+    return True
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", required=True, help="folder of runs.jsonl and arms.json")
     ap.add_argument("--worlds", required=True, help="comma-separated world specs")
     ap.add_argument("--strategies", default="paper",
-                    help=f"comma-separated, from {','.join(STRATEGIES)}")
+                    help=f"comma-separated, from {','.join(STRATEGIES)} or a strategy that "
+                         "a --plugin module registers")
+    ap.add_argument("--plugin", action="append", default=[], metavar="MODULE",
+                    help="import this module first (repeatable): a strategy it registers "
+                         "(explore_seg.core.selection.register) runs with its default arm")
     ap.add_argument("--seeds", default="0-19", help="e.g. 0-19 or 1,5,7")
     ap.add_argument("--arm", action="append", default=[],
                     help="NAME or NAME:KEY=VALUE[;KEY=VALUE]; the first is the reference "
@@ -378,10 +392,16 @@ def main(argv: list[str] | None = None) -> int:
         arms = [parse_arm(t) for t in a.arm]
         if not arms or len({x.name for x in arms}) != len(arms):
             raise ValueError("give at least one --arm, with distinct names")
+        for module in a.plugin:
+            try:
+                importlib.import_module(module)
+            except ImportError as err:
+                raise ValueError(f"--plugin {module}: {err}") from None
         strategies = [s for s in a.strategies.split(",") if s]
-        bad = [s for s in strategies if s not in STRATEGIES]
+        bad = [s for s in strategies if not _known_strategy(s)]
         if bad:
-            raise ValueError(f"unknown strategies {bad} (have {', '.join(STRATEGIES)})")
+            raise ValueError(f"unknown strategies {bad} (have {', '.join(STRATEGIES)} and "
+                             "the strategies registered by --plugin modules)")
         seeds = parse_seeds(a.seeds)
         if a.against and a.against not in strategies:
             raise ValueError(f"--against {a.against} is not one of --strategies")

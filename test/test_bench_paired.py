@@ -219,3 +219,27 @@ def test_sigusr1_finishes_the_run_in_flight_and_starts_no_new_one(tmp_path):
     assert row.split("|")[4].strip().endswith("/2")        # the report covers the 2 runs
     assert paired.main(["--out", str(out), *_SHORT, "--seeds", "0-4"]) == 0
     assert _seeds(out) == [0, 1, 2, 3, 4]
+
+
+def test_a_plugin_module_s_strategy_is_compared(tmp_path):
+    """``--plugin MODULE`` imports a module that registers a strategy; without it the
+    strategy is refused by name."""
+    from explore_seg.core.selection.strategy import unregister
+
+    out = tmp_path / "p"
+    args = ["--out", str(out), "--worlds", "small_house", "--strategies",
+            "farthest_first_plugin", "--seeds", "0", "--max-sim-time", "10", "--jobs", "1",
+            "--arm", "cur"]
+    sys.modules.pop("farthest_first_plugin", None)
+    with pytest.raises(SystemExit):
+        paired.main(args)
+    with pytest.raises(SystemExit):
+        paired.main(args + ["--plugin", "no_such_plugin_module"])
+    try:
+        assert paired.main(args + ["--plugin", "farthest_first_plugin"]) == 0
+    finally:
+        unregister("farthest_first_plugin")
+        sys.modules.pop("farthest_first_plugin", None)
+    rows = [json.loads(x) for x in (out / "runs.jsonl").read_text().splitlines()]
+    assert [r["strategy"] for r in rows] == ["farthest_first_plugin"]
+    assert rows[0]["goals_sent"] >= 1
