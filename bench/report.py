@@ -18,7 +18,8 @@ refused, naming each version and its number of runs, unless ``--allow-mixed``, w
 marks every row with its versions.
 
 Usage: ``.venv/bin/python bench/report.py OUT [--md BENCHMARKS.md] [--allow-mixed]
-[--certificate FILE]``.
+[--certificate FILE] [--mapping-noise-dir PROFILE=DIR]`` (the last adds the table under a
+SLAM-like mapping error, :mod:`bench.noise_table`).
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from bench import records, same_results, store  # noqa: E402
+from bench import noise_table, records, same_results, store  # noqa: E402
 from bench.figures import plot_coverage, plot_time_to  # noqa: E402
 from bench.records import TIMING_ROWS, as_float, by_world_strategy  # noqa: E402
 from bench.store import read_csv, slug  # noqa: E402
@@ -431,7 +432,8 @@ def summary_table(g: dict[tuple[str, str], list[dict[str, Any]]], strategies: li
 
 
 def write_all(out: Path, md: Path | None, command: str | None, allow_mixed: bool = False,
-              certificates: list[Path] | None = None) -> Path | None:
+              certificates: list[Path] | None = None,
+              noise_dirs: list[tuple[str, Path]] | None = None) -> Path | None:
     """Figures in ``out`` and, when ``md`` is given, the report there.
 
     The report is of one code version: runs of several (after the certificates in
@@ -440,6 +442,8 @@ def write_all(out: Path, md: Path | None, command: str | None, allow_mixed: bool
     table with a row per strategy: runs, complete (coverage >= 99 %), contacts per run,
     median T95 and T99, the median per-seed T95 ratio against ``routed`` with its 95 %
     bootstrap interval, and the median path to 99 % over the world's coverage tour.
+    ``noise_dirs`` (profile, folder) adds the table under mapping error
+    (:mod:`bench.noise_table`); each folder is held to the same one-version rule.
     """
     runs = load_runs(out)
     meta_path = out / "meta.json"
@@ -454,17 +458,34 @@ def write_all(out: Path, md: Path | None, command: str | None, allow_mixed: bool
         w_order.get(runs[i]["world"], len(w_order)), runs[i]["world"],
         s_order.get(runs[i]["strategy"], len(s_order)), runs[i]["strategy"], runs[i]["seed"]))
     runs, codes = [runs[i] for i in order], [codes[i] for i in order]
+    noise = [_noise_profile(p, d, certs, allow_mixed) for p, d in noise_dirs or []]
     plot_coverage(runs, out)
     plot_time_to(runs, out)
     if md is None:
         return None
-    md.write_text("\n".join(report_lines(out, md, runs, codes, meta, certs, command)) + "\n")
+    md.write_text("\n".join(report_lines(out, md, runs, codes, meta, certs, command, noise))
+                  + "\n")
     return md
+
+
+def _noise_profile(profile: str, folder: Path, certs: list[dict[str, Any]],
+                   allow_mixed: bool) -> tuple[str, list[dict[str, Any]], str]:
+    """(profile, runs, code version) of a mapping-error folder; its runs must be of one
+    version unless ``allow_mixed`` (then the versions are listed)."""
+    runs = load_runs(folder)
+    if not runs:
+        raise ValueError(f"--mapping-noise-dir {profile}: no runs in {folder}")
+    own = read_certificates([folder / CERT_DIR]) if (folder / CERT_DIR).is_dir() else []
+    codes = effective_codes(runs, certs + own)
+    check_versions(runs, codes, allow_mixed)
+    return profile, runs, ", ".join(sorted(set(codes)))
 
 
 def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[str],
                  meta: dict[str, Any], certs: list[dict[str, Any]],
-                 command: str | None) -> list[str]:
+                 command: str | None,
+                 noise: list[tuple[str, list[dict[str, Any]], str]] | None = None
+                 ) -> list[str]:
     """The lines of BENCHMARKS.md (see :func:`write_all`)."""
     rel = Path(os.path.relpath(out, md.parent))
     exp_rel = Path(os.path.relpath(out / EXPERIMENTS, md.parent)).as_posix()
@@ -550,6 +571,16 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
           + ("; the ratio pools the per-seed ratios of every world (interval: resampling "
              "world-seed pairs)" if DEFAULT_STRATEGY in strategies else "") + ".", ""]
     L += summary_table(g, strategies, id_codes, labels) + [""]
+    if noise:
+        L += ["## Under mapping error", "",
+              "The same strategies on a SLAM-like map (`--mapping-noise`: drift, jitter, "
+              "loop-closure re-renders; [docs/simulation.md]"
+              f"({docs}/simulation.md#mapping-error-a-slam-like-map)). *done < "
+              f"{noise_table.EARLY_DONE_PCT:.0f} %* = runs that declared exploration finished "
+              "below that coverage; *T95 ÷ no error* = median over the seeds of the per-seed "
+              "ratio of T95 to the same strategy's run without mapping error (same world, "
+              "same seeded start), 95 % bootstrap interval, † and n as above.", ""]
+        L += noise_table.noise_lines(runs, noise, strategies, _t_or_end, bootstrap_ci) + [""]
     L += ["## Results per world", ""]
     for w in worlds:
         a = area.get(w)
@@ -663,11 +694,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--certificate", action="append", default=[], metavar="PATH",
                     help="a certificate of bench/same_results.py (or a folder of them), "
                          f"besides OUT/{CERT_DIR}/; repeatable")
+    ap.add_argument("--mapping-noise-dir", action="append", default=[],
+                    metavar="PROFILE=DIR",
+                    help="a folder of the same matrix under a mapping error profile "
+                         "(run_bench.py --mapping-noise PROFILE --out DIR): adds the table "
+                         "under mapping error; repeatable")
     a = ap.parse_args(argv)
     try:
         path = write_all(Path(a.out), Path(a.md) if a.md else None, None,
                          allow_mixed=a.allow_mixed,
-                         certificates=[Path(c) for c in a.certificate])
+                         certificates=[Path(c) for c in a.certificate],
+                         noise_dirs=noise_table.parse_dirs(a.mapping_noise_dir))
     except ValueError as err:             # MixedVersions or a bad certificate
         print(f"[report] {err}", file=sys.stderr)
         return 2

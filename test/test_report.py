@@ -15,7 +15,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench import records, report, run_bench, same_results, store  # noqa: E402
+from bench import noise_table, records, report, run_bench, same_results, store  # noqa: E402
 from bench.worlds import default_worlds  # noqa: E402
 from sim_bridge.strategy_specs import MATRIX_STRATEGIES as STRATEGIES  # noqa: E402
 
@@ -314,3 +314,53 @@ def test_tiny_matrix_in_shards_merged_and_resumed(tmp_path, capsys):
     assert run_bench.main(more + ["--out", str(a), "--md", "", "--resume"]) == 0
     assert json.loads((a / "meta.json").read_text())["parts"][-1]["runs_run"] == 2
     assert len(records.read(a)) == 8
+
+
+# ------------------------------------------------------------------ mapping error table
+
+
+def test_the_table_under_mapping_error_pairs_each_run_with_its_noise_free_one(tmp_path):
+    base = [_rec("w", s, k, A, t95=100.0 + 10 * k) for s in ("routed", "nearest")
+            for k in range(3)]
+    real = [_rec("w", "routed", k, A, t95=(100.0 + 10 * k) * 1.1) for k in range(3)]
+    real += [_rec("w", "nearest", 0, A, t95=None, stop_reason="done", coverage_pct=90.0),
+             _rec("w", "nearest", 1, A, t95=None, stop_reason="done", coverage_pct=98.0),
+             _rec("w", "nearest", 2, A, t95=120.0, collisions=2)]
+    out = _folder(tmp_path / "none", base)
+    noisy = _folder(tmp_path / "realistic", real)
+    md = report.write_all(out, tmp_path / "B.md", command="x",
+                          noise_dirs=[("realistic", noisy)]).read_text()
+    assert "## Under mapping error" in md
+    assert "| routed | none | 1 | 3 | 3/3 | 0 | 0 | 110 | 1 (reference) |" in md
+    assert "| routed | realistic | 1 | 3 | 3/3 | 0 | 0 | 121 | 1.10 [1.10, 1.10] |" in md
+    row = next(ln for ln in md.splitlines() if ln.startswith("| nearest | realistic |"))
+    # one "done" below 97 %, one at 98 % (not early), contacts 2, the seeds without a
+    # T95 count with their end time (†)
+    assert row.startswith("| nearest | realistic | 1 | 3 | 1/3 | 1 | 2 |") and "†" in row
+    assert "`realistic` on `aaaaaaa11111`" in md
+
+
+def test_a_noise_folder_of_mixed_versions_is_refused(tmp_path):
+    out = _folder(tmp_path / "none", [_rec("w", "routed", k, A) for k in range(2)])
+    noisy = _folder(tmp_path / "harsh", [_rec("w", "routed", k, (A, B)[k]) for k in range(2)])
+    with pytest.raises(report.MixedVersions):
+        report.write_all(out, tmp_path / "B.md", command="x", noise_dirs=[("harsh", noisy)])
+
+
+@pytest.mark.parametrize("items, what", [
+    (["realistic"], "PROFILE=DIR"), (["none={d}"], "own folder"),
+    (["harsh={d}", "harsh={d}"], "twice"), (["harsh={d}/missing"], "no folder")])
+def test_mapping_noise_dirs_are_checked(tmp_path, items, what):
+    with pytest.raises(ValueError, match=what):
+        noise_table.parse_dirs([i.format(d=tmp_path) for i in items])
+
+
+def test_full_matrix_report_with_two_noise_profiles_fits_in_400_lines(tmp_path):
+    recs = _full_matrix((A,))
+    out = _folder(tmp_path / "full", recs, default_worlds(), list(STRATEGIES))
+    dirs = [(p, _folder(tmp_path / p, recs, default_worlds(), list(STRATEGIES)))
+            for p in ("realistic", "harsh")]
+    md = report.write_all(out, tmp_path / "B.md", command="bench/run_bench.py", noise_dirs=dirs)
+    lines = md.read_text().splitlines()
+    assert len(lines) <= 400, len(lines)
+    assert sum(1 for ln in lines if ln.startswith("| routed | harsh |")) == 1
