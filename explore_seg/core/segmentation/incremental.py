@@ -219,7 +219,10 @@ class IncrementalSegmenter:
         # caller's whole grid alive
         self._geom = grid.with_data(self._data)
         self._free_raw, self._free_clean = free_raw, free_clean
-        out = np.multiply(labels, free_raw, dtype=np.int32)   # 0 off the free cells
+        # free cells, and the occupied cells the cleaning counts as room (furniture and
+        # clutter filled for the decomposition): a desk in an office is part of it
+        shown = free_raw | (free_clean & (grid.data > self.params.occupied_min_occupancy))
+        out = np.multiply(labels, shown, dtype=np.int32)
         self.last_update_info = UpdateInfo(mode, time.perf_counter() - t0, n_areas,
                                            n_cells, len(label_counts(out)), reason)
         return out
