@@ -68,8 +68,12 @@ def clean_free_space(grid: GridMap, params: SegmentationParams
     return clean_masks(grid.data, params, grid.resolution_m)
 
 
-def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: float
-           ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
+def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: float,
+                roi: tuple[slice, slice] | None = None
+                ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
+    """:func:`clean_free_space` of an occupancy array; ``roi`` (optional): the part of
+    ``free_clean`` the caller uses (work outside it that cannot reach it is skipped,
+    so free_clean is exact only there)."""
     free_raw = (data >= 0) & (data < params.free_max_occupancy)
     if data.size == 0:
         return free_raw, free_raw.copy()
@@ -102,7 +106,7 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
         # small free-standing objects are free space for the decomposition
         free_clean |= objects & (grown > 0) & (obst == 0)
     free_clean = fill_clutter_holes(free_clean, occ_u8, params, res, occ_cc)
-    return free_raw, fill_furniture(free_clean, occ_u8, params, res)
+    return free_raw, fill_furniture(free_clean, occ_u8, params, res, roi)
 
 
 def _small_objects(occ_u8: npt.NDArray[np.uint8],

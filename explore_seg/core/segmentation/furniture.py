@@ -89,7 +89,8 @@ def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res:
 
 
 def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8],
-                   params: SegmentationParams, res: float) -> npt.NDArray[np.bool_]:
+                   params: SegmentationParams, res: float,
+                   roi: tuple[slice, slice] | None = None) -> npt.NDArray[np.bool_]:
     """``free_clean`` with the footprints of wall-standing furniture filled.
 
     Parameters
@@ -100,6 +101,9 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
         Obstacle cells (specks removed), as inflated into ``free_clean``.
     params : SegmentationParams
     res : float
+    roi : (slice, slice), optional
+        The part of the result the caller uses: bulges whose fill cannot reach it are
+        not tested (their fill is left out).
 
     Returns
     -------
@@ -135,9 +139,15 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
     r_c = int(math.ceil(0.25 * params.furniture_min_thickness_m / res))
     k_corner = np.ones((2 * r_c + 1, 2 * r_c + 1), np.uint8)
     out = free_clean.copy()
+    # a bulge's fill lies within the corner dilation and the inflation of its box
+    reach = r_c + r_inf + 1
     for k in range(1, n):
         x, y, bw, bh, _area = (int(v) for v in stats[k])
         if max(bw, bh) > ext:
+            continue
+        if roi is not None and (y + bh + reach <= roi[0].start or y - reach >= roi[0].stop
+                                or x + bw + reach <= roi[1].start
+                                or x - reach >= roi[1].stop):
             continue
         box = (slice(max(0, y - m), min(h, y + bh + m)),
                slice(max(0, x - m), min(w, x + bw + m)))

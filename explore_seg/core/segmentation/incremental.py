@@ -272,9 +272,9 @@ class IncrementalSegmenter:
         h, w = grid.shape
         wr = slice(max(0, box[0].start - infl), min(h, box[0].stop + infl))
         wc = slice(max(0, box[1].start - infl), min(w, box[1].stop + infl))
-        fr, fc = clean_masks(grid.data[wr, wc], p, res)
         ir = slice(box[0].start - wr.start, box[0].stop - wr.start)
         ic = slice(box[1].start - wc.start, box[1].stop - wc.start)
+        fr, fc = clean_masks(grid.data[wr, wc], p, res, roi=(ir, ic))
         free_raw[box] = fr[ir, ic]
         free_clean[box] = fc[ir, ic]
         return free_raw, free_clean
