@@ -16,8 +16,9 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.segmentation.furniture import (fill_furniture, furniture_reach_cells,
-                                                     open_disk)
+from explore_seg.core.segmentation.furniture import (fill_furniture, furniture_cells,
+                                                     furniture_cells_update,
+                                                     furniture_reach_cells, open_disk)
 from explore_seg.core.segmentation.labels import bbox
 from explore_seg.core.segmentation.params import SegmentationParams
 
@@ -74,9 +75,23 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
     """:func:`clean_free_space` of an occupancy array; ``roi`` (optional): the part of
     ``free_clean`` the caller uses (work outside it that cannot reach it is skipped,
     so free_clean is exact only there)."""
+    free_raw, free_clean, _occ, _bulge = clean_state(data, params, res, roi)
+    return free_raw, free_clean
+
+
+def clean_state(data: npt.NDArray[np.int8], params: SegmentationParams, res: float,
+                roi: tuple[slice, slice] | None = None,
+                prev: tuple[npt.NDArray[np.uint8], npt.NDArray[np.bool_]] | None = None
+                ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_],
+                           npt.NDArray[np.uint8], npt.NDArray[np.bool_] | None]:
+    """:func:`clean_masks` plus what an incremental update keeps to redo less: the
+    obstacles as inflated (specks and small objects removed, uint8) and their
+    furniture bulges (None when the furniture rule is off). ``prev``: those two of an
+    earlier map in this array's geometry (cells it did not cover: obstacle value 2), so
+    that the bulges' distance transforms run only around changed obstacles."""
     free_raw = (data >= 0) & (data < params.free_max_occupancy)
     if data.size == 0:
-        return free_raw, free_raw.copy()
+        return free_raw, free_raw.copy(), np.zeros(data.shape, np.uint8), None
     occ = data > params.occupied_min_occupancy
     occ_u8 = occ.astype(np.uint8)
     occ_cc = None
@@ -106,7 +121,12 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
         # small free-standing objects are free space for the decomposition
         free_clean |= objects & (grown > 0) & (obst == 0)
     free_clean = fill_clutter_holes(free_clean, occ_u8, params, res, occ_cc)
-    return free_raw, fill_furniture(free_clean, occ_u8, params, res, roi)
+    bulge = None
+    if params.furniture_min_thickness_m > 0:
+        bulge = (furniture_cells(occ_u8, params, res) if prev is None else
+                 furniture_cells_update(occ_u8, params, res, prev[0], prev[1]))
+    return (free_raw, fill_furniture(free_clean, occ_u8, params, res, roi, bulge), occ_u8,
+            bulge)
 
 
 def _small_objects(occ_u8: npt.NDArray[np.uint8],

@@ -88,9 +88,47 @@ def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res:
     return out
 
 
+def furniture_cells_update(occ: npt.NDArray[np.uint8], params: SegmentationParams,
+                           res: float, occ_prev: npt.NDArray[np.uint8],
+                           bulge_prev: npt.NDArray[np.bool_]) -> npt.NDArray[np.bool_]:
+    """:func:`furniture_cells` of ``occ``, given those of ``occ_prev`` (``bulge_prev``):
+    the distance transforms run only around the cells where the two differ.
+
+    A cell's bulge depends on the obstacles within :func:`bulge_reach_cells` of it, so
+    it is recomputed (with that much context) within that distance of a changed cell
+    and copied elsewhere. The result equals ``furniture_cells(occ)`` wherever
+    ``bulge_prev`` equals ``furniture_cells(occ_prev)``.
+    """
+    changed = occ != occ_prev
+    box = bbox(changed, bulge_reach_cells(params, res))
+    if box is None:
+        return bulge_prev.copy()
+    d = bulge_reach_cells(params, res)
+    h, w = occ.shape
+    ctx = (slice(max(0, box[0].start - d), min(h, box[0].stop + d)),
+           slice(max(0, box[1].start - d), min(w, box[1].stop + d)))
+    if (ctx[0].stop - ctx[0].start) * (ctx[1].stop - ctx[1].start) >= 0.8 * occ.size:
+        return furniture_cells(occ, params, res)
+    out = bulge_prev.copy()
+    sub = furniture_cells(occ[ctx], params, res)
+    out[box] = sub[box[0].start - ctx[0].start:box[0].stop - ctx[0].start,
+                   box[1].start - ctx[1].start:box[1].stop - ctx[1].start]
+    return out
+
+
+def bulge_reach_cells(params: SegmentationParams, res: float) -> int:
+    """How far (cells) a changed obstacle cell can change :func:`furniture_cells`: the
+    two openings see the obstacles within their disks' diameters (the chamfer distance
+    transform underestimates a distance by at most 4.5 %), plus a few cells."""
+    d_min = params.furniture_min_thickness_m / res
+    d_max = params.furniture_max_thickness_m / res
+    return int(math.ceil(1.1 * (d_max + d_min))) + 4
+
+
 def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8],
                    params: SegmentationParams, res: float,
-                   roi: tuple[slice, slice] | None = None) -> npt.NDArray[np.bool_]:
+                   roi: tuple[slice, slice] | None = None,
+                   bulge: npt.NDArray[np.bool_] | None = None) -> npt.NDArray[np.bool_]:
     """``free_clean`` with the footprints of wall-standing furniture filled.
 
     Parameters
@@ -104,6 +142,8 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
     roi : (slice, slice), optional
         The part of the result the caller uses: bulges whose fill cannot reach it are
         not tested (their fill is left out).
+    bulge : ndarray of bool, shape (H, W), optional
+        :func:`furniture_cells` of ``occ``, when the caller has it.
 
     Returns
     -------
@@ -114,7 +154,8 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
     """
     if params.furniture_min_thickness_m <= 0:
         return free_clean
-    bulge = furniture_cells(occ, params, res)
+    if bulge is None:
+        bulge = furniture_cells(occ, params, res)
     if not bulge.any():
         return free_clean
     ext = params.furniture_max_extent_m / res

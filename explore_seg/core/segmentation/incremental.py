@@ -20,7 +20,7 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.segmentation.cleaning import (clean_influence_cells, clean_masks,
+from explore_seg.core.segmentation.cleaning import (clean_influence_cells, clean_state,
                                                     length_to_cells)
 from explore_seg.core.segmentation.dude import decompose_mask, find_cuts
 from explore_seg.core.segmentation.labels import (apply_mapping, bbox, fill_gaps,
@@ -122,6 +122,9 @@ class IncrementalSegmenter:
         self._data: npt.NDArray[np.int8] | None = None
         self._free_raw: npt.NDArray[np.bool_] | None = None
         self._free_clean: npt.NDArray[np.bool_] | None = None
+        # the obstacles as inflated and their furniture bulges (None: rule off)
+        self._occ: npt.NDArray[np.uint8] | None = None
+        self._bulge: npt.NDArray[np.bool_] | None = None
         self._next_id = 1
         self._force_full = False
         self.last_update_info: UpdateInfo | None = None
@@ -134,6 +137,8 @@ class IncrementalSegmenter:
         self._data = None
         self._free_raw = None
         self._free_clean = None
+        self._occ = None
+        self._bulge = None
 
     def set_params(self, params: SegmentationParams) -> None:
         """Use new parameters; the next update is a full run whose ids are matched."""
@@ -193,7 +198,7 @@ class IncrementalSegmenter:
         if shift is not None and self._free_raw is not None and self._free_clean is not None:
             # cells that were known free and in the cleaned free space before
             prev_known_f = shift_into(self._free_raw & self._free_clean, grid.shape, *shift)
-        free_raw, free_clean = self._clean_update(grid, shift)
+        free_raw, free_clean, occ, bulge = self._clean_update(grid, shift)
         domain = free_raw | free_clean
         prev = None
         if shift is not None and self._labels is not None:
@@ -219,6 +224,7 @@ class IncrementalSegmenter:
         # caller's whole grid alive
         self._geom = grid.with_data(self._data)
         self._free_raw, self._free_clean = free_raw, free_clean
+        self._occ, self._bulge = occ, bulge
         # free cells, and the occupied cells the cleaning counts as room (furniture and
         # clutter filled for the decomposition): a desk in an office is part of it
         shown = free_raw | (free_clean & (grid.data > self.params.occupied_min_occupancy))
@@ -245,13 +251,17 @@ class IncrementalSegmenter:
         return int(ir), int(ic)
 
     def _clean_update(self, grid: GridMap, shift: tuple[int, int] | None
-                      ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
-        """Cleaned masks of ``grid``, recomputed only around changed cells when possible."""
+                      ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_],
+                                 npt.NDArray[np.uint8], npt.NDArray[np.bool_] | None]:
+        """Cleaned masks of ``grid``, its obstacles as inflated and their furniture
+        bulges (:func:`.cleaning.clean_state`), recomputed only around changed cells when
+        possible."""
         p = self.params
         res = grid.resolution_m
         if (shift is None or self._data is None or self._free_raw is None
-                or self._free_clean is None):
-            return clean_masks(grid.data, p, res)
+                or self._free_clean is None or self._occ is None
+                or (p.furniture_min_thickness_m > 0) != (self._bulge is not None)):
+            return clean_state(grid.data, p, res)
         old = shift_into(self._data, grid.shape, *shift, fill=-1, reuse=True)
         changed = old != grid.data
         infl = clean_influence_cells(p, res)
@@ -260,6 +270,10 @@ class IncrementalSegmenter:
         # the old masks are replaced by the result, so they may be updated in place
         free_raw = shift_into(self._free_raw, grid.shape, *shift, reuse=True)
         free_clean = shift_into(self._free_clean, grid.shape, *shift, reuse=True)
+        # cells the old state did not cover count as changed obstacles (value 2)
+        occ = shift_into(self._occ, grid.shape, *shift, fill=2, reuse=True)
+        bulge = (None if self._bulge is None
+                 else shift_into(self._bulge, grid.shape, *shift, reuse=True))
         if shift != (0, 0) or self._data.shape != grid.shape:
             cover = shift_into(np.ones(self._data.shape, dtype=bool), grid.shape, *shift)
             edge = bbox(~cover, infl)
@@ -268,16 +282,20 @@ class IncrementalSegmenter:
                     slice(min(box[0].start, edge[0].start), max(box[0].stop, edge[0].stop)),
                     slice(min(box[1].start, edge[1].start), max(box[1].stop, edge[1].stop)))
         if box is None:
-            return free_raw, free_clean
+            return free_raw, free_clean, occ, bulge
         h, w = grid.shape
         wr = slice(max(0, box[0].start - infl), min(h, box[0].stop + infl))
         wc = slice(max(0, box[1].start - infl), min(w, box[1].stop + infl))
         ir = slice(box[0].start - wr.start, box[0].stop - wr.start)
         ic = slice(box[1].start - wc.start, box[1].stop - wc.start)
-        fr, fc = clean_masks(grid.data[wr, wc], p, res, roi=(ir, ic))
+        prev = None if bulge is None else (occ[wr, wc], bulge[wr, wc])
+        fr, fc, oc, bu = clean_state(grid.data[wr, wc], p, res, roi=(ir, ic), prev=prev)
         free_raw[box] = fr[ir, ic]
         free_clean[box] = fc[ir, ic]
-        return free_raw, free_clean
+        occ[box] = oc[ir, ic]
+        if bulge is not None and bu is not None:
+            bulge[box] = bu[ir, ic]
+        return free_raw, free_clean, occ, bulge
 
     def _fresh(self) -> int:
         k = self._next_id
