@@ -103,7 +103,7 @@ def clean_state(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
         if small.any():
             keep = (~small).astype(np.uint8)
             keep[0] = 0
-            occ_u8 = keep[lab]        # the occupied cells less the specks
+            occ_u8 = np.take(keep, lab)      # the occupied cells less the specks
         # the components left in occ_u8 are these minus the specks
         occ_cc = (lab, stats, small)
     objects = None
@@ -142,7 +142,7 @@ def _small_objects(occ_u8: npt.NDArray[np.uint8],
     obj[0] = False
     if not obj.any():
         return None
-    objects = obj[lab]
+    objects = np.take(obj, lab)
     r_near = 2 * length_to_cells(params.obstacle_inflation_m, res) + 1
     box = bbox(objects, r_near)
     assert box is not None
@@ -195,8 +195,8 @@ def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.ui
     if big.any() and params.furniture_min_thickness_m > 0:
         big &= ~_thick_blocks(olab, ost, big, params, res)
     if big.any():
-        small[lab[big[olab]]] = False
-    return free_clean | small[lab]
+        small[lab[np.take(big, olab)]] = False
+    return free_clean | np.take(small, lab)
 
 
 def _thick_blocks(olab: npt.NDArray[np.int32], ost: npt.NDArray[np.int32],

@@ -167,9 +167,20 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
     # walls closed when the whole bulge would open them
     occ_b = occ > 0
     half_min = 0.5 * params.furniture_min_thickness_m / res
-    # components of the bulges, in the bulges' bounding box
+    r_c = int(math.ceil(0.25 * params.furniture_min_thickness_m / res))
+    # a bulge's fill lies within the corner dilation and the inflation of its box
+    reach = r_c + r_inf + 1
+    # components of the bulges, in the bulges' bounding box; with a roi, only within
+    # reach of it plus the widest bulge filled (a component cut off there is wider
+    # than that, as it is whole)
     bb = bbox(bulge, 0)
     assert bb is not None
+    if roi is not None:
+        g = reach + int(math.ceil(ext)) + 1
+        bb = (slice(max(bb[0].start, roi[0].start - g), min(bb[0].stop, roi[0].stop + g)),
+              slice(max(bb[1].start, roi[1].start - g), min(bb[1].stop, roi[1].stop + g)))
+        if bb[0].start >= bb[0].stop or bb[1].start >= bb[1].stop:
+            return free_clean
     lab = np.zeros(occ.shape, dtype=np.int32)
     n, lab[bb], stats, _ = cv2.connectedComponentsWithStats(bulge[bb].view(np.uint8),
                                                             connectivity=8)
@@ -177,11 +188,8 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
     stats[:, 1] += bb[0].start
     h, w = occ.shape
     m = int(round(params.furniture_max_thickness_m / res)) + r_inf + r_door + 4
-    r_c = int(math.ceil(0.25 * params.furniture_min_thickness_m / res))
     k_corner = np.ones((2 * r_c + 1, 2 * r_c + 1), np.uint8)
     out = free_clean.copy()
-    # a bulge's fill lies within the corner dilation and the inflation of its box
-    reach = r_c + r_inf + 1
     for k in range(1, n):
         x, y, bw, bh, _area = (int(v) for v in stats[k])
         if max(bw, bh) > ext:
@@ -198,7 +206,7 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
         whole = (cv2.dilate(blob.view(np.uint8), k_corner) > 0) & occ_b[box]
         fill = _footprint(whole, occ_b[box], free_clean[box], k_inf, r_door)
         if fill is None:
-            thin = occ_b[box] & ~(lab[box] > 0)
+            thin = occ_b[box] & ~bulge[box]
             to_thin = cv2.distanceTransform((~thin).view(np.uint8), cv2.DIST_L2, 3)
             fill = _footprint(blob & (to_thin > half_min), occ_b[box], free_clean[box],
                               k_inf, r_door)

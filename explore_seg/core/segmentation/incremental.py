@@ -429,7 +429,7 @@ class IncrementalSegmenter:
         if not big.any():
             return dirty, None
         blobs = np.zeros(shape, dtype=bool)
-        blobs[box_new] = big[lab]
+        blobs[box_new] = np.take(big, lab)
         t = p.inc_touch_cells
         bb = bbox(blobs, t + 1)
         near = cv2.dilate(blobs[bb].astype(np.uint8),
@@ -481,7 +481,7 @@ class IncrementalSegmenter:
         else:
             lut = np.zeros(max(max(old_area, default=0), max(dirty)) + 2, dtype=bool)
             lut[list(dirty)] = True
-            work = lut[labels]
+            work = np.take(lut, labels)
         if blobs is not None:
             work |= blobs
         return work
