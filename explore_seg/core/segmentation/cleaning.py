@@ -16,7 +16,8 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.segmentation.furniture import (fill_furniture, furniture_cells,
+from explore_seg.core.segmentation.furniture import (FillCache, fill_furniture,
+                                                     furniture_cells,
                                                      furniture_cells_update,
                                                      furniture_reach_cells, open_disk)
 from explore_seg.core.segmentation.labels import bbox
@@ -81,14 +82,17 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
 
 def clean_state(data: npt.NDArray[np.int8], params: SegmentationParams, res: float,
                 roi: tuple[slice, slice] | None = None,
-                prev: tuple[npt.NDArray[np.uint8], npt.NDArray[np.bool_]] | None = None
+                prev: tuple[npt.NDArray[np.uint8], npt.NDArray[np.bool_]] | None = None,
+                fill_cache: FillCache | None = None, origin: tuple[int, int] = (0, 0)
                 ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_],
                            npt.NDArray[np.uint8], npt.NDArray[np.bool_] | None]:
     """:func:`clean_masks` plus what an incremental update keeps to redo less: the
     obstacles as inflated (specks and small objects removed, uint8) and their
     furniture bulges (None when the furniture rule is off). ``prev``: those two of an
     earlier map in this array's geometry (cells it did not cover: obstacle value 2), so
-    that the bulges' distance transforms run only around changed obstacles."""
+    that the bulges' distance transforms run only around changed obstacles;
+    ``fill_cache`` and ``origin``: the bulges' fills of that map (:class:`FillCache`) and
+    this array's cell (0, 0) in the cache's reference cells."""
     free_raw = (data >= 0) & (data < params.free_max_occupancy)
     if data.size == 0:
         return free_raw, free_raw.copy(), np.zeros(data.shape, np.uint8), None
@@ -125,8 +129,8 @@ def clean_state(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
     if params.furniture_min_thickness_m > 0:
         bulge = (furniture_cells(occ_u8, params, res) if prev is None else
                  furniture_cells_update(occ_u8, params, res, prev[0], prev[1]))
-    return (free_raw, fill_furniture(free_clean, occ_u8, params, res, roi, bulge), occ_u8,
-            bulge)
+    filled = fill_furniture(free_clean, occ_u8, params, res, roi, bulge, fill_cache, origin)
+    return free_raw, filled, occ_u8, bulge
 
 
 def _small_objects(occ_u8: npt.NDArray[np.uint8],

@@ -128,7 +128,9 @@ def bulge_reach_cells(params: SegmentationParams, res: float) -> int:
 def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8],
                    params: SegmentationParams, res: float,
                    roi: tuple[slice, slice] | None = None,
-                   bulge: npt.NDArray[np.bool_] | None = None) -> npt.NDArray[np.bool_]:
+                   bulge: npt.NDArray[np.bool_] | None = None,
+                   cache: FillCache | None = None,
+                   origin: tuple[int, int] = (0, 0)) -> npt.NDArray[np.bool_]:
     """``free_clean`` with the footprints of wall-standing furniture filled.
 
     Parameters
@@ -144,6 +146,10 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
         not tested (their fill is left out).
     bulge : ndarray of bool, shape (H, W), optional
         :func:`furniture_cells` of ``occ``, when the caller has it.
+    cache : FillCache, optional
+        The fills of the previous call, replaced by this call's.
+    origin : (int, int)
+        The cell (0, 0) of these arrays in the cache's reference cells.
 
     Returns
     -------
@@ -190,6 +196,9 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
     m = int(round(params.furniture_max_thickness_m / res)) + r_inf + r_door + 4
     k_corner = np.ones((2 * r_c + 1, 2 * r_c + 1), np.uint8)
     out = free_clean.copy()
+    seen = {}
+    if cache is not None:
+        seen, cache.fills = cache.fills, {}
     for k in range(1, n):
         x, y, bw, bh, _area = (int(v) for v in stats[k])
         if max(bw, bh) > ext:
@@ -201,18 +210,47 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
         box = (slice(max(0, y - m), min(h, y + bh + m)),
                slice(max(0, x - m), min(w, x + bw + m)))
         blob = lab[box] == k
-        # the opening rounds the bulge's corners off: the occupied cells near it are
-        # the furniture's footprint
-        whole = (cv2.dilate(blob.view(np.uint8), k_corner) > 0) & occ_b[box]
-        fill = _footprint(whole, occ_b[box], free_clean[box], k_inf, r_door)
-        if fill is None:
-            thin = occ_b[box] & ~bulge[box]
-            to_thin = cv2.distanceTransform((~thin).view(np.uint8), cv2.DIST_L2, 3)
-            fill = _footprint(blob & (to_thin > half_min), occ_b[box], free_clean[box],
-                              k_inf, r_door)
+        inputs = (blob, occ_b[box], free_clean[box], bulge[box])
+        key = (box[0].start + origin[0], box[0].stop + origin[0],
+               box[1].start + origin[1], box[1].stop + origin[1])
+        hit = seen.get(key)
+        if hit is not None and all(np.array_equal(a, b) for a, b in zip(hit[0], inputs)):
+            fill = hit[1]
+        else:
+            fill = _bulge_fill(*inputs, k_corner, k_inf, r_door, half_min)
+        if cache is not None:
+            cache.fills[key] = (tuple(a.copy() for a in inputs), fill)
         if fill is not None:
             out[box] |= fill
     return out
+
+
+class FillCache:
+    """The fills of the bulges of an earlier :func:`fill_furniture` call, with the
+    inputs each was computed from, keyed by the bulge's neighbourhood in cells of a
+    fixed reference (a bulge whose neighbourhood did not change is not tested again;
+    an incremental update keeps one)."""
+
+    def __init__(self) -> None:
+        self.fills: dict[tuple[int, int, int, int],
+                         tuple[tuple[npt.NDArray[np.bool_], ...],
+                               npt.NDArray[np.bool_] | None]] = {}
+
+
+def _bulge_fill(blob: npt.NDArray[np.bool_], occ: npt.NDArray[np.bool_],
+                free_clean: npt.NDArray[np.bool_], bulge: npt.NDArray[np.bool_],
+                k_corner: npt.NDArray[np.uint8], k_inf: npt.NDArray[np.uint8],
+                r_door: int, half_min: float) -> npt.NDArray[np.bool_] | None:
+    """The fill of one bulge ``blob`` (arrays: the bulge's neighbourhood), or None."""
+    # the opening rounds the bulge's corners off: the occupied cells near it are the
+    # furniture's footprint
+    whole = (cv2.dilate(blob.view(np.uint8), k_corner) > 0) & occ
+    fill = _footprint(whole, occ, free_clean, k_inf, r_door)
+    if fill is None:
+        thin = occ & ~bulge
+        to_thin = cv2.distanceTransform((~thin).view(np.uint8), cv2.DIST_L2, 3)
+        fill = _footprint(blob & (to_thin > half_min), occ, free_clean, k_inf, r_door)
+    return fill
 
 
 def _footprint(cells: npt.NDArray[np.bool_], occ: npt.NDArray[np.bool_],
