@@ -121,6 +121,11 @@ def merge_passages(labels: npt.NDArray[np.int32], mg: _Merger, cand: set[int],
     if ratio <= 0 or not cand:
         return
     door = params.max_door_width_m / res
+    # the widths and clearances cost two distance transforms: only when a border
+    # between candidate regions is longer than a door
+    if not any(sp > door and ((a in cand and b in cand) if both else (a in cand or b in cand))
+               for (a, b), (sp, _c) in border_spans(labels).items()):
+        return
     width = inscribed_diameters(labels, inner)
     # the free space's own width where two regions meet (region borders do not count):
     # twice the largest distance to an obstacle along the border
