@@ -9,13 +9,14 @@ and region ids that persist between updates (§12).
 Label images follow :class:`~explore_seg.core.grid.GridMap`: int32 ``(H, W)``, row = y,
 ``0`` = no region (a wall or other obstacle, unknown, undecided occupancy, or a free speck
 smaller than ``min_region_area_m2`` that touches no region), ``k > 0`` a region id.
-Furniture the cleaning fills as room (clutter holes, small objects, furniture against a
-wall: their occupied cells in F) carries the id of the region around it: a desk belongs
-to its office, as in hand-drawn room maps.
+Free-standing furniture the cleaning counts as room (the occupied cells of clutter holes
+and small objects) carries the id of the region around it: a table belongs to its
+office, as in hand-drawn room maps. Furniture against a wall keeps 0: there furniture
+and wall are one obstacle.
 
 Internally every cell of the *domain* (cleaned free space F united with the raw free
 cells) carries a label; the published labels are the domain labels restricted to the raw
-free cells and the occupied cells in F. Keeping the F margin labelled (F reaches
+free cells and those furniture cells. Keeping the F margin labelled (F reaches
 ``free_close_m`` into unknown space at frontiers) is what lets the incremental update
 tell newly seen space from old.
 

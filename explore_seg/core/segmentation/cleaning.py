@@ -10,6 +10,7 @@ otherwise wall off strips of a room.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -76,26 +77,41 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
     """:func:`clean_free_space` of an occupancy array; ``roi`` (optional): the part of
     ``free_clean`` the caller uses (work outside it that cannot reach it is skipped,
     so free_clean is exact only there)."""
-    free_raw, free_clean, _occ, _bulge = clean_state(data, params, res, roi)
-    return free_raw, free_clean
+    st = clean_state(data, params, res, roi)
+    return st.free_raw, st.free_clean
+
+
+class CleanState(NamedTuple):
+    """The masks of :func:`clean_state`, all of the grid's shape."""
+
+    free_raw: npt.NDArray[np.bool_]
+    free_clean: npt.NDArray[np.bool_]
+    #: obstacles as inflated (specks and small objects removed), uint8
+    occ: npt.NDArray[np.uint8]
+    #: their furniture bulges (None when the furniture rule is off)
+    bulge: npt.NDArray[np.bool_] | None
+    #: the cells whose labels are published: the free cells, and the occupied cells the
+    #: clutter fill and the small objects make room (free-standing furniture); the
+    #: furniture fill's cells are not, as wall and furniture are one obstacle there
+    shown: npt.NDArray[np.bool_]
 
 
 def clean_state(data: npt.NDArray[np.int8], params: SegmentationParams, res: float,
                 roi: tuple[slice, slice] | None = None,
                 prev: tuple[npt.NDArray[np.uint8], npt.NDArray[np.bool_]] | None = None,
                 fill_cache: FillCache | None = None, origin: tuple[int, int] = (0, 0)
-                ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_],
-                           npt.NDArray[np.uint8], npt.NDArray[np.bool_] | None]:
-    """:func:`clean_masks` plus what an incremental update keeps to redo less: the
-    obstacles as inflated (specks and small objects removed, uint8) and their
-    furniture bulges (None when the furniture rule is off). ``prev``: those two of an
+                ) -> CleanState:
+    """:func:`clean_masks` plus the published cells and what an incremental update keeps
+    to redo less: the obstacles as inflated and their furniture bulges
+    (:class:`CleanState`). ``prev``: those two of an
     earlier map in this array's geometry (cells it did not cover: obstacle value 2), so
     that the bulges' distance transforms run only around changed obstacles;
     ``fill_cache`` and ``origin``: the bulges' fills of that map (:class:`FillCache`) and
     this array's cell (0, 0) in the cache's reference cells."""
     free_raw = (data >= 0) & (data < params.free_max_occupancy)
     if data.size == 0:
-        return free_raw, free_raw.copy(), np.zeros(data.shape, np.uint8), None
+        return CleanState(free_raw, free_raw.copy(), np.zeros(data.shape, np.uint8), None,
+                          free_raw.copy())
     occ = data > params.occupied_min_occupancy
     occ_u8 = occ.astype(np.uint8)
     occ_cc = None
@@ -129,8 +145,9 @@ def clean_state(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
     if params.furniture_min_thickness_m > 0:
         bulge = (furniture_cells(occ_u8, params, res) if prev is None else
                  furniture_cells_update(occ_u8, params, res, prev[0], prev[1]))
+    shown = free_raw | (free_clean & occ)
     filled = fill_furniture(free_clean, occ_u8, params, res, roi, bulge, fill_cache, origin)
-    return free_raw, filled, occ_u8, bulge
+    return CleanState(free_raw, filled, occ_u8, bulge, shown)
 
 
 def _small_objects(occ_u8: npt.NDArray[np.uint8],

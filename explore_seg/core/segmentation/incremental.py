@@ -20,8 +20,8 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.segmentation.cleaning import (clean_influence_cells, clean_state,
-                                                    length_to_cells)
+from explore_seg.core.segmentation.cleaning import (CleanState, clean_influence_cells,
+                                                    clean_state, length_to_cells)
 from explore_seg.core.segmentation.crop import (CROP_CHUNK_CELLS, crop_grid,  # noqa: F401
                                                 crop_margin_cells, known_crop)
 from explore_seg.core.segmentation.dude import decompose_mask, find_cuts
@@ -98,6 +98,7 @@ class IncrementalSegmenter:
         # the obstacles as inflated and their furniture bulges (None: rule off)
         self._occ: npt.NDArray[np.uint8] | None = None
         self._bulge: npt.NDArray[np.bool_] | None = None
+        self._shown: npt.NDArray[np.bool_] | None = None
         # the bulges' fills, keyed in cells of the first grid of this state; that grid's
         # cell (0, 0) is cell _ref_rc of the current one
         self._fill_cache = FillCache()
@@ -116,6 +117,7 @@ class IncrementalSegmenter:
         self._free_clean = None
         self._occ = None
         self._bulge = None
+        self._shown = None
         self._fill_cache = FillCache()
 
     def set_params(self, params: SegmentationParams) -> None:
@@ -176,7 +178,8 @@ class IncrementalSegmenter:
         if shift is not None and self._free_raw is not None and self._free_clean is not None:
             # cells that were known free and in the cleaned free space before
             prev_known_f = shift_into(self._free_raw & self._free_clean, grid.shape, *shift)
-        free_raw, free_clean, occ, bulge = self._clean_update(grid, shift)
+        cs = self._clean_update(grid, shift)
+        free_raw, free_clean = cs.free_raw, cs.free_clean
         domain = free_raw | free_clean
         prev = None
         if shift is not None and self._labels is not None:
@@ -202,13 +205,13 @@ class IncrementalSegmenter:
         # caller's whole grid alive
         self._geom = grid.with_data(self._data)
         self._free_raw, self._free_clean = free_raw, free_clean
-        self._occ, self._bulge = occ, bulge
-        # free cells, and the occupied cells the cleaning counts as room (furniture and
-        # clutter filled for the decomposition): a desk in an office is part of it
-        shown = free_raw | (free_clean & (grid.data > self.params.occupied_min_occupancy))
+        self._occ, self._bulge, self._shown = cs.occ, cs.bulge, cs.shown
+        # free cells, and free-standing furniture the cleaning counts as room: a table in
+        # an office is part of it
+        shown = cs.shown
         out = np.multiply(labels, shown, dtype=np.int32)
         self.last_update_info = UpdateInfo(mode, time.perf_counter() - t0, n_areas,
-                                           n_cells, reason, labels, shown)
+                                           n_cells, reason, labels, shown.copy())
         return out
 
     # ---------------------------------------------------------------- internals
@@ -229,15 +232,13 @@ class IncrementalSegmenter:
         return int(ir), int(ic)
 
     def _clean_update(self, grid: GridMap, shift: tuple[int, int] | None
-                      ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_],
-                                 npt.NDArray[np.uint8], npt.NDArray[np.bool_] | None]:
-        """Cleaned masks of ``grid``, its obstacles as inflated and their furniture
-        bulges (:func:`.cleaning.clean_state`), recomputed only around changed cells when
-        possible."""
+                      ) -> CleanState:
+        """:func:`.cleaning.clean_state` of ``grid``, recomputed only around changed
+        cells when possible."""
         p = self.params
         res = grid.resolution_m
         if (shift is None or self._data is None or self._free_raw is None
-                or self._free_clean is None or self._occ is None
+                or self._free_clean is None or self._occ is None or self._shown is None
                 or (p.furniture_min_thickness_m > 0) != (self._bulge is not None)):
             self._fill_cache = FillCache()
             self._ref_rc = (0, 0)
@@ -262,24 +263,26 @@ class IncrementalSegmenter:
                 box = edge if box is None else (
                     slice(min(box[0].start, edge[0].start), max(box[0].stop, edge[0].stop)),
                     slice(min(box[1].start, edge[1].start), max(box[1].stop, edge[1].stop)))
+        shown = shift_into(self._shown, grid.shape, *shift, reuse=True)
         if box is None:
-            return free_raw, free_clean, occ, bulge
+            return CleanState(free_raw, free_clean, occ, bulge, shown)
         h, w = grid.shape
         wr = slice(max(0, box[0].start - infl), min(h, box[0].stop + infl))
         wc = slice(max(0, box[1].start - infl), min(w, box[1].stop + infl))
         ir = slice(box[0].start - wr.start, box[0].stop - wr.start)
         ic = slice(box[1].start - wc.start, box[1].stop - wc.start)
         prev = None if bulge is None else (occ[wr, wc], bulge[wr, wc])
-        fr, fc, oc, bu = clean_state(grid.data[wr, wc], p, res, roi=(ir, ic), prev=prev,
-                                     fill_cache=self._fill_cache,
-                                     origin=(wr.start - self._ref_rc[0],
-                                             wc.start - self._ref_rc[1]))
+        fr, fc, oc, bu, sh = clean_state(grid.data[wr, wc], p, res, roi=(ir, ic), prev=prev,
+                                         fill_cache=self._fill_cache,
+                                         origin=(wr.start - self._ref_rc[0],
+                                                 wc.start - self._ref_rc[1]))
         free_raw[box] = fr[ir, ic]
         free_clean[box] = fc[ir, ic]
         occ[box] = oc[ir, ic]
+        shown[box] = sh[ir, ic]
         if bulge is not None and bu is not None:
             bulge[box] = bu[ir, ic]
-        return free_raw, free_clean, occ, bulge
+        return CleanState(free_raw, free_clean, occ, bulge, shown)
 
     def _fresh(self) -> int:
         k = self._next_id
