@@ -10,7 +10,10 @@ Three modes:
   recall, precision and segments per room (segments whose largest overlap is that room,
   averaged over rooms; max over the rooms of a map)::
 
-      python bench/eval_segmentation.py --set furnished --maps 30
+      python bench/eval_segmentation.py --set furnished --maps 30 [--furniture-as-room]
+
+  ``--furniture-as-room`` scores the furnished maps against the plain map's rooms
+  (furniture cells count as room, as in the IPA ground truth; default: free cells only).
 
 * generated houses (default): for every seed, ``sim_bridge.worlds.generate_house`` gives
   the rooms (``World.room_labels``) and ``ground_truth(world).as_map("lidar")`` the map
@@ -119,10 +122,12 @@ def segments_per_room(e: dict) -> tuple[float, int]:
 
 
 def run_furnished(n_maps: int, first_seed: int, params: SegmentationParams,
-                  verbose: bool = True, kinds: tuple[str, ...] | None = None
-                  ) -> dict[str, dict[str, float]]:
+                  verbose: bool = True, kinds: tuple[str, ...] | None = None,
+                  furniture_as_room: bool = False) -> dict[str, dict[str, float]]:
     """Plain and furnished scores over the furnished evaluation set (``kinds``: the
-    floor-plan styles cycled, default ``MAP_KINDS``); prints per map."""
+    floor-plan styles cycled, default ``MAP_KINDS``); prints per map. The furnished
+    maps' rooms are their free cells, or with ``furniture_as_room`` the plain map's
+    (furniture cells count as room, as in the IPA ground truth)."""
     from sim_bridge.worlds.furnished import MAP_KINDS, furnished_map, furnished_set
 
     acc: dict[str, dict[str, list[float]]] = {
@@ -132,7 +137,8 @@ def run_furnished(n_maps: int, first_seed: int, params: SegmentationParams,
         m = furnished_map(seed, kind)
         line = f"  {m.name:18s}"
         for key, grid, rooms in (("plain", m.plain, m.plain_rooms),
-                                 ("furnished", m.furnished, m.furnished_rooms)):
+                                 ("furnished", m.furnished,
+                                  m.plain_rooms if furniture_as_room else m.furnished_rooms)):
             t0 = time.perf_counter()
             labels = segment(grid, params)
             dt = (time.perf_counter() - t0) * 1e3
@@ -257,6 +263,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--kinds", default="",
                     help="furnished set: comma-separated floor-plan styles cycled (default "
                          "office,open_office,home; real_office: furnished like real plans)")
+    ap.add_argument("--furniture-as-room", action="store_true",
+                    help="furnished set: score the furnished maps against the plain map's "
+                         "rooms (furniture cells count as room, as in the IPA ground truth)")
     ap.add_argument("--seeds", default="0-7", help="house seeds, e.g. 0-9 or 1,4,7")
     ap.add_argument("--tau", default=str(SegmentationParams().tau_m),
                     help="tau in metres, comma-separated for a sweep")
@@ -331,7 +340,7 @@ def main(argv: list[str] | None = None) -> int:
         kinds = tuple(k for k in args.kinds.split(",") if k) or None
         try:
             res_f = run_furnished(args.maps, args.first_seed, params, verbose=not args.quiet,
-                                  kinds=kinds)
+                                  kinds=kinds, furniture_as_room=args.furniture_as_room)
         except ValueError as err:
             ap.error(f"--kinds: {err}")
         for key, r in res_f.items():

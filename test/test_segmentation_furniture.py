@@ -66,6 +66,52 @@ def test_desk_against_a_wall_does_not_cut_the_room():
     assert_coverage(desk_room(), segment(desk_room(), p), p)
 
 
+def test_free_standing_furniture_carries_the_room_label_and_walls_none():
+    """A free-standing table (clutter fill, on by default) and a solid 1 x 1 m cabinet
+    block (a clutter hole with the rules on) are part of the room in the published
+    labels: their cells get the room's id. The walls keep 0, and so does the desk
+    against the wall (the furniture fill opens it for the decomposition, but desk and
+    wall are one obstacle there)."""
+    table = Canvas(9.0, 5.0).room(0.5, 0.5, 8.5, 4.5).fill(5.8, 2.6, 6.8, 3.4, 100)
+    block = Canvas(9.0, 5.0).room(0.5, 0.5, 8.5, 4.5).fill(3.0, 2.0, 4.8, 3.0, 100)
+    for grid, params, cell_m in ((table.grid(), SegmentationParams(**OFF), (6.3, 3.0)),
+                                 (block.grid(), SegmentationParams(**ON), (3.9, 2.5))):
+        lab = segment(grid, params)
+        assert len(region_ids(lab)) == 1
+        assert grid.data[round(cell_m[1] / RES), round(cell_m[0] / RES)] == 100
+        assert _at(lab, *cell_m) == region_ids(lab)[0]
+        wall = grid.data == 100
+        wall[round(0.7 / RES):round(4.3 / RES), round(0.7 / RES):round(8.3 / RES)] = False
+        assert wall.sum() > 1000 and (lab[wall] == 0).all()
+        assert_coverage(grid, lab, params)
+    g = desk_room()
+    lab = segment(g, SegmentationParams(tau_m=0.8, **ON))
+    assert len(region_ids(lab)) == 1 and (lab[g.data == 100] == 0).all()
+
+
+def test_incremental_cleaning_equals_batch_while_a_real_office_is_explored():
+    """Exploring a furnished office (real_office style) with the rules on, every update's
+    cleaned mask and furniture bulges, though kept between updates and redone only round
+    changed cells, equal a full cleaning of that map."""
+    from bench.bench_segmentation import exploration_maps
+
+    from explore_seg.core.segmentation.cleaning import clean_state
+    from sim_bridge.worlds.furnished import furnished_map
+
+    fm = furnished_map(1003, "real_office")
+    p = SegmentationParams(inc_full_frac=1.0, **ON)
+    seg = IncrementalSegmenter(p)
+    modes = []
+    for grid, _off in exploration_maps(fm.furnished, fm.start_cell, 4.0, 3.0):
+        seg.update(grid)
+        batch = clean_state(seg._data, p, RES)
+        assert np.array_equal(seg._free_clean, batch.free_clean), f"update {len(modes)}"
+        assert np.array_equal(seg._bulge, batch.bulge), f"update {len(modes)}"
+        assert np.array_equal(seg._shown, batch.shown), f"update {len(modes)}"
+        modes.append(seg.last_update_info.mode)
+    assert modes.count("incremental") >= 5
+
+
 def test_desk_is_a_bulge_and_thin_walls_are_not():
     g = desk_room()
     occ = (g.data > 90).astype(np.uint8)

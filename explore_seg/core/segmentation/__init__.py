@@ -7,19 +7,25 @@ incremental update that redoes only the pieces touched by newly seen free space 
 and region ids that persist between updates (§12).
 
 Label images follow :class:`~explore_seg.core.grid.GridMap`: int32 ``(H, W)``, row = y,
-``0`` = no region (obstacle, unknown, undecided occupancy, or a free speck smaller than
-``min_region_area_m2`` that touches no region), ``k > 0`` a region id.
+``0`` = no region (a wall or other obstacle, unknown, undecided occupancy, or a free speck
+smaller than ``min_region_area_m2`` that touches no region), ``k > 0`` a region id.
+Free-standing furniture the cleaning counts as room (the occupied cells of clutter holes
+and small objects) carries the id of the region around it: a table belongs to its
+office, as in hand-drawn room maps. Furniture against a wall keeps 0: there furniture
+and wall are one obstacle.
 
 Internally every cell of the *domain* (cleaned free space F united with the raw free
 cells) carries a label; the published labels are the domain labels restricted to the raw
-free cells. Keeping the F margin labelled (F reaches ``free_close_m`` into unknown space
-at frontiers) is what lets the incremental update tell newly seen space from old.
+free cells and those furniture cells. Keeping the F margin labelled (F reaches
+``free_close_m`` into unknown space at frontiers) is what lets the incremental update
+tell newly seen space from old.
 
 Modules: :mod:`.params` (parameters), :mod:`.cleaning` (grid -> free-space masks, with
 :mod:`.furniture`: furniture against walls), :mod:`.dude` (decomposition of a mask, with
 :mod:`.polygon`, :mod:`.rings` and :mod:`.cuts`), :mod:`.labels` (label-image helpers),
 :mod:`.merging` (small, thin and corridor regions, with :mod:`.passages`: parts of one
-passage), :mod:`.incremental` (the stateful segmenter, :func:`segment`) and
+passage), :mod:`.incremental` (the stateful segmenter, :func:`segment`, on the known
+cells' crop of :mod:`.crop`) and
 :mod:`.eval` (recall / precision against ground-truth rooms).
 """
 

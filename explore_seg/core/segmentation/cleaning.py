@@ -10,14 +10,17 @@ otherwise wall off strips of a room.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import cv2
 import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.segmentation.furniture import (fill_furniture, furniture_reach_cells,
-                                                     open_disk)
+from explore_seg.core.segmentation.furniture import (FillCache, fill_furniture,
+                                                     furniture_cells,
+                                                     furniture_cells_update,
+                                                     furniture_reach_cells, open_disk)
 from explore_seg.core.segmentation.labels import bbox
 from explore_seg.core.segmentation.params import SegmentationParams
 
@@ -68,11 +71,47 @@ def clean_free_space(grid: GridMap, params: SegmentationParams
     return clean_masks(grid.data, params, grid.resolution_m)
 
 
-def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: float
-           ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
+def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: float,
+                roi: tuple[slice, slice] | None = None
+                ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
+    """:func:`clean_free_space` of an occupancy array; ``roi`` (optional): the part of
+    ``free_clean`` the caller uses (work outside it that cannot reach it is skipped,
+    so free_clean is exact only there)."""
+    st = clean_state(data, params, res, roi)
+    return st.free_raw, st.free_clean
+
+
+class CleanState(NamedTuple):
+    """The masks of :func:`clean_state`, all of the grid's shape."""
+
+    free_raw: npt.NDArray[np.bool_]
+    free_clean: npt.NDArray[np.bool_]
+    #: obstacles as inflated (specks and small objects removed), uint8
+    occ: npt.NDArray[np.uint8]
+    #: their furniture bulges (None when the furniture rule is off)
+    bulge: npt.NDArray[np.bool_] | None
+    #: the cells whose labels are published: the free cells, and the occupied cells the
+    #: clutter fill and the small objects make room (free-standing furniture); the
+    #: furniture fill's cells are not, as wall and furniture are one obstacle there
+    shown: npt.NDArray[np.bool_]
+
+
+def clean_state(data: npt.NDArray[np.int8], params: SegmentationParams, res: float,
+                roi: tuple[slice, slice] | None = None,
+                prev: tuple[npt.NDArray[np.uint8], npt.NDArray[np.bool_]] | None = None,
+                fill_cache: FillCache | None = None, origin: tuple[int, int] = (0, 0)
+                ) -> CleanState:
+    """:func:`clean_masks` plus the published cells and what an incremental update keeps
+    to redo less: the obstacles as inflated and their furniture bulges
+    (:class:`CleanState`). ``prev``: those two of an
+    earlier map in this array's geometry (cells it did not cover: obstacle value 2), so
+    that the bulges' distance transforms run only around changed obstacles;
+    ``fill_cache`` and ``origin``: the bulges' fills of that map (:class:`FillCache`) and
+    this array's cell (0, 0) in the cache's reference cells."""
     free_raw = (data >= 0) & (data < params.free_max_occupancy)
     if data.size == 0:
-        return free_raw, free_raw.copy()
+        return CleanState(free_raw, free_raw.copy(), np.zeros(data.shape, np.uint8), None,
+                          free_raw.copy())
     occ = data > params.occupied_min_occupancy
     occ_u8 = occ.astype(np.uint8)
     occ_cc = None
@@ -84,7 +123,7 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
         if small.any():
             keep = (~small).astype(np.uint8)
             keep[0] = 0
-            occ_u8 = keep[lab]        # the occupied cells less the specks
+            occ_u8 = np.take(keep, lab)      # the occupied cells less the specks
         # the components left in occ_u8 are these minus the specks
         occ_cc = (lab, stats, small)
     objects = None
@@ -102,7 +141,13 @@ def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
         # small free-standing objects are free space for the decomposition
         free_clean |= objects & (grown > 0) & (obst == 0)
     free_clean = fill_clutter_holes(free_clean, occ_u8, params, res, occ_cc)
-    return free_raw, fill_furniture(free_clean, occ_u8, params, res)
+    bulge = None
+    if params.furniture_min_thickness_m > 0:
+        bulge = (furniture_cells(occ_u8, params, res) if prev is None else
+                 furniture_cells_update(occ_u8, params, res, prev[0], prev[1]))
+    shown = free_raw | (free_clean & occ)
+    filled = fill_furniture(free_clean, occ_u8, params, res, roi, bulge, fill_cache, origin)
+    return CleanState(free_raw, filled, occ_u8, bulge, shown)
 
 
 def _small_objects(occ_u8: npt.NDArray[np.uint8],
@@ -118,7 +163,7 @@ def _small_objects(occ_u8: npt.NDArray[np.uint8],
     obj[0] = False
     if not obj.any():
         return None
-    objects = obj[lab]
+    objects = np.take(obj, lab)
     r_near = 2 * length_to_cells(params.obstacle_inflation_m, res) + 1
     box = bbox(objects, r_near)
     assert box is not None
@@ -171,8 +216,8 @@ def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.ui
     if big.any() and params.furniture_min_thickness_m > 0:
         big &= ~_thick_blocks(olab, ost, big, params, res)
     if big.any():
-        small[lab[big[olab]]] = False
-    return free_clean | small[lab]
+        small[lab[np.take(big, olab)]] = False
+    return free_clean | np.take(small, lab)
 
 
 def _thick_blocks(olab: npt.NDArray[np.int32], ost: npt.NDArray[np.int32],

@@ -88,8 +88,49 @@ def furniture_cells(occ: npt.NDArray[np.uint8], params: SegmentationParams, res:
     return out
 
 
+def furniture_cells_update(occ: npt.NDArray[np.uint8], params: SegmentationParams,
+                           res: float, occ_prev: npt.NDArray[np.uint8],
+                           bulge_prev: npt.NDArray[np.bool_]) -> npt.NDArray[np.bool_]:
+    """:func:`furniture_cells` of ``occ``, given those of ``occ_prev`` (``bulge_prev``):
+    the distance transforms run only around the cells where the two differ.
+
+    A cell's bulge depends on the obstacles within :func:`bulge_reach_cells` of it, so
+    it is recomputed (with that much context) within that distance of a changed cell
+    and copied elsewhere. The result equals ``furniture_cells(occ)`` wherever
+    ``bulge_prev`` equals ``furniture_cells(occ_prev)``.
+    """
+    changed = occ != occ_prev
+    box = bbox(changed, bulge_reach_cells(params, res))
+    if box is None:
+        return bulge_prev.copy()
+    d = bulge_reach_cells(params, res)
+    h, w = occ.shape
+    ctx = (slice(max(0, box[0].start - d), min(h, box[0].stop + d)),
+           slice(max(0, box[1].start - d), min(w, box[1].stop + d)))
+    if (ctx[0].stop - ctx[0].start) * (ctx[1].stop - ctx[1].start) >= 0.8 * occ.size:
+        return furniture_cells(occ, params, res)
+    out = bulge_prev.copy()
+    sub = furniture_cells(occ[ctx], params, res)
+    out[box] = sub[box[0].start - ctx[0].start:box[0].stop - ctx[0].start,
+                   box[1].start - ctx[1].start:box[1].stop - ctx[1].start]
+    return out
+
+
+def bulge_reach_cells(params: SegmentationParams, res: float) -> int:
+    """How far (cells) a changed obstacle cell can change :func:`furniture_cells`: the
+    two openings see the obstacles within their disks' diameters (the chamfer distance
+    transform underestimates a distance by at most 4.5 %), plus a few cells."""
+    d_min = params.furniture_min_thickness_m / res
+    d_max = params.furniture_max_thickness_m / res
+    return int(math.ceil(1.1 * (d_max + d_min))) + 4
+
+
 def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8],
-                   params: SegmentationParams, res: float) -> npt.NDArray[np.bool_]:
+                   params: SegmentationParams, res: float,
+                   roi: tuple[slice, slice] | None = None,
+                   bulge: npt.NDArray[np.bool_] | None = None,
+                   cache: FillCache | None = None,
+                   origin: tuple[int, int] = (0, 0)) -> npt.NDArray[np.bool_]:
     """``free_clean`` with the footprints of wall-standing furniture filled.
 
     Parameters
@@ -100,6 +141,15 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
         Obstacle cells (specks removed), as inflated into ``free_clean``.
     params : SegmentationParams
     res : float
+    roi : (slice, slice), optional
+        The part of the result the caller uses: bulges whose fill cannot reach it are
+        not tested (their fill is left out).
+    bulge : ndarray of bool, shape (H, W), optional
+        :func:`furniture_cells` of ``occ``, when the caller has it.
+    cache : FillCache, optional
+        The fills of the previous call, replaced by this call's.
+    origin : (int, int)
+        The cell (0, 0) of these arrays in the cache's reference cells.
 
     Returns
     -------
@@ -110,7 +160,8 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
     """
     if params.furniture_min_thickness_m <= 0:
         return free_clean
-    bulge = furniture_cells(occ, params, res)
+    if bulge is None:
+        bulge = furniture_cells(occ, params, res)
     if not bulge.any():
         return free_clean
     ext = params.furniture_max_extent_m / res
@@ -122,9 +173,20 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
     # walls closed when the whole bulge would open them
     occ_b = occ > 0
     half_min = 0.5 * params.furniture_min_thickness_m / res
-    # components of the bulges, in the bulges' bounding box
+    r_c = int(math.ceil(0.25 * params.furniture_min_thickness_m / res))
+    # a bulge's fill lies within the corner dilation and the inflation of its box
+    reach = r_c + r_inf + 1
+    # components of the bulges, in the bulges' bounding box; with a roi, only within
+    # reach of it plus the widest bulge filled (a component cut off there is wider
+    # than that, as it is whole)
     bb = bbox(bulge, 0)
     assert bb is not None
+    if roi is not None:
+        g = reach + int(math.ceil(ext)) + 1
+        bb = (slice(max(bb[0].start, roi[0].start - g), min(bb[0].stop, roi[0].stop + g)),
+              slice(max(bb[1].start, roi[1].start - g), min(bb[1].stop, roi[1].stop + g)))
+        if bb[0].start >= bb[0].stop or bb[1].start >= bb[1].stop:
+            return free_clean
     lab = np.zeros(occ.shape, dtype=np.int32)
     n, lab[bb], stats, _ = cv2.connectedComponentsWithStats(bulge[bb].view(np.uint8),
                                                             connectivity=8)
@@ -132,28 +194,63 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
     stats[:, 1] += bb[0].start
     h, w = occ.shape
     m = int(round(params.furniture_max_thickness_m / res)) + r_inf + r_door + 4
-    r_c = int(math.ceil(0.25 * params.furniture_min_thickness_m / res))
     k_corner = np.ones((2 * r_c + 1, 2 * r_c + 1), np.uint8)
     out = free_clean.copy()
+    seen = {}
+    if cache is not None:
+        seen, cache.fills = cache.fills, {}
     for k in range(1, n):
         x, y, bw, bh, _area = (int(v) for v in stats[k])
         if max(bw, bh) > ext:
             continue
+        if roi is not None and (y + bh + reach <= roi[0].start or y - reach >= roi[0].stop
+                                or x + bw + reach <= roi[1].start
+                                or x - reach >= roi[1].stop):
+            continue
         box = (slice(max(0, y - m), min(h, y + bh + m)),
                slice(max(0, x - m), min(w, x + bw + m)))
         blob = lab[box] == k
-        # the opening rounds the bulge's corners off: the occupied cells near it are
-        # the furniture's footprint
-        whole = (cv2.dilate(blob.view(np.uint8), k_corner) > 0) & occ_b[box]
-        fill = _footprint(whole, occ_b[box], free_clean[box], k_inf, r_door)
-        if fill is None:
-            thin = occ_b[box] & ~(lab[box] > 0)
-            to_thin = cv2.distanceTransform((~thin).view(np.uint8), cv2.DIST_L2, 3)
-            fill = _footprint(blob & (to_thin > half_min), occ_b[box], free_clean[box],
-                              k_inf, r_door)
+        inputs = (blob, occ_b[box], free_clean[box], bulge[box])
+        key = (box[0].start + origin[0], box[0].stop + origin[0],
+               box[1].start + origin[1], box[1].stop + origin[1])
+        hit = seen.get(key)
+        if hit is not None and all(np.array_equal(a, b) for a, b in zip(hit[0], inputs)):
+            fill = hit[1]
+        else:
+            fill = _bulge_fill(*inputs, k_corner, k_inf, r_door, half_min)
+        if cache is not None:
+            cache.fills[key] = (tuple(a.copy() for a in inputs), fill)
         if fill is not None:
             out[box] |= fill
     return out
+
+
+class FillCache:
+    """The fills of the bulges of an earlier :func:`fill_furniture` call, with the
+    inputs each was computed from, keyed by the bulge's neighbourhood in cells of a
+    fixed reference (a bulge whose neighbourhood did not change is not tested again;
+    an incremental update keeps one)."""
+
+    def __init__(self) -> None:
+        self.fills: dict[tuple[int, int, int, int],
+                         tuple[tuple[npt.NDArray[np.bool_], ...],
+                               npt.NDArray[np.bool_] | None]] = {}
+
+
+def _bulge_fill(blob: npt.NDArray[np.bool_], occ: npt.NDArray[np.bool_],
+                free_clean: npt.NDArray[np.bool_], bulge: npt.NDArray[np.bool_],
+                k_corner: npt.NDArray[np.uint8], k_inf: npt.NDArray[np.uint8],
+                r_door: int, half_min: float) -> npt.NDArray[np.bool_] | None:
+    """The fill of one bulge ``blob`` (arrays: the bulge's neighbourhood), or None."""
+    # the opening rounds the bulge's corners off: the occupied cells near it are the
+    # furniture's footprint
+    whole = (cv2.dilate(blob.view(np.uint8), k_corner) > 0) & occ
+    fill = _footprint(whole, occ, free_clean, k_inf, r_door)
+    if fill is None:
+        thin = occ & ~bulge
+        to_thin = cv2.distanceTransform((~thin).view(np.uint8), cv2.DIST_L2, 3)
+        fill = _footprint(blob & (to_thin > half_min), occ, free_clean, k_inf, r_door)
+    return fill
 
 
 def _footprint(cells: npt.NDArray[np.bool_], occ: npt.NDArray[np.bool_],

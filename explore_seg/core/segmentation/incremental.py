@@ -13,16 +13,19 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.segmentation.cleaning import (clean_influence_cells, clean_masks,
-                                                    length_to_cells)
+from explore_seg.core.segmentation.cleaning import (CleanState, clean_influence_cells,
+                                                    clean_state, length_to_cells)
+from explore_seg.core.segmentation.crop import (CROP_CHUNK_CELLS, crop_grid,  # noqa: F401
+                                                crop_margin_cells, known_crop)
 from explore_seg.core.segmentation.dude import decompose_mask, find_cuts
+from explore_seg.core.segmentation.furniture import FillCache
 from explore_seg.core.segmentation.labels import (apply_mapping, bbox, fill_gaps,
                                                   label_counts, match_ids, pair_counts,
                                                   renumber, resample_labels, shift_into)
@@ -33,63 +36,33 @@ from explore_seg.core.segmentation.params import SegmentationParams, dude_settin
 #: pieces, and clean pieces whose shape changed.
 _MAX_SEAM_TESTS = 6
 _MAX_SHAPE_TESTS = 4
-#: The crop's edges are snapped outward to multiples of this many cells, so that it
-#: moves only now and then while the known area grows (a move recleans the new strip).
-CROP_CHUNK_CELLS = 64
-
-
-def crop_margin_cells(params: SegmentationParams, res: float) -> int:
-    """Unknown cells kept around the known ones: beyond the reach of the cleaning (free
-    space grows by ``free_close_m``; clutter holes, specks) and of the gap filling and
-    work-area boxes of an update, so the crop's edge changes no label."""
-    p = params
-    fill = 2 * (length_to_cells(p.obstacle_inflation_m, res)
-                + length_to_cells(p.free_close_m, res)) + 4
-    return clean_influence_cells(p, res) + fill + p.inc_touch_cells + 4
-
-
-def known_crop(data: npt.NDArray[np.int8], margin: int, chunk: int = CROP_CHUNK_CELLS
-               ) -> tuple[slice, slice] | None:
-    """(rows, cols) of the known (not -1) cells' bounding box grown by ``margin`` and
-    snapped outward to multiples of ``chunk`` (clipped to the array); None when no cell
-    is known.
-
-    >>> d = np.full((300, 200), -1, np.int8); d[100:110, 150:160] = 0
-    >>> known_crop(d, 5)
-    (slice(64, 128, None), slice(128, 192, None))
-    """
-    # max >= 0 <=> a known cell (values -1..100): no temporary of the grid's size
-    rows = np.flatnonzero(data.max(axis=1) >= 0)
-    if rows.size == 0:
-        return None
-    cols = np.flatnonzero(data[rows[0]:rows[-1] + 1].max(axis=0) >= 0)
-    h, w = data.shape
-
-    def span(lo: int, hi: int, n: int) -> slice:
-        return slice(max(0, (lo - margin) // chunk * chunk),
-                     min(n, -(-(hi + margin) // chunk) * chunk))
-    return span(int(rows[0]), int(rows[-1]) + 1, h), span(int(cols[0]), int(cols[-1]) + 1, w)
-
-
-def crop_grid(grid: GridMap, box: tuple[slice, slice]) -> GridMap:
-    """The part ``box`` of ``grid`` as a grid of its own (origin at its first cell's
-    corner; the data is a view)."""
-    r0, c0 = box[0].start, box[1].start
-    x, y = grid.cells_to_world(np.array([r0 - 0.5]), np.array([c0 - 0.5]))
-    return GridMap(grid.data[box], grid.resolution_m, (float(x[0]), float(y[0])),
-                   grid.origin_yaw_rad, grid.frame_id, grid.stamp_ns)
-
-
 @dataclass(frozen=True)
 class UpdateInfo:
-    """What the last :meth:`IncrementalSegmenter.update` did."""
+    """What the last :meth:`IncrementalSegmenter.update` did.
+
+    ``regions`` (the number of regions in the result) is counted when first read: the
+    count costs a pass over the labels that most callers never need.
+    """
 
     mode: str                  # "full", "incremental", "unchanged" or "empty"
     time_s: float              # wall time of the update
     work_areas: int            # number of work areas redone (0 for full/unchanged)
     work_cells: int            # cells in the work areas (all domain cells for full)
-    regions: int               # number of regions in the result
     reason: str = ""           # why a full run was done
+    # the segmenter's labels and the published cells (never written after the update)
+    _labels: npt.NDArray[np.int32] | None = field(default=None, repr=False, compare=False)
+    _shown: npt.NDArray[np.bool_] | None = field(default=None, repr=False, compare=False)
+    _count: list[int] = field(default_factory=list, repr=False, compare=False)
+
+    @property
+    def regions(self) -> int:
+        """Number of regions in the result."""
+        if self._labels is None or self._shown is None:
+            return 0
+        if not self._count:
+            out = np.multiply(self._labels, self._shown, dtype=np.int32)
+            self._count.append(len(label_counts(out)))
+        return self._count[0]
 
 
 
@@ -122,6 +95,14 @@ class IncrementalSegmenter:
         self._data: npt.NDArray[np.int8] | None = None
         self._free_raw: npt.NDArray[np.bool_] | None = None
         self._free_clean: npt.NDArray[np.bool_] | None = None
+        # the obstacles as inflated and their furniture bulges (None: rule off)
+        self._occ: npt.NDArray[np.uint8] | None = None
+        self._bulge: npt.NDArray[np.bool_] | None = None
+        self._shown: npt.NDArray[np.bool_] | None = None
+        # the bulges' fills, keyed in cells of the first grid of this state; that grid's
+        # cell (0, 0) is cell _ref_rc of the current one
+        self._fill_cache = FillCache()
+        self._ref_rc = (0, 0)
         self._next_id = 1
         self._force_full = False
         self.last_update_info: UpdateInfo | None = None
@@ -134,6 +115,10 @@ class IncrementalSegmenter:
         self._data = None
         self._free_raw = None
         self._free_clean = None
+        self._occ = None
+        self._bulge = None
+        self._shown = None
+        self._fill_cache = FillCache()
 
     def set_params(self, params: SegmentationParams) -> None:
         """Use new parameters; the next update is a full run whose ids are matched."""
@@ -173,7 +158,7 @@ class IncrementalSegmenter:
         if box is None:
             # nothing known: no region (and no state worth keeping)
             self.reset()
-            self.last_update_info = UpdateInfo("empty", time.perf_counter() - t0, 0, 0, 0)
+            self.last_update_info = UpdateInfo("empty", time.perf_counter() - t0, 0, 0)
             return np.zeros(grid.shape, dtype=np.int32)
         if (box[0].stop - box[0].start, box[1].stop - box[1].start) == grid.shape:
             return self._update_grid(grid, t0)             # the crop is the whole grid
@@ -186,14 +171,15 @@ class IncrementalSegmenter:
         res = grid.resolution_m
         if grid.data.size == 0:
             self.reset()
-            self.last_update_info = UpdateInfo("empty", time.perf_counter() - t0, 0, 0, 0)
+            self.last_update_info = UpdateInfo("empty", time.perf_counter() - t0, 0, 0)
             return np.zeros(grid.shape, dtype=np.int32)
         shift = self._aligned_shift(grid)
         prev_known_f = None
         if shift is not None and self._free_raw is not None and self._free_clean is not None:
             # cells that were known free and in the cleaned free space before
             prev_known_f = shift_into(self._free_raw & self._free_clean, grid.shape, *shift)
-        free_raw, free_clean = self._clean_update(grid, shift)
+        cs = self._clean_update(grid, shift)
+        free_raw, free_clean = cs.free_raw, cs.free_clean
         domain = free_raw | free_clean
         prev = None
         if shift is not None and self._labels is not None:
@@ -207,7 +193,7 @@ class IncrementalSegmenter:
             if prev is None and self._labels is not None and self._geom is not None:
                 prev = resample_labels(self._labels, self._geom, grid)
             labels = self._full(free_raw, free_clean, domain, res, prev)
-            mode, n_areas, n_cells = "full", 0, int(domain.sum())
+            mode, n_areas, n_cells = "full", 0, int(np.count_nonzero(domain))
         else:
             assert prev is not None and prev_known_f is not None
             labels, mode, n_areas, n_cells, reason = self._incremental(
@@ -219,9 +205,13 @@ class IncrementalSegmenter:
         # caller's whole grid alive
         self._geom = grid.with_data(self._data)
         self._free_raw, self._free_clean = free_raw, free_clean
-        out = np.multiply(labels, free_raw, dtype=np.int32)   # 0 off the free cells
+        self._occ, self._bulge, self._shown = cs.occ, cs.bulge, cs.shown
+        # free cells, and free-standing furniture the cleaning counts as room: a table in
+        # an office is part of it
+        shown = cs.shown
+        out = np.multiply(labels, shown, dtype=np.int32)
         self.last_update_info = UpdateInfo(mode, time.perf_counter() - t0, n_areas,
-                                           n_cells, len(label_counts(out)), reason)
+                                           n_cells, reason, labels, shown.copy())
         return out
 
     # ---------------------------------------------------------------- internals
@@ -242,13 +232,18 @@ class IncrementalSegmenter:
         return int(ir), int(ic)
 
     def _clean_update(self, grid: GridMap, shift: tuple[int, int] | None
-                      ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
-        """Cleaned masks of ``grid``, recomputed only around changed cells when possible."""
+                      ) -> CleanState:
+        """:func:`.cleaning.clean_state` of ``grid``, recomputed only around changed
+        cells when possible."""
         p = self.params
         res = grid.resolution_m
         if (shift is None or self._data is None or self._free_raw is None
-                or self._free_clean is None):
-            return clean_masks(grid.data, p, res)
+                or self._free_clean is None or self._occ is None or self._shown is None
+                or (p.furniture_min_thickness_m > 0) != (self._bulge is not None)):
+            self._fill_cache = FillCache()
+            self._ref_rc = (0, 0)
+            return clean_state(grid.data, p, res, fill_cache=self._fill_cache)
+        self._ref_rc = (self._ref_rc[0] + shift[0], self._ref_rc[1] + shift[1])
         old = shift_into(self._data, grid.shape, *shift, fill=-1, reuse=True)
         changed = old != grid.data
         infl = clean_influence_cells(p, res)
@@ -257,6 +252,10 @@ class IncrementalSegmenter:
         # the old masks are replaced by the result, so they may be updated in place
         free_raw = shift_into(self._free_raw, grid.shape, *shift, reuse=True)
         free_clean = shift_into(self._free_clean, grid.shape, *shift, reuse=True)
+        # cells the old state did not cover count as changed obstacles (value 2)
+        occ = shift_into(self._occ, grid.shape, *shift, fill=2, reuse=True)
+        bulge = (None if self._bulge is None
+                 else shift_into(self._bulge, grid.shape, *shift, reuse=True))
         if shift != (0, 0) or self._data.shape != grid.shape:
             cover = shift_into(np.ones(self._data.shape, dtype=bool), grid.shape, *shift)
             edge = bbox(~cover, infl)
@@ -264,17 +263,26 @@ class IncrementalSegmenter:
                 box = edge if box is None else (
                     slice(min(box[0].start, edge[0].start), max(box[0].stop, edge[0].stop)),
                     slice(min(box[1].start, edge[1].start), max(box[1].stop, edge[1].stop)))
+        shown = shift_into(self._shown, grid.shape, *shift, reuse=True)
         if box is None:
-            return free_raw, free_clean
+            return CleanState(free_raw, free_clean, occ, bulge, shown)
         h, w = grid.shape
         wr = slice(max(0, box[0].start - infl), min(h, box[0].stop + infl))
         wc = slice(max(0, box[1].start - infl), min(w, box[1].stop + infl))
-        fr, fc = clean_masks(grid.data[wr, wc], p, res)
         ir = slice(box[0].start - wr.start, box[0].stop - wr.start)
         ic = slice(box[1].start - wc.start, box[1].stop - wc.start)
+        prev = None if bulge is None else (occ[wr, wc], bulge[wr, wc])
+        fr, fc, oc, bu, sh = clean_state(grid.data[wr, wc], p, res, roi=(ir, ic), prev=prev,
+                                         fill_cache=self._fill_cache,
+                                         origin=(wr.start - self._ref_rc[0],
+                                                 wc.start - self._ref_rc[1]))
         free_raw[box] = fr[ir, ic]
         free_clean[box] = fc[ir, ic]
-        return free_raw, free_clean
+        occ[box] = oc[ir, ic]
+        shown[box] = sh[ir, ic]
+        if bulge is not None and bu is not None:
+            bulge[box] = bu[ir, ic]
+        return CleanState(free_raw, free_clean, occ, bulge, shown)
 
     def _fresh(self) -> int:
         k = self._next_id
@@ -368,10 +376,13 @@ class IncrementalSegmenter:
         labels = prev.copy()
         old_area = label_counts(labels)
         # known free cells that left the cleaned free space: new obstacles, map fixes
-        blocked = (labels > 0) & prev_known_f & ~free_clean
-        lost = (labels > 0) & ~domain
-        labels[lost] = 0
-        dirty, blobs = self._new_blobs(labels, free_clean & (labels == 0), domain.shape, res)
+        pos = labels > 0
+        blocked = pos & prev_known_f & ~free_clean
+        lost = pos & ~domain
+        if lost.any():
+            labels[lost] = 0
+            pos &= ~lost
+        dirty, blobs = self._new_blobs(labels, free_clean & ~pos, domain.shape, res)
         if blocked.any():
             dirty |= self._blocked_pieces(labels, prev[blocked], free_clean, res, old_area,
                                           dirty)
@@ -379,8 +390,8 @@ class IncrementalSegmenter:
             self._leftovers(labels, free_raw, domain, res)
             return labels, "unchanged", 0, 0, ""
         work = self._work_area(labels, dirty, blobs, old_area)
-        n_work = int(work.sum())
-        n_dom = max(1, int(domain.sum()))
+        n_work = int(np.count_nonzero(work))
+        n_dom = max(1, int(np.count_nonzero(domain)))
         if n_work > self.params.inc_full_frac * n_dom:
             full = self._full(free_raw, free_clean, domain, res, prev)
             return full, "full", 0, n_dom, (
@@ -408,7 +419,7 @@ class IncrementalSegmenter:
         if not big.any():
             return dirty, None
         blobs = np.zeros(shape, dtype=bool)
-        blobs[box_new] = big[lab]
+        blobs[box_new] = np.take(big, lab)
         t = p.inc_touch_cells
         bb = bbox(blobs, t + 1)
         near = cv2.dilate(blobs[bb].astype(np.uint8),
@@ -460,7 +471,7 @@ class IncrementalSegmenter:
         else:
             lut = np.zeros(max(max(old_area, default=0), max(dirty)) + 2, dtype=bool)
             lut[list(dirty)] = True
-            work = lut[labels]
+            work = np.take(lut, labels)
         if blobs is not None:
             work |= blobs
         return work

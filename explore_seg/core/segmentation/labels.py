@@ -139,11 +139,16 @@ _MAX_TABLE = 1 << 21
 def pair_counts(lab: npt.NDArray[np.int32]) -> dict[tuple[int, int], int]:
     """Number of 4-neighbour cell pairs between every two different non-zero labels."""
     out: dict[tuple[int, int], int] = {}
-    for a, b in ((lab[:, :-1], lab[:, 1:]), (lab[:-1, :], lab[1:, :])):
-        m = (a != b) & (a > 0) & (b > 0)
-        if not m.any():
+    pos = lab > 0
+    for a, b, pa, pb in ((lab[:, :-1], lab[:, 1:], pos[:, :-1], pos[:, 1:]),
+                         (lab[:-1, :], lab[1:, :], pos[:-1, :], pos[1:, :])):
+        m = a != b
+        m &= pa
+        m &= pb
+        r, c = np.nonzero(m)
+        if r.size == 0:
             continue
-        am, bm = a[m], b[m]
+        am, bm = a[r, c], b[r, c]
         x = np.minimum(am, bm).astype(np.int64)
         y = np.maximum(am, bm).astype(np.int64)
         for i, j, c in zip(*_key_counts(x, y)):

@@ -85,13 +85,14 @@ def merge_regions(labels: npt.NDArray[np.int32], out_mask: npt.NDArray[np.bool_]
     mg = _Merger(areas, borders)
     min_area = params.min_region_area_m2 / (res * res)
     thin: set[int] = set()
+    inner = None
     if params.min_region_width_m > 0 and cand:
         half_w = 0.5 * params.min_region_width_m / res
         # a region is thin when no cell is farther than half the width from its border;
         # borders between regions count as borders too (one distance transform to the
         # union of both: the chamfer distance to a union is the smaller of the two)
-        edge = region_edges(labels)
-        dd = cv2.distanceTransform(((labels > 0) & ~edge).astype(np.uint8), cv2.DIST_L2, 3)
+        inner = (labels > 0) & ~region_edges(labels)
+        dd = cv2.distanceTransform(inner.view(np.uint8), cv2.DIST_L2, 3)
         wide = label_counts(labels[dd >= half_w])
         thin = {k for k in cand if k not in wide}
     dropped: set[int] = set()
@@ -114,7 +115,7 @@ def merge_regions(labels: npt.NDArray[np.int32], out_mask: npt.NDArray[np.bool_]
         if mg.area[into] >= min_area:
             thin.discard(into)
     # in an update, only new pieces join: an old region stays as it was (§11.7)
-    merge_passages(labels, mg, cand, params, res, both=candidates is not None)
+    merge_passages(labels, mg, cand, params, res, both=candidates is not None, inner=inner)
     if params.corridor_merge:
         _corridor_merge(labels, mg, cand, params, res)
     lut_keys = [k for k in mg.parent if mg.root(k) != k or k in dropped]

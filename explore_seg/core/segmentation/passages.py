@@ -49,14 +49,18 @@ def border_spans(labels: npt.NDArray[np.int32],
     cols: list[npt.NDArray[np.int64]] = []
     keys: list[npt.NDArray[np.int64]] = []
     clear: list[npt.NDArray[np.float32]] = []
-    for a, b, dr, dc in ((labels[:, :-1], labels[:, 1:], 0, 1),
-                         (labels[:-1, :], labels[1:, :], 1, 0)):
-        m = (a != b) & (a > 0) & (b > 0)
-        if not m.any():
-            continue
+    pos = labels > 0
+    for a, b, pa, pb, dr, dc in ((labels[:, :-1], labels[:, 1:], pos[:, :-1], pos[:, 1:], 0, 1),
+                                 (labels[:-1, :], labels[1:, :], pos[:-1, :], pos[1:, :], 1, 0)):
+        m = a != b
+        m &= pa
+        m &= pb
         r, c = np.nonzero(m)
-        lo = np.minimum(a[m], b[m]).astype(np.int64)
-        hi = np.maximum(a[m], b[m]).astype(np.int64)
+        if r.size == 0:
+            continue
+        av, bv = a[r, c], b[r, c]
+        lo = np.minimum(av, bv).astype(np.int64)
+        hi = np.maximum(av, bv).astype(np.int64)
         # the point between the two cells of a pair
         rows.append(2 * r + dr)
         cols.append(2 * c + dc)
@@ -90,11 +94,14 @@ def border_spans(labels: npt.NDArray[np.int32],
             for x, s, q in zip(uk.tolist(), span.tolist(), cl.tolist())}
 
 
-def inscribed_diameters(labels: npt.NDArray[np.int32]) -> dict[int, float]:
+def inscribed_diameters(labels: npt.NDArray[np.int32],
+                        inner: npt.NDArray[np.bool_] | None = None) -> dict[int, float]:
     """Twice the largest distance (cells) from a cell of each region to its edge (other
-    regions and non-region cells alike)."""
-    edge = region_edges(labels)
-    inner = ((labels > 0) & ~edge).astype(np.uint8)
+    regions and non-region cells alike). ``inner``: the region cells off the edges,
+    when the caller has them."""
+    if inner is None:
+        inner = (labels > 0) & ~region_edges(labels)
+    inner = inner.view(np.uint8)
     dd = cv2.distanceTransform(np.pad(inner, 1), cv2.DIST_L2, 3)[1:-1, 1:-1]
     top = int(labels.max()) if labels.size else 0
     best = np.zeros(top + 1, dtype=np.float64)
@@ -105,7 +112,8 @@ def inscribed_diameters(labels: npt.NDArray[np.int32]) -> dict[int, float]:
 
 
 def merge_passages(labels: npt.NDArray[np.int32], mg: _Merger, cand: set[int],
-                   params: SegmentationParams, res: float, both: bool = False) -> None:
+                   params: SegmentationParams, res: float, both: bool = False,
+                   inner: npt.NDArray[np.bool_] | None = None) -> None:
     """Merge neighbouring parts of one passage in the union-find ``mg`` (see the module
     docstring); one of each pair is in ``cand`` (with ``both``: the two). The part
     outside ``cand`` (an old, kept region) keeps its id, else the larger one."""
@@ -113,7 +121,12 @@ def merge_passages(labels: npt.NDArray[np.int32], mg: _Merger, cand: set[int],
     if ratio <= 0 or not cand:
         return
     door = params.max_door_width_m / res
-    width = inscribed_diameters(labels)
+    # the widths and clearances cost two distance transforms: only when a border
+    # between candidate regions is longer than a door
+    if not any(sp > door and ((a in cand and b in cand) if both else (a in cand or b in cand))
+               for (a, b), (sp, _c) in border_spans(labels).items()):
+        return
+    width = inscribed_diameters(labels, inner)
     # the free space's own width where two regions meet (region borders do not count):
     # twice the largest distance to an obstacle along the border
     clearance = cv2.distanceTransform(np.pad((labels > 0).view(np.uint8), 1), cv2.DIST_L2,
