@@ -15,16 +15,12 @@ import numpy.typing as npt
 
 from explore_seg.core.frontiers import Frontier
 from explore_seg.core.grid import GridMap
+from explore_seg.core.selection.areas import AreaCounts
 from explore_seg.core.selection.costs import Selection, select_goal
 from explore_seg.core.selection.goal_types import (Action, Goal, NavOutcome, StepInputs,
                                                    StepResult, goal_yaw)
 from explore_seg.core.selection.params import SelectionParams
 from explore_seg.core.selection.strategy import get_strategy
-
-#: Goal points kept per counted area (vanished frontiers, revealed arrivals), and areas
-#: kept per kind (oldest dropped).
-_AREA_POINTS = 20
-_AREAS_KEPT = 100
 
 
 class GoalManager:
@@ -73,12 +69,11 @@ class GoalManager:
         #: Entries ever added to the blacklist (callers count new ones by difference).
         self.blacklist_added = 0
         self._blacklist_version = 0
-        # Areas where a goal's frontier vanished before arrival: [count, goal points].
-        self._vanished: list[tuple[list[int], list[tuple[float, float]]]] = []
-        # Areas where a reached goal's frontier remained with its cells revealed.
-        self._revealed: list[tuple[list[int], list[tuple[float, float]]]] = []
-        # Areas where the navigator aborted a goal the explorer had no path to either.
-        self._aborted_areas: list[tuple[list[int], list[tuple[float, float]]]] = []
+        # Areas where a goal's frontier vanished before arrival, where a reached goal's
+        # frontier remained with its cells revealed, where the navigator aborted a goal
+        # the explorer had no path to either, and where the robot turned to look.
+        self._vanished, self._revealed = AreaCounts(), AreaCounts()
+        self._aborted_areas, self._turns = AreaCounts(), AreaCounts()
         self.reset()
 
     def reset(self, clear_blacklist: bool = False) -> None:
@@ -104,6 +99,7 @@ class GoalManager:
             self._vanished.clear()
             self._revealed.clear()
             self._aborted_areas.clear()
+            self._turns.clear()
 
     def _clear_blacklist(self) -> None:
         self._blacklist.clear()
@@ -236,36 +232,15 @@ class GoalManager:
         self.start_xy_m = (float(xy_m[0]), float(xy_m[1]))
         self._start_yaw = float(yaw_rad)
 
-    def _note_vanished(self, xy_m: tuple[float, float]) -> bool:
-        """Count a goal whose frontier vanished before arrival; True when its area reached
-        ``flicker_vanish_count`` (its goal points are then blacklisted)."""
-        return self._note_area(self._vanished, xy_m, self.params.flicker_vanish_count)
-
-    def _note_revealed(self, xy_m: tuple[float, float]) -> bool:
-        """Count a reached goal whose frontier remains with its cells revealed; True when
-        its area reached ``revealed_arrivals_max`` (its goal points are then
-        blacklisted)."""
-        return self._note_area(self._revealed, xy_m, self.params.revealed_arrivals_max)
-
-    def _note_area(self, areas: list[tuple[list[int], list[tuple[float, float]]]],
-                   xy_m: tuple[float, float], limit: int) -> bool:
-        """Count an event at ``xy_m`` in the area (within ``flicker_radius_m`` of its
-        first point) it falls in; True, with the area's points blacklisted, when the
-        area's count reached ``limit`` (never when ``limit`` < 1)."""
+    def _note_area(self, areas: AreaCounts, xy_m: tuple[float, float], limit: int) -> bool:
+        """Count an event at ``xy_m`` in its area (within ``flicker_radius_m`` of the
+        area's first point): vanished frontiers (``flicker_vanish_count``), revealed
+        arrivals (``revealed_arrivals_max``), aborts (``abort_retries``). True, with the
+        area's points blacklisted, when its count reached ``limit`` (never when < 1)."""
         if limit < 1:
             return False
-        x, y = float(xy_m[0]), float(xy_m[1])
-        for count, pts in areas:
-            if math.hypot(x - pts[0][0], y - pts[0][1]) <= self.params.flicker_radius_m:
-                count[0] += 1
-                pts.append((x, y))
-                del pts[1:-_AREA_POINTS]
-                break
-        else:
-            count, pts = [1], [(x, y)]
-            areas.append((count, pts))
-            del areas[:-_AREAS_KEPT]
-        if count[0] < limit:
+        count, pts = areas.note(xy_m, self.params.flicker_radius_m)
+        if count < limit:
             return False
         for pt in pts:
             self.add_to_blacklist(pt)
@@ -274,9 +249,7 @@ class GoalManager:
     def aborted_near(self, xy_m: tuple[float, float]) -> bool:
         """True when the navigator aborted a goal the map had no path to either within
         ``flicker_radius_m`` of ``xy_m`` (see :meth:`judge_aborted`)."""
-        r = self.params.flicker_radius_m
-        return any(math.hypot(xy_m[0] - pts[0][0], xy_m[1] - pts[0][1]) <= r
-                   for _, pts in self._aborted_areas)
+        return self._aborted_areas.count_near(xy_m, self.params.flicker_radius_m) > 0
 
     def excluded(self, frontiers: Sequence[Frontier]) -> npt.NDArray[np.bool_]:
         """Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted
@@ -492,7 +465,7 @@ class GoalManager:
                 or self._still_unknown(grid) >= p.reached_unknown_fraction):
             self.abandon_goal(blacklist=True)
             return "goal reached but its frontier remains: blacklisted"
-        if self._note_revealed(self.goal.xy_m):   # blacklists the area's goals
+        if self._note_area(self._revealed, self.goal.xy_m, p.revealed_arrivals_max):
             self.goal = None
             return (f"goal reached, its frontier's cells revealed "
                     f"{p.revealed_arrivals_max} times here and it remains: area blacklisted")
@@ -578,7 +551,8 @@ class GoalManager:
             if cur is not None and not excluded[cur] and np.isfinite(sel.costs[cur]):
                 reason = reason or "a better frontier appeared"
             elif (cur is None and self._still_unknown(grid) >= 0.5
-                  and self._note_vanished(self.goal.xy_m)):
+                  and self._note_area(self._vanished, self.goal.xy_m,
+                                      p.flicker_vanish_count)):
                 reason = (f"goal frontier vanished {p.flicker_vanish_count} times here before "
                           "arrival (flickering): area blacklisted")
             elif cur is None:
