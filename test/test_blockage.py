@@ -36,7 +36,8 @@ DOORWAY = """
 def _scene(text: str = DOORWAY, **kw):
     g, marks = grid_from_ascii(text.replace("*", "#"), resolution_m=0.1)
     params = dict(strategy="nearest", robot_radius_m=0.2, min_group_size_cells=1,
-                  path_block_cells=1, blacklist_retries=0, done_confirmations=1)
+                  path_block_cells=1, blacklist_retries=0, done_confirmations=1,
+                  turn_looks=0)   # the look alone (turn looks: test_turn_look.py)
     params.update(kw)
     fp, sp = split_params(**params)
     x, y = g.cell_to_world(*marks["R"][0])

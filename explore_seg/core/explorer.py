@@ -389,11 +389,12 @@ class Explorer:
                                      labels, manager.goal_frontier(grid, frontiers))
         old_goal = manager.goal
         res = manager.step(now_s, (x, y), stamped, frontiers, dist, StepInputs(
-            labels, robot_rc, excluded, tour.tour_cost_m if tour is not None else None))
+            labels, robot_rc, excluded, tour.tour_cost_m if tour is not None else None, yaw))
         blacklisted = manager.blacklist_added - added + self._reported_blacklisted
         self._reported_blacklisted = 0
         switched = (res.action is Action.NEW_GOAL and res.goal is not None
-                    and old_goal is not None and not old_goal.is_return and not blacklisted
+                    and old_goal is not None and not (old_goal.is_return or old_goal.is_turn)
+                    and not blacklisted
                     and res.selection is not None
                     and _frontier_alive(grid, frontiers, res.selection.costs, old_goal.xy_m,
                                         self._selection_params.frontier_match_radius_m))

@@ -15,12 +15,17 @@ import numpy.typing as npt
 
 from explore_seg.core.frontiers import Frontier
 from explore_seg.core.grid import GridMap
-from explore_seg.core.selection.areas import AreaCounts
+from explore_seg.core.selection.areas import AreaCounts, turn_goal, turned
 from explore_seg.core.selection.costs import Selection, select_goal
 from explore_seg.core.selection.goal_types import (Action, Goal, NavOutcome, StepInputs,
-                                                   StepResult, goal_yaw)
+                                                   StepResult, goal_frontier_index, goal_yaw,
+                                                   unknown_share)
 from explore_seg.core.selection.params import SelectionParams
 from explore_seg.core.selection.strategy import get_strategy
+
+#: A turn look's heading counts as reached within this of its goal heading, radians
+#: (above Nav2's default yaw_goal_tolerance, 0.25 rad).
+_TURN_DONE_RAD = 0.3
 
 
 class GoalManager:
@@ -50,6 +55,9 @@ class GoalManager:
        still has a path to its frontier (the navigator disagrees: retrying would repeat
        the abort), otherwise left to wait for a path (a doorway that map noise closed
        opens again when the robot looks at it), at most ``abort_retries`` times per area.
+       Before the blacklist retry (and DONE), the robot turns in place by half a turn
+       (:func:`.areas.turn_goal`), ``turn_looks`` times per area: a map made of keyframes
+       gains a scan from where it stands, which may clear the noise that closed a passage.
     3. The current goal is kept unless its frontier vanished or another frontier is
        cheaper than the current goal's frontier by ``hysteresis_margin * |cost|``; a
        new goal within ``goal_change_min_m`` of the current one is not sent. Observed
@@ -87,6 +95,7 @@ class GoalManager:
         self._arrived_stamp_ns = 0
         self._nav_succeeded = False
         self._outcome_reason = ""
+        self._yaw: float | None = None      # the robot's heading at this decision
         self._aborted: Goal | None = None   # aborted by the navigator, judged next decision
         self._empty_ticks = 0
         self._goal_cells_xy: npt.NDArray[np.float64] | None = None
@@ -166,9 +175,11 @@ class GoalManager:
         if outcome is NavOutcome.SUCCEEDED:
             self._nav_succeeded = True
             return True
-        if outcome is NavOutcome.CANCELED_BY_US:
+        if outcome is NavOutcome.CANCELED_BY_US or goal.is_turn:
+            # a turn the navigator could not make has no frontier to blacklist
             self.goal = None
-            self._outcome_reason = "goal canceled by us"
+            self._outcome_reason = ("goal canceled by us" if not goal.is_turn else
+                                    f"navigation {outcome.value} turning in place")
             return True
         if goal.is_return:
             self.goal = None
@@ -264,23 +275,16 @@ class GoalManager:
     def goal_frontier(self, grid: GridMap, frontiers: Sequence[Frontier]) -> int | None:
         """Index of the frontier owning the current goal (a cell within
         ``frontier_match_radius_m`` + the goal's gap to its frontier), None if none."""
-        if self.goal is None or self.goal.is_return:
+        if self.goal is None or self.goal.is_return or self.goal.is_turn:
             return None
         return self._matching(grid, frontiers)
 
     def _matching(self, grid: GridMap, frontiers: Sequence[Frontier]) -> int | None:
         """Index of the frontier owning the current goal (closest cell within radius)."""
-        if self.goal is None or not frontiers:
+        if self.goal is None:
             return None
-        gx, gy = self.goal.xy_m
-        best, best_d = None, math.inf
-        for i, f in enumerate(frontiers):
-            x, y = grid.cells_to_world(f.cells[:, 0], f.cells[:, 1])
-            d = float(np.min(np.hypot(x - gx, y - gy)))
-            if d < best_d:
-                best, best_d = i, d
-        radius = self.params.frontier_match_radius_m + self.goal.frontier_gap_m
-        return best if best_d <= radius else None
+        return goal_frontier_index(self.goal, grid, frontiers,
+                                   self.params.frontier_match_radius_m)
 
     def _remember_cells(self, grid: GridMap, f: Frontier) -> None:
         """Keep the (world) positions of the current goal's frontier cells."""
@@ -290,14 +294,7 @@ class GoalManager:
     def _still_unknown(self, grid: GridMap) -> float:
         """Share of the goal frontier's last cells that are still unknown in ``grid``
         (a frontier that vanished with its cells unexplored was not cleared by sensing)."""
-        xy = self._goal_cells_xy
-        if xy is None or len(xy) == 0:
-            return 0.0
-        r, c = grid.world_to_cells(xy[:, 0], xy[:, 1])
-        inside = (r >= 0) & (r < grid.height) & (c >= 0) & (c < grid.width)
-        unknown = ~inside
-        unknown[inside] = grid.data[r[inside], c[inside]] < 0
-        return float(unknown.mean())
+        return unknown_share(grid, self._goal_cells_xy)
 
     def _new_goal(self, f: Frontier, cost: float, robot_xy_m: tuple[float, float],
                   now_s: float) -> Goal:
@@ -345,6 +342,7 @@ class GoalManager:
         """
         known = known if known is not None else StepInputs()
         labels, robot_rc, excluded = known.labels, known.robot_rc, known.excluded
+        self._yaw = known.robot_yaw_rad
         if self.done:
             reason, self._outcome_reason = self._outcome_reason or "exploration done", ""
             return StepResult(Action.DONE, None, reason)
@@ -384,6 +382,8 @@ class GoalManager:
         """
         if self.goal is None:
             return None, ""
+        if self.goal.is_turn:
+            return self._on_turn(now_s, grid)
         d_goal = math.hypot(robot_xy_m[0] - self.goal.xy_m[0],
                             robot_xy_m[1] - self.goal.xy_m[1])
         self._note_straight_progress(now_s, d_goal)
@@ -413,6 +413,24 @@ class GoalManager:
                 if math.isfinite(self._best_path_dist):
                     self._last_progress_s = now_s
                 self._best_path_dist = d_path
+
+    def _on_turn(self, now_s: float, grid: GridMap) -> tuple[StepResult | None, str]:
+        """A turn look ends once the navigator reports it done (or the heading is
+        there) and a map that shows it came (or ``arrival_wait_s`` passed); it is given
+        up, not blacklisted, after ``progress_timeout_s``. The decisions without a
+        frontier before DONE count again from its end."""
+        assert self.goal is not None
+        if self._nav_succeeded or turned(self.goal, self._yaw, _TURN_DONE_RAD):
+            self._nav_succeeded = True
+            if self._waiting_for_map(now_s, grid):
+                return StepResult(Action.KEEP, self.goal,
+                                  "turned in place: waiting for the map to update"), ""
+            self.goal, self._arrived_s, self._empty_ticks = None, None, 0
+            return None, "turned in place"
+        if now_s - self._last_progress_s > self.params.progress_timeout_s:
+            self.goal, self._empty_ticks = None, 0
+            return None, "turn in place not done in time: given up"
+        return None, ""
 
     def _within_reach(self, d_goal: float) -> bool:
         """The goal counts as reached at ``goal_reached_tolerance_m`` (at ``handover_m``
@@ -489,8 +507,9 @@ class GoalManager:
         ``done_confirmations`` ticks, return to start, retry the blacklist, then DONE."""
         p = self.params
         self._empty_ticks += 1
-        if self.goal is not None and self.goal.is_return:
-            return StepResult(Action.KEEP, self.goal, "returning to start", sel)
+        if self.goal is not None and (self.goal.is_return or self.goal.is_turn):
+            return StepResult(Action.KEEP, self.goal, "returning to start"
+                              if self.goal.is_return else "turning in place", sel)
         if self.goal is not None and self._still_unknown(grid) >= 0.5:
             # A thin frontier seen at a grazing angle (a doorway from the side) comes
             # and goes: its cells are still unknown, so drive on and look.
@@ -499,6 +518,13 @@ class GoalManager:
         self.goal = None
         if self._empty_ticks < p.done_confirmations:
             return StepResult(Action.WAIT, None, reason or "no reachable frontier", sel)
+        if (self._yaw is not None and self._turns.count_near(robot_xy_m, p.flicker_radius_m)
+                < p.turn_looks):
+            self._turns.note(robot_xy_m, p.flicker_radius_m)
+            self.goal = turn_goal(robot_xy_m, self._yaw, grid.world_to_cell(*robot_xy_m))
+            self._start_progress(self.goal, robot_xy_m, now_s)
+            return StepResult(Action.NEW_GOAL, self.goal, "no reachable frontier: turning in "
+                              "place, so that the map gains a scan from here", sel)
         if p.return_to_start and self.start_xy_m is not None:
             d0 = math.hypot(robot_xy_m[0] - self.start_xy_m[0],
                             robot_xy_m[1] - self.start_xy_m[1])
@@ -536,7 +562,7 @@ class GoalManager:
         best = sel.index
         assert best is not None
         best_cost = float(sel.costs[best])
-        if self.goal is not None and not self.goal.is_return:
+        if self.goal is not None and not (self.goal.is_return or self.goal.is_turn):
             cur = self._matching(grid, frontiers)
             if cur is not None:
                 self._remember_cells(grid, frontiers[cur])

@@ -134,6 +134,14 @@ class GoalParams:
         "robot's width but left wider than twice this gets an approach too. Lowering it "
         "opens more passages to a look; at or above the robot radius only speckle does",
         "m", default=0.15)
+    turn_looks: int = field(default=2, metadata=param_meta(
+        "when no frontier (nor lookout, nor approach) is selectable for "
+        "done_confirmations decisions, turn in place by half a turn this many times per "
+        "area (flicker_radius_m) before the blacklist retry and DONE: slam_toolbox adds a "
+        "scan only after 0.5 m or 0.5 rad of motion (minimum_travel_distance / _heading), "
+        "so a robot that stands still adds none, and the scans of a turn clear map noise "
+        "(speckle, ragged wall ends) that closes a passage next to it; 0 = no turns",
+        range=(0, INT_MAX)))
 
     def __post_init__(self) -> None:
         check_non_negative(self, ("hysteresis_margin", "progress_min_m",
@@ -156,6 +164,8 @@ class GoalParams:
             raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
         if self.speckle_max_cells < 0:
             raise ValueError(f"speckle_max_cells must be >= 0, got {self.speckle_max_cells}")
+        if self.turn_looks < 0:
+            raise ValueError(f"turn_looks must be >= 0, got {self.turn_looks}")
 
 
 @dataclass(frozen=True)
