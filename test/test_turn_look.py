@@ -108,6 +108,13 @@ def test_a_turn_not_done_in_time_is_given_up():
     assert out.action is Action.DONE
 
 
+def test_no_turn_when_nothing_is_left():
+    _, clear, pose, ex, sp = _scene(turn_looks=2)
+    explored = clear.with_data(np.where(clear.data < 0, 100, clear.data).astype(np.int8))
+    out = ex.step(0.0, explored, pose)
+    assert not out.frontiers and out.action is Action.DONE
+
+
 def test_no_turn_without_a_heading_or_with_turn_looks_0():
     noisy, _, pose, ex, sp = _scene(turn_looks=0)
     assert ex.step(0.0, noisy, pose).action is Action.DONE

@@ -38,6 +38,9 @@ AREAS_KEPT = 100
 
 #: A turn look's heading change, radians (half a turn).
 TURN_LOOK_RAD = math.pi
+#: A turn look's heading counts as reached within this of its goal heading, radians
+#: (above Nav2's default yaw_goal_tolerance, 0.25 rad).
+TURN_DONE_RAD = 0.3
 
 
 class AreaCounts:
@@ -90,4 +93,5 @@ def turned(goal: Goal, yaw_rad: float | None, tolerance_rad: float) -> bool:
     return abs(err) <= tolerance_rad
 
 
-__all__ = ["AREAS_KEPT", "AREA_POINTS", "AreaCounts", "TURN_LOOK_RAD", "turn_goal", "turned"]
+__all__ = ["AREAS_KEPT", "AREA_POINTS", "AreaCounts", "TURN_DONE_RAD", "TURN_LOOK_RAD",
+           "turn_goal", "turned"]

@@ -15,17 +15,13 @@ import numpy.typing as npt
 
 from explore_seg.core.frontiers import Frontier
 from explore_seg.core.grid import GridMap
-from explore_seg.core.selection.areas import AreaCounts, turn_goal, turned
+from explore_seg.core.selection.areas import TURN_DONE_RAD, AreaCounts, turn_goal, turned
 from explore_seg.core.selection.costs import Selection, select_goal
 from explore_seg.core.selection.goal_types import (Action, Goal, NavOutcome, StepInputs,
                                                    StepResult, goal_frontier_index, goal_yaw,
                                                    unknown_share)
 from explore_seg.core.selection.params import SelectionParams
 from explore_seg.core.selection.strategy import get_strategy
-
-#: A turn look's heading counts as reached within this of its goal heading, radians
-#: (above Nav2's default yaw_goal_tolerance, 0.25 rad).
-_TURN_DONE_RAD = 0.3
 
 
 class GoalManager:
@@ -55,9 +51,10 @@ class GoalManager:
        still has a path to its frontier (the navigator disagrees: retrying would repeat
        the abort), otherwise left to wait for a path (a doorway that map noise closed
        opens again when the robot looks at it), at most ``abort_retries`` times per area.
-       Before the blacklist retry (and DONE), the robot turns in place by half a turn
-       (:func:`.areas.turn_goal`), ``turn_looks`` times per area: a map made of keyframes
-       gains a scan from where it stands, which may clear the noise that closed a passage.
+       Before the blacklist retry (and DONE), while frontiers without a path or
+       blacklisted remain, the robot turns in place by half a turn (:func:`.areas.turn_goal`),
+       ``turn_looks`` times per area: a map made of keyframes gains a scan from where it
+       stands, which may clear the noise that closed a passage.
     3. The current goal is kept unless its frontier vanished or another frontier is
        cheaper than the current goal's frontier by ``hysteresis_margin * |cost|``; a
        new goal within ``goal_change_min_m`` of the current one is not sent. Observed
@@ -96,6 +93,7 @@ class GoalManager:
         self._nav_succeeded = False
         self._outcome_reason = ""
         self._yaw: float | None = None      # the robot's heading at this decision
+        self._unreached = False             # frontiers left without a path or blacklisted
         self._aborted: Goal | None = None   # aborted by the navigator, judged next decision
         self._empty_ticks = 0
         self._goal_cells_xy: npt.NDArray[np.float64] | None = None
@@ -150,9 +148,9 @@ class GoalManager:
         at a later :meth:`step`, on a map newer than the arrival's and stamped at or after
         it, or after ``arrival_wait_s``; a return-to-start goal ends exploration there);
         ABORTED drops the goal and leaves it to :meth:`judge_aborted` at the next
-        decision; REJECTED and CANCELED (by someone else) blacklist the goal at once. Either way the next
+        decision; REJECTED and CANCELED (by someone else) blacklist it at once, so the next
         :meth:`step` picks another frontier instead of waiting ``progress_timeout_s``.
-        CANCELED_BY_US drops the goal without blacklisting it.
+        CANCELED_BY_US, and any other end of a turn look, drop the goal unblacklisted.
 
         Parameters
         ----------
@@ -161,10 +159,7 @@ class GoalManager:
             The goal the outcome belongs to; an outcome for another goal (an older one
             that the navigator finished late) is ignored. None: the current goal.
 
-        Returns
-        -------
-        bool
-            True when the outcome was applied to the current goal.
+        Returns ``True`` when the outcome was applied to the current goal.
         """
         goal = self.goal
         if goal is None or not isinstance(outcome, NavOutcome):
@@ -367,6 +362,9 @@ class GoalManager:
         sel = select_goal(frontiers, dist_m, labels, robot_rc, self.params, grid.resolution_m,
                           excluded, known.tour_cost_m)
         if sel.index is None:
+            # frontiers left without a path, or blacklisted: worth a turn look
+            self._unreached = bool(np.any(~np.isfinite(np.asarray(dist_m, dtype=np.float64))
+                                          | excluded))
             return self._no_candidate(now_s, robot_xy_m, grid, reason, sel)
         self._empty_ticks = 0
         # 3. keep or switch
@@ -420,7 +418,7 @@ class GoalManager:
         up, not blacklisted, after ``progress_timeout_s``. The decisions without a
         frontier before DONE count again from its end."""
         assert self.goal is not None
-        if self._nav_succeeded or turned(self.goal, self._yaw, _TURN_DONE_RAD):
+        if self._nav_succeeded or turned(self.goal, self._yaw, TURN_DONE_RAD):
             self._nav_succeeded = True
             if self._waiting_for_map(now_s, grid):
                 return StepResult(Action.KEEP, self.goal,
@@ -518,8 +516,8 @@ class GoalManager:
         self.goal = None
         if self._empty_ticks < p.done_confirmations:
             return StepResult(Action.WAIT, None, reason or "no reachable frontier", sel)
-        if (self._yaw is not None and self._turns.count_near(robot_xy_m, p.flicker_radius_m)
-                < p.turn_looks):
+        if (self._yaw is not None and self._unreached
+                and self._turns.count_near(robot_xy_m, p.flicker_radius_m) < p.turn_looks):
             self._turns.note(robot_xy_m, p.flicker_radius_m)
             self.goal = turn_goal(robot_xy_m, self._yaw, grid.world_to_cell(*robot_xy_m))
             self._start_progress(self.goal, robot_xy_m, now_s)

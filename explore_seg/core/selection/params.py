@@ -135,8 +135,9 @@ class GoalParams:
         "opens more passages to a look; at or above the robot radius only speckle does",
         "m", default=0.15)
     turn_looks: int = field(default=2, metadata=param_meta(
-        "when no frontier (nor lookout, nor approach) is selectable for "
-        "done_confirmations decisions, turn in place by half a turn this many times per "
+        "when frontiers without a path (or blacklisted) remain and none, nor a lookout or "
+        "approach, is selectable for done_confirmations decisions, turn in place by half a "
+        "turn this many times per "
         "area (flicker_radius_m) before the blacklist retry and DONE: slam_toolbox adds a "
         "scan only after 0.5 m or 0.5 rad of motion (minimum_travel_distance / _heading), "
         "so a robot that stands still adds none, and the scans of a turn clear map noise "
