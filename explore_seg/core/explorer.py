@@ -354,6 +354,8 @@ class Explorer:
             self._detect(grid, layer)
         elif key is not None:
             grid = key[0]
+        # the map near blacklisted goals changed: their frontiers are candidates again
+        self.manager.retry_changed(grid, self._frontier_params.occupied_threshold)
         x, y, yaw = (float(v) for v in pose)
         if self._strategy.candidates == "rrt":
             self._detect_rrt(grid, (x, y))

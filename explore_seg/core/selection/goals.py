@@ -7,7 +7,6 @@ decision core (:mod:`explore_seg.core.explorer`) drives it once per decision.
 from __future__ import annotations
 
 import math
-from collections import deque
 from typing import Sequence
 
 import numpy as np
@@ -16,6 +15,7 @@ import numpy.typing as npt
 from explore_seg.core.frontiers import Frontier
 from explore_seg.core.grid import GridMap
 from explore_seg.core.selection.areas import TURN_DONE_RAD, AreaCounts, turn_goal, turned
+from explore_seg.core.selection.blacklist import Blacklist
 from explore_seg.core.selection.costs import Selection, select_goal
 from explore_seg.core.selection.goal_types import (Action, Goal, NavOutcome, StepInputs,
                                                    StepResult, goal_frontier_index, goal_yaw,
@@ -34,9 +34,9 @@ class GoalManager:
        it (``goal_reached_tolerance_m``) while its frontier (a frontier with a cell
        within ``frontier_match_radius_m`` + the goal's gap to its frontier) is still
        there on a newer map stamped at or after the arrival (or after ``arrival_wait_s``)
-       blacklists it too (``routed``
-       with ``reached_unknown_fraction`` > 0: unless the visit revealed the frontier's
-       cells, at most ``revealed_arrivals_max`` - 1 times per area); reaching a
+       blacklists it too (``routed`` with ``reached_unknown_fraction`` > 0: unless the
+       visit revealed the frontier's cells, at most ``revealed_arrivals_max`` - 1 times
+       per area); reaching a
        return-to-start goal ends exploration (DONE). A ``routed`` goal counts as reached
        within ``handover_m`` already (the robot drives on while it is judged).
     2. Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted goal
@@ -52,9 +52,9 @@ class GoalManager:
        the abort), otherwise left to wait for a path (a doorway that map noise closed
        opens again when the robot looks at it), at most ``abort_retries`` times per area.
        Before the blacklist retry (and DONE), while frontiers without a path or
-       blacklisted remain, the robot turns in place by half a turn (:func:`.areas.turn_goal`),
-       ``turn_looks`` times per area: a map made of keyframes gains a scan from where it
-       stands, which may clear the noise that closed a passage.
+       blacklisted remain, the robot turns in place by half a turn (:func:`.areas.turn_goal`,
+       ``turn_looks`` per area): a keyframe map gains a scan from where it stands. A goal
+       is unblacklisted once the map near it changed (:meth:`retry_changed`).
     3. The current goal is kept unless its frontier vanished or another frontier is
        cheaper than the current goal's frontier by ``hysteresis_margin * |cost|``; a
        new goal within ``goal_change_min_m`` of the current one is not sent. Observed
@@ -64,21 +64,16 @@ class GoalManager:
        the same place (within ``flicker_radius_m`` of where it first vanished) is map
        flicker: after ``flicker_vanish_count`` such vanishings its goals are blacklisted.
 
-    DONE is final until :meth:`reset`. The blacklist keeps the newest ``blacklist_max``
-    goals.
+    DONE is final until :meth:`reset`. The blacklist keeps the newest ``blacklist_max``.
     """
 
     def __init__(self, params: SelectionParams = SelectionParams()) -> None:
         self.params = params
-        self._blacklist: deque[tuple[float, float]] = deque(maxlen=params.blacklist_max)
-        #: Entries ever added to the blacklist (callers count new ones by difference).
-        self.blacklist_added = 0
-        self._blacklist_version = 0
-        # Areas where a goal's frontier vanished before arrival, where a reached goal's
-        # frontier remained with its cells revealed, where the navigator aborted a goal
-        # the explorer had no path to either, and where the robot turned to look.
+        self._bl = Blacklist(params.blacklist_max)
+        # Areas of: frontiers vanished before arrival, reached goals whose frontier remained
+        # revealed, aborts without a path on the map, turn looks, retries on a map change.
         self._vanished, self._revealed = AreaCounts(), AreaCounts()
-        self._aborted_areas, self._turns = AreaCounts(), AreaCounts()
+        self._aborted_areas, self._turns, self._changed = AreaCounts(), AreaCounts(), AreaCounts()
         self.reset()
 
     def reset(self, clear_blacklist: bool = False) -> None:
@@ -102,15 +97,17 @@ class GoalManager:
         self.start_xy_m: tuple[float, float] | None = None
         self._start_yaw = 0.0
         if clear_blacklist:
-            self._clear_blacklist()
+            self._bl.clear()
             self._vanished.clear()
             self._revealed.clear()
             self._aborted_areas.clear()
             self._turns.clear()
+            self._changed.clear()
 
-    def _clear_blacklist(self) -> None:
-        self._blacklist.clear()
-        self._blacklist_version += 1
+    @property
+    def blacklist_added(self) -> int:
+        """Entries ever added to the blacklist (callers count new ones by difference)."""
+        return self._bl.added
 
     def restart_timers(self, now_s: float) -> None:
         """Restart the progress and arrival timers at ``now_s`` (after a clock jump)."""
@@ -120,19 +117,27 @@ class GoalManager:
     def set_params(self, params: SelectionParams) -> None:
         """Apply new parameters (the blacklist keeps its newest entries)."""
         self.params = params
-        self._blacklist = deque(self._blacklist, maxlen=params.blacklist_max)
-        self._blacklist_version += 1
+        self._bl.resize(params.blacklist_max)
 
     @property
     def blacklist(self) -> tuple[tuple[float, float], ...]:
         """Blacklisted goal positions (x, y) in metres, oldest first."""
-        return tuple(self._blacklist)
+        return tuple(self._bl)
 
     def add_to_blacklist(self, xy_m: tuple[float, float]) -> None:
         """Blacklist a position (e.g. after the navigator reported a failure)."""
-        self._blacklist.append((float(xy_m[0]), float(xy_m[1])))
-        self.blacklist_added += 1
-        self._blacklist_version += 1
+        self._bl.add(xy_m)
+
+    def retry_changed(self, grid: GridMap, occupied_threshold: int) -> int:
+        """Unblacklist the goals near which the map changed by ``retry_change_m2``
+        (:meth:`.blacklist.Blacklist.changed`), ``change_retries`` times per area at most:
+        their frontiers are candidates again. Returns how many."""
+        p = self.params
+        if p.retry_change_m2 <= 0 or p.change_retries < 1 or not len(self._bl):
+            return 0
+        cells = max(1, round(p.retry_change_m2 / grid.resolution_m ** 2))
+        return self._bl.drop_changed(grid, (p.flicker_radius_m, occupied_threshold, cells),
+                                     self._changed, p.change_retries)
 
     def abandon_goal(self, blacklist: bool = True) -> None:
         """Drop the current goal (blacklisting it unless told not to)."""
@@ -260,12 +265,10 @@ class GoalManager:
     def excluded(self, frontiers: Sequence[Frontier]) -> npt.NDArray[np.bool_]:
         """Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted
         goal (not candidates now)."""
-        if not self._blacklist or not frontiers:
+        if not len(self._bl) or not frontiers:
             return np.zeros(len(frontiers), dtype=bool)
-        pts = np.asarray([f.point_xy_m for f in frontiers])
-        bl = np.asarray(self._blacklist)
-        d2 = ((pts[:, None, :] - bl[None, :, :]) ** 2).sum(axis=2)
-        return (d2 <= self.params.blacklist_radius_m ** 2).any(axis=1)
+        return self._bl.excluded(np.asarray([f.point_xy_m for f in frontiers]),
+                                 self.params.blacklist_radius_m)
 
     def goal_frontier(self, grid: GridMap, frontiers: Sequence[Frontier]) -> int | None:
         """Index of the frontier owning the current goal (a cell within
@@ -345,7 +348,7 @@ class GoalManager:
             self.set_start(robot_xy_m, 0.0)
         if robot_rc is None:
             robot_rc = grid.world_to_cell(*robot_xy_m)
-        version = self._blacklist_version
+        version = self._bl.version
         if self._aborted is not None and dist_m is not None:
             self.judge_aborted(grid, frontiers, dist_m)
         # 1. progress and arrival on the current goal
@@ -357,7 +360,7 @@ class GoalManager:
             action = Action.KEEP if self.goal is not None else Action.WAIT
             return StepResult(action, self.goal, reason or "no path distances")
         # 2. candidates
-        if excluded is None or self._blacklist_version != version:
+        if excluded is None or self._bl.version != version:
             excluded = self.excluded(frontiers)
         sel = select_goal(frontiers, dist_m, labels, robot_rc, self.params, grid.resolution_m,
                           excluded, known.tour_cost_m)
@@ -533,18 +536,18 @@ class GoalManager:
                 self._start_progress(self.goal, robot_xy_m, now_s)
                 return StepResult(Action.NEW_GOAL, self.goal,
                                   "no reachable frontier: returning to start", sel)
-        known = int(np.count_nonzero(grid.data >= 0)) if self._blacklist else 0
+        known = int(np.count_nonzero(grid.data >= 0)) if len(self._bl) else 0
         # the last retry revealed space: this one does not count
         free = (self._known_at_retry is not None and p.retry_reveal_m2 > 0
                 and (known - self._known_at_retry) * grid.resolution_m ** 2
                 >= p.retry_reveal_m2)
-        if self._blacklist and (free or self._retries_left > 0):
+        if len(self._bl) and (free or self._retries_left > 0):
             # The map changed since those goals failed (a doorway seen, a false
             # obstacle cleared): give the blacklisted frontiers another chance.
             if not free:
                 self._retries_left -= 1
             self._known_at_retry = known
-            self._clear_blacklist()
+            self._bl.clear()
             self._empty_ticks = 0
             return StepResult(Action.WAIT, None, "no reachable frontier: blacklist "
                               "cleared, retrying its frontiers", sel)
