@@ -440,7 +440,9 @@ class Explorer:
             fp = self._frontier_params
             relaxed = RelaxedMap(replace(fp, robot_radius_m=min(fp.robot_radius_m,
                                                                 sp.approach_radius_m)),
-                                 sp.speckle_max_cells, self._det.extra_obstacles)
+                                 sp.speckle_max_cells,
+                                 self._det.extra_obstacles if sp.approach_keeps_objects
+                                 else None)
             out, d_out = approaches(grid, frontiers, dist, reach, relaxed, excluded, through)
             ex_out = manager.excluded(out)
         return out, d_out, ex_out

@@ -134,6 +134,11 @@ class GoalParams:
         "robot's width but left wider than twice this gets an approach too. Lowering it "
         "opens more passages to a look; at or above the robot radius only speckle does",
         "m", default=0.15)
+    approach_keeps_objects: bool = field(default=False, metadata=param_meta(
+        "the relaxed map of approach goals keeps the object layer's obstacles. False: it "
+        "drops them, so a box that closes a passage (depth points of a wall mapped at a "
+        "drifted pose, a real table) gets an approach too: the robot drives up to it and "
+        "looks, and the navigator, which keeps the layer, decides whether to pass"))
     retry_change_m2: float = non_negative(
         "a blacklisted goal is dropped from the blacklist (its frontier a candidate again) "
         "once the map's occupied plus unknown cells within flicker_radius_m of it changed "
