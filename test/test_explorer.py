@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import math
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
@@ -77,9 +75,7 @@ def test_dist_inf_when_object_blocks_the_corridor():
     #R......??
     ##########
     """, resolution_m=RES)
-    # (approaches on a relaxed map that keeps the layer: the path graph alone)
-    params = split_params(robot_radius_m=0.0, min_group_size_cells=1, path_block_cells=1,
-                          approach_keeps_objects=True)
+    params = split_params(robot_radius_m=0.0, min_group_size_cells=1, path_block_cells=1)
     fr, dist, _ = pipeline(g, marks["R"][0], params)
     assert len(fr) == 1 and dist[0] == pytest.approx(0.6)
     extra = np.zeros(g.shape, bool)
@@ -195,8 +191,6 @@ def test_frontiers_and_paths_are_cached_per_map_and_layer_object():
 
 def test_object_layer_blocks_and_a_layer_in_another_frame_is_ignored():
     g, pose, ex = _corridor()
-    # (approaches on a relaxed map that keeps the layer: the path graph alone)
-    ex.set_params(selection=replace(ex.selection_params, approach_keeps_objects=True))
     data = np.zeros_like(g.data)
     data[1:3, 5] = 100                                     # an object across the corridor
     out = ex.step(0.0, g, pose, g.with_data(data))

@@ -134,7 +134,7 @@ class GoalParams:
         "robot's width but left wider than twice this gets an approach too. Lowering it "
         "opens more passages to a look; at or above the robot radius only speckle does",
         "m", default=0.15)
-    approach_keeps_objects: bool = field(default=False, metadata=param_meta(
+    approach_keeps_objects: bool = field(default=True, metadata=param_meta(
         "the relaxed map of approach goals keeps the object layer's obstacles. False: it "
         "drops them, so a box that closes a passage (depth points of a wall mapped at a "
         "drifted pose, a real table) gets an approach too: the robot drives up to it and "
