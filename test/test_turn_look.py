@@ -14,7 +14,7 @@ import pytest
 from explore_seg.core.explorer import Explorer
 from explore_seg.core.grid import GridMap, grid_from_ascii
 from explore_seg.core.selection import Action, GoalManager, NavOutcome
-from explore_seg.core.selection.areas import TURN_LOOK_RAD, nearest_left, turn_goal, turned
+from explore_seg.core.selection.areas import TURN_LOOK_RAD, turn_goal, turned
 from selection_cases import split_params
 
 # Room A (robot R) and room B joined by a doorway that one noise cell (*) closes for a
@@ -62,8 +62,7 @@ def test_a_turn_that_clears_the_noise_lets_exploration_go_on():
     assert np.isinf(out.dist_m).all()
     assert out.action is Action.NEW_GOAL and out.goal.is_turn and "turning" in out.reason
     assert out.goal.xy_m == pytest.approx(pose[:2])
-    fx, fy = out.frontiers[0].point_xy_m                 # faces the frontier left behind
-    assert out.goal.yaw_rad == pytest.approx(math.atan2(fy - pose[1], fx - pose[0]))
+    assert math.cos(out.goal.yaw_rad - pose[2]) == pytest.approx(-1.0)   # half a turn
     assert ex.step(1.0, noisy, pose).action is Action.KEEP               # turning
     after = (pose[0], pose[1], out.goal.yaw_rad + 0.1)
     assert ex.step(2.0, noisy, after).action is Action.KEEP              # map not yet newer
@@ -83,13 +82,11 @@ def test_turns_per_area_then_done_without_blacklisting():
         if out.action is Action.NEW_GOAL:
             assert out.goal.is_turn
             turns += 1
-            first = out.goal.yaw_rad if turns == 1 else first
             yaw = out.goal.yaw_rad            # the navigator turns at once
             ex.report_navigation(NavOutcome.SUCCEEDED, out.goal)
         t += 1.0
     assert out.action is Action.DONE and turns == 2
     assert ex.manager.blacklist_added == 0
-    assert math.cos(yaw - first) == pytest.approx(-1.0)   # the second: half a turn on
 
 
 def test_a_turn_the_navigator_aborts_is_dropped_not_blacklisted():
@@ -126,26 +123,10 @@ def test_no_turn_without_a_heading_or_with_turn_looks_0():
     assert m.step(0.0, pose[:2], noisy, [], []).action is Action.DONE
 
 
-def test_turn_goal_faces_the_point_then_turns_half_a_turn_and_turned_within_tolerance():
-    assert turn_goal((1.0, 2.0), 3.0, (20, 10), (2.0, 3.0), 0).yaw_rad == pytest.approx(
-        math.pi / 4)
-    assert turn_goal((1.0, 2.0), 3.0, (20, 10), (2.0, 3.0), 1).yaw_rad == pytest.approx(
-        -3 * math.pi / 4)
+def test_turn_goal_is_half_a_turn_and_turned_within_tolerance():
     g = turn_goal((1.0, 2.0), 3.0, (20, 10))
     assert g.is_turn and g.xy_m == (1.0, 2.0) and g.rc == (20, 10)
     assert math.cos(g.yaw_rad - 3.0 - TURN_LOOK_RAD) == pytest.approx(1.0)
     assert -math.pi <= g.yaw_rad <= math.pi
     assert turned(g, g.yaw_rad + 0.2, 0.3) and not turned(g, g.yaw_rad + 0.4, 0.3)
     assert not turned(g, None, 0.3)
-
-
-def test_nearest_left_is_the_closest_frontier_without_a_path_or_blacklisted():
-    noisy, _, pose, ex, _ = _scene()
-    fr = ex.step(0.0, noisy, pose).frontiers
-    far = [f for f in fr]
-    d = np.full(len(far), np.inf)
-    assert nearest_left(far, d, np.zeros(len(far), bool), pose[:2]) is not None
-    assert nearest_left(far, np.zeros(len(far)), np.zeros(len(far), bool), pose[:2]) is None
-    assert nearest_left(far, np.zeros(len(far)), np.ones(len(far), bool),
-                        pose[:2]) == far[0].point_xy_m
-    assert nearest_left([], np.zeros(0), np.zeros(0, bool), pose[:2]) is None

@@ -14,8 +14,7 @@ import numpy.typing as npt
 
 from explore_seg.core.frontiers import Frontier
 from explore_seg.core.grid import GridMap
-from explore_seg.core.selection.areas import (TURN_DONE_RAD, AreaCounts, nearest_left,
-                                              turn_goal, turned)
+from explore_seg.core.selection.areas import TURN_DONE_RAD, AreaCounts, turn_goal, turned
 from explore_seg.core.selection.blacklist import Blacklist
 from explore_seg.core.selection.costs import Selection, select_goal
 from explore_seg.core.selection.goal_types import (Action, Goal, NavOutcome, StepInputs,
@@ -52,9 +51,10 @@ class GoalManager:
        still has a path to its frontier (the navigator disagrees: retrying would repeat
        the abort), otherwise left to wait for a path (a doorway that map noise closed
        opens again when the robot looks at it), at most ``abort_retries`` times per area.
-       Before the blacklist retry (and DONE), while frontiers without a path or blacklisted
-       remain, the robot turns in place to look (:func:`.areas.turn_goal`, ``turn_looks``
-       per area). A goal is unblacklisted once the map near it changed (:meth:`retry_changed`).
+       Before the blacklist retry (and DONE), while frontiers without a path or
+       blacklisted remain, the robot turns in place by half a turn (:func:`.areas.turn_goal`,
+       ``turn_looks`` per area): a keyframe map gains a scan from where it stands. A goal
+       is unblacklisted once the map near it changed (:meth:`retry_changed`).
     3. The current goal is kept unless its frontier vanished or another frontier is
        cheaper than the current goal's frontier by ``hysteresis_margin * |cost|``; a
        new goal within ``goal_change_min_m`` of the current one is not sent. Observed
@@ -88,7 +88,7 @@ class GoalManager:
         self._nav_succeeded = False
         self._outcome_reason = ""
         self._yaw: float | None = None      # the robot's heading at this decision
-        self._unreached: tuple[float, float] | None = None   # the nearest such frontier
+        self._unreached = False             # frontiers left without a path or blacklisted
         self._aborted: Goal | None = None   # aborted by the navigator, judged next decision
         self._empty_ticks = 0
         self._goal_cells_xy: npt.NDArray[np.float64] | None = None
@@ -365,8 +365,9 @@ class GoalManager:
         sel = select_goal(frontiers, dist_m, labels, robot_rc, self.params, grid.resolution_m,
                           excluded, known.tour_cost_m)
         if sel.index is None:
-            # frontiers left without a path, or blacklisted: worth a turn look toward one
-            self._unreached = nearest_left(frontiers, dist_m, excluded, robot_xy_m)
+            # frontiers left without a path, or blacklisted: worth a turn look
+            self._unreached = bool(np.any(~np.isfinite(np.asarray(dist_m, dtype=np.float64))
+                                          | excluded))
             return self._no_candidate(now_s, robot_xy_m, grid, reason, sel)
         self._empty_ticks = 0
         # 3. keep or switch
@@ -518,11 +519,10 @@ class GoalManager:
         self.goal = None
         if self._empty_ticks < p.done_confirmations:
             return StepResult(Action.WAIT, None, reason or "no reachable frontier", sel)
-        k = self._turns.count_near(robot_xy_m, p.flicker_radius_m)
-        if self._yaw is not None and self._unreached is not None and k < p.turn_looks:
+        if (self._yaw is not None and self._unreached
+                and self._turns.count_near(robot_xy_m, p.flicker_radius_m) < p.turn_looks):
             self._turns.note(robot_xy_m, p.flicker_radius_m)
-            self.goal = turn_goal(robot_xy_m, self._yaw, grid.world_to_cell(*robot_xy_m),
-                                  self._unreached, k)
+            self.goal = turn_goal(robot_xy_m, self._yaw, grid.world_to_cell(*robot_xy_m))
             self._start_progress(self.goal, robot_xy_m, now_s)
             return StepResult(Action.NEW_GOAL, self.goal, "no reachable frontier: turning in "
                               "place, so that the map gains a scan from here", sel)

@@ -151,14 +151,12 @@ class GoalParams:
         "(flicker_radius_m); 0 = none", range=(0, INT_MAX)))
     turn_looks: int = field(default=2, metadata=param_meta(
         "when frontiers without a path (or blacklisted) remain and none, nor a lookout or "
-        "approach, is selectable for done_confirmations decisions, turn in place this many "
-        "times per area (flicker_radius_m), the first time to face the nearest such "
-        "frontier, then half a turn further each time, before the blacklist retry and "
-        "DONE: the depth layer clears a ghost box its camera sees through, and "
-        "slam_toolbox adds a scan only after 0.5 m or 0.5 rad of motion "
-        "(minimum_travel_distance / _heading), so a robot that stands still adds none; "
-        "the new scans clear map noise (speckle, ragged wall ends) that closes a passage "
-        "next to it; 0 = no turns",
+        "approach, is selectable for done_confirmations decisions, turn in place by half a "
+        "turn this many times per "
+        "area (flicker_radius_m) before the blacklist retry and DONE: slam_toolbox adds a "
+        "scan only after 0.5 m or 0.5 rad of motion (minimum_travel_distance / _heading), "
+        "so a robot that stands still adds none, and the scans of a turn clear map noise "
+        "(speckle, ragged wall ends) that closes a passage next to it; 0 = no turns",
         range=(0, INT_MAX)))
 
     def __post_init__(self) -> None:
