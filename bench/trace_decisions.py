@@ -17,6 +17,9 @@ while coverage did not grow, and for runs that ended DONE how long after coverag
 its final value (within 0.05 %) DONE came (``done_lag_s``; ``--coverage-target 100`` lets
 runs go on until DONE).
 
+``--mapping-noise PROFILE`` maps the scans with the simulator's SLAM-like error
+(``SimParams.mapping_error``), as ``bench/paired.py`` does.
+
 ``--groups T0:T1`` also writes, for every decision between T0 and T1 s of sim time
 (``groups_WORLD_STRATEGY_SEED.csv``), one row per frontier group: its goal point (the
 viewpoint under ``routed``), centroid, size, selection cost, and under ``routed`` its
@@ -38,7 +41,7 @@ import csv
 import json
 import math
 import sys
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -110,12 +113,27 @@ def paper_terms(st: LockstepState, alpha: float, beta: float, gamma: float
                 size_decided=int(int(np.argmin(no_size)) != i))
 
 
+@dataclass(frozen=True)
+class TraceOptions:
+    """How a traced run runs: when it stops, which decisions dump their groups, and the
+    simulator's mapping error."""
+
+    #: Stop at this coverage (None: the lock step's 99 %).
+    coverage_target_pct: float | None = None
+    #: Dump the groups of the decisions between these sim times (s).
+    groups_window: tuple[float, float] | None = None
+    #: Caps the benchmark's time limit (s).
+    max_sim_time_s: float | None = None
+    #: ``SimParams.mapping_error`` (none, realistic, harsh, custom).
+    mapping_error: str = "none"
+
+
 def trace_run(world_spec: str, strategy: str, seed: int, out_dir: Path,
-              still_m: float, coverage_target_pct: float | None = None,
-              groups_window: tuple[float, float] | None = None,
-              max_sim_time_s: float | None = None) -> dict[str, Any]:
-    """One traced run: writes its CSV (and with ``groups_window`` the groups' CSV),
-    returns its summary. ``max_sim_time_s`` caps the benchmark's time limit."""
+              still_m: float, opts: TraceOptions = TraceOptions()) -> dict[str, Any]:
+    """One traced run: writes its CSV (and with ``opts.groups_window`` the groups' CSV),
+    returns its summary."""
+    coverage_target_pct, groups_window = opts.coverage_target_pct, opts.groups_window
+    max_sim_time_s = opts.max_sim_time_s
     world, gt = load(world_spec)
     ep = explorer_params()
     sp = ep.selection
@@ -164,7 +182,8 @@ def trace_run(world_spec: str, strategy: str, seed: int, out_dir: Path,
         limit = min(limit, max_sim_time_s)
     res = run_exploration(world, strategy, seed, ground_truth=gt, explorer_params=ep,
                           params=replace(lp, max_sim_time_s=float(limit)),
-                          sim_params=sim_params_for(PAPER_CAMERA_MOUNT, None),
+                          sim_params=replace(sim_params_for(PAPER_CAMERA_MOUNT, None),
+                                             mapping_error=opts.mapping_error),
                           observer=observe)
     out_dir.mkdir(parents=True, exist_ok=True)
     name = f"trace_{world_spec.replace('/', '_')}_{strategy}_{seed}.csv"
@@ -235,6 +254,9 @@ def main(argv: list[str] | None = None) -> int:
                          "T1 s of sim time (groups_*.csv)")
     ap.add_argument("--max-sim-time", type=float, default=None,
                     help="end runs at this sim time (s) if the benchmark's limit is later")
+    ap.add_argument("--mapping-noise", default="none", metavar="PROFILE",
+                    help="SLAM-like mapping error (SimParams.mapping_error: none, realistic, "
+                         "harsh, custom)")
     a = ap.parse_args(argv)
     out = Path(a.out)
     window = None
@@ -250,8 +272,8 @@ def main(argv: list[str] | None = None) -> int:
     for w in a.worlds.split(","):
         for s in a.strategies.split(","):
             for seed in (int(x) for x in a.seeds.split(",")):
-                summ = trace_run(w, s, seed, out, a.still_m, a.coverage_target, window,
-                                 a.max_sim_time)
+                summ = trace_run(w, s, seed, out, a.still_m, TraceOptions(
+                    a.coverage_target, window, a.max_sim_time, a.mapping_noise))
                 print(json.dumps(summ), flush=True)
                 summaries.append(summ)
     with open(out / "summary.json", "a") as fh:

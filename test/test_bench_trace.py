@@ -25,7 +25,8 @@ def _read(path: Path) -> list[dict[str, str]]:
 
 def test_routed_groups_window_holds_every_group_of_each_decision(tmp_path):
     summ = trace_decisions.trace_run("eb/corridor_asym", "routed", 0, tmp_path, 0.05,
-                                     groups_window=(0.0, 4.0), max_sim_time_s=6.0)
+                                     trace_decisions.TraceOptions(groups_window=(0.0, 4.0),
+                                                                  max_sim_time_s=6.0))
     assert summ["end_s"] <= 6.1 and summ["stop"] == "timeout"
     trace = _read(tmp_path / "trace_eb_corridor_asym_routed_0.csv")
     groups = _read(tmp_path / "groups_eb_corridor_asym_routed_0.csv")
@@ -54,7 +55,8 @@ def test_routed_groups_window_holds_every_group_of_each_decision(tmp_path):
 
 def test_without_a_tour_the_groups_have_no_tour_columns(tmp_path):
     trace_decisions.trace_run("eb/corridor_asym", "nearest", 0, tmp_path, 0.05,
-                              groups_window=(0.0, 1.0), max_sim_time_s=2.0)
+                              trace_decisions.TraceOptions(groups_window=(0.0, 1.0),
+                                                           max_sim_time_s=2.0))
     groups = _read(tmp_path / "groups_eb_corridor_asym_nearest_0.csv")
     assert groups and all(g["tour_position"] == g["gain_m2"] == "" for g in groups)
     assert sum(g["chosen"] == "1" for g in groups if g["t_s"] == groups[0]["t_s"]) == 1
@@ -62,7 +64,7 @@ def test_without_a_tour_the_groups_have_no_tour_columns(tmp_path):
 
 def test_no_groups_file_without_a_window_and_bad_options_are_refused(tmp_path, capsys):
     trace_decisions.trace_run("eb/corridor_asym", "nearest", 0, tmp_path, 0.05,
-                              max_sim_time_s=1.0)
+                              trace_decisions.TraceOptions(max_sim_time_s=1.0))
     assert not list(tmp_path.glob("groups_*"))
     with pytest.raises(SystemExit) as exc:
         trace_decisions.main(["--worlds", "eb/corridor_asym", "--groups", "10",
@@ -74,3 +76,14 @@ def test_no_groups_file_without_a_window_and_bad_options_are_refused(tmp_path, c
                               "--out", str(tmp_path)])
     assert exc.value.code == 2
     assert "--max-sim-time must be > 0" in capsys.readouterr().err
+
+
+def test_mapping_noise_reaches_the_simulator(tmp_path):
+    with pytest.raises(ValueError, match="mapping_error"):
+        trace_decisions.trace_run("eb/corridor_asym", "nearest", 0, tmp_path, 0.05,
+                                  trace_decisions.TraceOptions(max_sim_time_s=1.0,
+                                                               mapping_error="bogus"))
+    summ = trace_decisions.trace_run("eb/corridor_asym", "nearest", 0, tmp_path, 0.05,
+                                     trace_decisions.TraceOptions(max_sim_time_s=1.0,
+                                                                  mapping_error="harsh"))
+    assert summ["end_s"] <= 1.1

@@ -36,7 +36,8 @@ DOORWAY = """
 def _scene(text: str = DOORWAY, **kw):
     g, marks = grid_from_ascii(text.replace("*", "#"), resolution_m=0.1)
     params = dict(strategy="nearest", robot_radius_m=0.2, min_group_size_cells=1,
-                  path_block_cells=1, blacklist_retries=0, done_confirmations=1)
+                  path_block_cells=1, blacklist_retries=0, done_confirmations=1,
+                  turn_looks=0)   # the look alone (turn looks: test_turn_look.py)
     params.update(kw)
     fp, sp = split_params(**params)
     x, y = g.cell_to_world(*marks["R"][0])
@@ -161,3 +162,24 @@ def test_a_passage_narrowed_below_the_robot_width_gets_an_approach_at_its_near_s
 def test_at_the_robot_radius_only_speckle_opens_a_passage():
     g, pose, ex, _ = _scene(DETOUR, approach_radius_m=0.2)
     assert ex.step(0.0, g, pose).action is Action.DONE
+
+
+def test_a_doorway_closed_by_an_object_layer_box_gets_an_approach():
+    """A box of the object layer (depth points of a wall mapped at a drifted pose) closes
+    the doorway: the navigator tries the frontier, then the robot drives up to the box to
+    look (the layer clears a box its camera sees through), instead of ending."""
+    text = DOORWAY.replace("*", ".")
+    g, pose, ex, _ = _scene(text, approach_keeps_objects=False)
+    row = int(np.flatnonzero((g.data == 0).sum(axis=1) == 7)[0])    # the doorway's row
+    data = np.zeros_like(g.data)
+    data[row, :] = 100
+    layer = g.with_data(data)
+    first = ex.step(0.0, g, pose, layer)
+    assert first.action is Action.NEW_GOAL and first.goal.rc == ex._frontiers[0].point_rc
+    assert ex.report_navigation(NavOutcome.ABORTED, first.goal)
+    look = ex.step(0.5, g, pose, layer)
+    assert look.action is Action.NEW_GOAL and look.blacklisted == 0
+    r, _ = look.goal.rc
+    assert ex._det.passable[look.goal.rc] and 0 < r - row <= 4   # room A's side, at the box
+    _, _, keeps, _ = _scene(text, approach_keeps_objects=True)
+    assert keeps.step(0.0, g, pose, layer).action is Action.DONE

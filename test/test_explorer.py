@@ -219,7 +219,7 @@ def test_step_reports_blacklisting_and_done():
     g, marks = grid_from_ascii(CORRIDOR, resolution_m=RES)
     x, y = g.cell_to_world(*marks["R"][0])
     fp, sp = split_params(strategy="nearest", robot_radius_m=0.0, min_group_size_cells=1,
-                          blacklist_retries=0, done_confirmations=3)
+                          blacklist_retries=0, done_confirmations=3, turn_looks=0)
     ex = Explorer(fp, sp)
     assert ex.step(0.0, g, (x, y, 0.0)).action is Action.NEW_GOAL
     out = ex.step(sp.progress_timeout_s + 1.0, g, (x, y, 0.0))   # no progress: blacklisted

@@ -51,7 +51,8 @@ def _niche(**kw):
     g, marks = grid_from_ascii(NICHE, resolution_m=0.1)
     params = dict(strategy="nearest", robot_radius_m=0.2, min_group_size_cells=1,
                   path_block_cells=1, min_gain_m2=0.1, blacklist_retries=0,
-                  done_confirmations=1)
+                  done_confirmations=1,
+                  turn_looks=0)   # the look alone (turn looks: test_turn_look.py)
     params.update(kw)
     fp, sp = split_params(**params)
     x, y = g.cell_to_world(*marks["R"][0])
@@ -99,7 +100,7 @@ def test_no_lookout_without_line_of_sight_or_view():
     g2, marks = grid_from_ascii(walled, resolution_m=0.1)
     fp, sp = split_params(strategy="nearest", robot_radius_m=0.2, min_group_size_cells=1,
                           path_block_cells=1, min_gain_m2=0.1, done_confirmations=1,
-                          blacklist_retries=0)
+                          blacklist_retries=0, turn_looks=0)
     x, y = g2.cell_to_world(*marks["R"][0])
     assert Explorer(fp, sp).step(0.0, g2, (x, y, 0.0)).action is Action.DONE
 

@@ -354,6 +354,8 @@ class Explorer:
             self._detect(grid, layer)
         elif key is not None:
             grid = key[0]
+        # the map near blacklisted goals changed: their frontiers are candidates again
+        self.manager.retry_changed(grid, self._frontier_params.occupied_threshold)
         x, y, yaw = (float(v) for v in pose)
         if self._strategy.candidates == "rrt":
             self._detect_rrt(grid, (x, y))
@@ -389,11 +391,12 @@ class Explorer:
                                      labels, manager.goal_frontier(grid, frontiers))
         old_goal = manager.goal
         res = manager.step(now_s, (x, y), stamped, frontiers, dist, StepInputs(
-            labels, robot_rc, excluded, tour.tour_cost_m if tour is not None else None))
+            labels, robot_rc, excluded, tour.tour_cost_m if tour is not None else None, yaw))
         blacklisted = manager.blacklist_added - added + self._reported_blacklisted
         self._reported_blacklisted = 0
         switched = (res.action is Action.NEW_GOAL and res.goal is not None
-                    and old_goal is not None and not old_goal.is_return and not blacklisted
+                    and old_goal is not None and not (old_goal.is_return or old_goal.is_turn)
+                    and not blacklisted
                     and res.selection is not None
                     and _frontier_alive(grid, frontiers, res.selection.costs, old_goal.xy_m,
                                         self._selection_params.frontier_match_radius_m))
@@ -437,7 +440,9 @@ class Explorer:
             fp = self._frontier_params
             relaxed = RelaxedMap(replace(fp, robot_radius_m=min(fp.robot_radius_m,
                                                                 sp.approach_radius_m)),
-                                 sp.speckle_max_cells, self._det.extra_obstacles)
+                                 sp.speckle_max_cells,
+                                 self._det.extra_obstacles if sp.approach_keeps_objects
+                                 else None)
             out, d_out = approaches(grid, frontiers, dist, reach, relaxed, excluded, through)
             ex_out = manager.excluded(out)
         return out, d_out, ex_out

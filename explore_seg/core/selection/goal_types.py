@@ -6,11 +6,13 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.frontiers import Frontier
+from explore_seg.core.grid import GridMap
 from explore_seg.core.selection.costs import Selection
 
 
@@ -45,6 +47,8 @@ class Goal:
     cost: float
     is_return: bool = False
     frontier_gap_m: float = 0.0
+    #: A turn look (:func:`.areas.turn_goal`): turn in place at the robot's position.
+    is_turn: bool = False
 
 
 @dataclass(frozen=True)
@@ -71,6 +75,8 @@ class StepInputs:
     excluded: npt.NDArray[np.bool_] | None = None
     #: The ``routed`` strategy's tour costs (:class:`~.router.Router`), shape (N,).
     tour_cost_m: npt.NDArray[np.float64] | None = None
+    #: The robot's heading (turn looks need it; none without it).
+    robot_yaw_rad: float | None = None
 
 
 def goal_yaw(frontier: Frontier, robot_xy_m: tuple[float, float]) -> float:
@@ -83,4 +89,31 @@ def goal_yaw(frontier: Frontier, robot_xy_m: tuple[float, float]) -> float:
     return math.atan2(py - robot_xy_m[1], px - robot_xy_m[0])
 
 
-__all__ = ["Action", "Goal", "NavOutcome", "StepInputs", "StepResult", "goal_yaw"]
+def goal_frontier_index(goal: Goal, grid: GridMap, frontiers: Sequence[Frontier],
+                        match_radius_m: float) -> int | None:
+    """Index of the frontier owning ``goal``: the one with the cell closest to the goal,
+    when within ``match_radius_m`` + the goal's gap to its frontier; None otherwise."""
+    gx, gy = goal.xy_m
+    best, best_d = None, math.inf
+    for i, f in enumerate(frontiers):
+        x, y = grid.cells_to_world(f.cells[:, 0], f.cells[:, 1])
+        d = float(np.min(np.hypot(x - gx, y - gy)))
+        if d < best_d:
+            best, best_d = i, d
+    return best if best_d <= match_radius_m + goal.frontier_gap_m else None
+
+
+def unknown_share(grid: GridMap, xy_m: npt.NDArray[np.float64] | None) -> float:
+    """Share of the points ``xy_m`` (shape (N, 2), map frame) that lie on unknown cells of
+    ``grid`` or outside it (0 without points)."""
+    if xy_m is None or len(xy_m) == 0:
+        return 0.0
+    r, c = grid.world_to_cells(xy_m[:, 0], xy_m[:, 1])
+    inside = (r >= 0) & (r < grid.height) & (c >= 0) & (c < grid.width)
+    unknown = ~inside
+    unknown[inside] = grid.data[r[inside], c[inside]] < 0
+    return float(unknown.mean())
+
+
+__all__ = ["Action", "Goal", "NavOutcome", "StepInputs", "StepResult", "goal_frontier_index",
+           "goal_yaw", "unknown_share"]

@@ -7,7 +7,6 @@ decision core (:mod:`explore_seg.core.explorer`) drives it once per decision.
 from __future__ import annotations
 
 import math
-from collections import deque
 from typing import Sequence
 
 import numpy as np
@@ -15,16 +14,14 @@ import numpy.typing as npt
 
 from explore_seg.core.frontiers import Frontier
 from explore_seg.core.grid import GridMap
+from explore_seg.core.selection.areas import TURN_DONE_RAD, AreaCounts, turn_goal, turned
+from explore_seg.core.selection.blacklist import Blacklist
 from explore_seg.core.selection.costs import Selection, select_goal
 from explore_seg.core.selection.goal_types import (Action, Goal, NavOutcome, StepInputs,
-                                                   StepResult, goal_yaw)
+                                                   StepResult, goal_frontier_index, goal_yaw,
+                                                   unknown_share)
 from explore_seg.core.selection.params import SelectionParams
 from explore_seg.core.selection.strategy import get_strategy
-
-#: Goal points kept per counted area (vanished frontiers, revealed arrivals), and areas
-#: kept per kind (oldest dropped).
-_AREA_POINTS = 20
-_AREAS_KEPT = 100
 
 
 class GoalManager:
@@ -37,9 +34,9 @@ class GoalManager:
        it (``goal_reached_tolerance_m``) while its frontier (a frontier with a cell
        within ``frontier_match_radius_m`` + the goal's gap to its frontier) is still
        there on a newer map stamped at or after the arrival (or after ``arrival_wait_s``)
-       blacklists it too (``routed``
-       with ``reached_unknown_fraction`` > 0: unless the visit revealed the frontier's
-       cells, at most ``revealed_arrivals_max`` - 1 times per area); reaching a
+       blacklists it too (``routed`` with ``reached_unknown_fraction`` > 0: unless the
+       visit revealed the frontier's cells, at most ``revealed_arrivals_max`` - 1 times
+       per area); reaching a
        return-to-start goal ends exploration (DONE). A ``routed`` goal counts as reached
        within ``handover_m`` already (the robot drives on while it is judged).
     2. Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted goal
@@ -54,6 +51,10 @@ class GoalManager:
        still has a path to its frontier (the navigator disagrees: retrying would repeat
        the abort), otherwise left to wait for a path (a doorway that map noise closed
        opens again when the robot looks at it), at most ``abort_retries`` times per area.
+       Before the blacklist retry (and DONE), while frontiers without a path or
+       blacklisted remain, the robot turns in place by half a turn (:func:`.areas.turn_goal`,
+       ``turn_looks`` per area): a keyframe map gains a scan from where it stands. A goal
+       is unblacklisted once the map near it changed (:meth:`retry_changed`).
     3. The current goal is kept unless its frontier vanished or another frontier is
        cheaper than the current goal's frontier by ``hysteresis_margin * |cost|``; a
        new goal within ``goal_change_min_m`` of the current one is not sent. Observed
@@ -63,22 +64,16 @@ class GoalManager:
        the same place (within ``flicker_radius_m`` of where it first vanished) is map
        flicker: after ``flicker_vanish_count`` such vanishings its goals are blacklisted.
 
-    DONE is final until :meth:`reset`. The blacklist keeps the newest ``blacklist_max``
-    goals.
+    DONE is final until :meth:`reset`. The blacklist keeps the newest ``blacklist_max``.
     """
 
     def __init__(self, params: SelectionParams = SelectionParams()) -> None:
         self.params = params
-        self._blacklist: deque[tuple[float, float]] = deque(maxlen=params.blacklist_max)
-        #: Entries ever added to the blacklist (callers count new ones by difference).
-        self.blacklist_added = 0
-        self._blacklist_version = 0
-        # Areas where a goal's frontier vanished before arrival: [count, goal points].
-        self._vanished: list[tuple[list[int], list[tuple[float, float]]]] = []
-        # Areas where a reached goal's frontier remained with its cells revealed.
-        self._revealed: list[tuple[list[int], list[tuple[float, float]]]] = []
-        # Areas where the navigator aborted a goal the explorer had no path to either.
-        self._aborted_areas: list[tuple[list[int], list[tuple[float, float]]]] = []
+        self._bl = Blacklist(params.blacklist_max)
+        # Areas of: frontiers vanished before arrival, reached goals whose frontier remained
+        # revealed, aborts without a path on the map, turn looks, retries on a map change.
+        self._vanished, self._revealed = AreaCounts(), AreaCounts()
+        self._aborted_areas, self._turns, self._changed = AreaCounts(), AreaCounts(), AreaCounts()
         self.reset()
 
     def reset(self, clear_blacklist: bool = False) -> None:
@@ -92,6 +87,8 @@ class GoalManager:
         self._arrived_stamp_ns = 0
         self._nav_succeeded = False
         self._outcome_reason = ""
+        self._yaw: float | None = None      # the robot's heading at this decision
+        self._unreached = False             # frontiers left without a path or blacklisted
         self._aborted: Goal | None = None   # aborted by the navigator, judged next decision
         self._empty_ticks = 0
         self._goal_cells_xy: npt.NDArray[np.float64] | None = None
@@ -100,14 +97,17 @@ class GoalManager:
         self.start_xy_m: tuple[float, float] | None = None
         self._start_yaw = 0.0
         if clear_blacklist:
-            self._clear_blacklist()
+            self._bl.clear()
             self._vanished.clear()
             self._revealed.clear()
             self._aborted_areas.clear()
+            self._turns.clear()
+            self._changed.clear()
 
-    def _clear_blacklist(self) -> None:
-        self._blacklist.clear()
-        self._blacklist_version += 1
+    @property
+    def blacklist_added(self) -> int:
+        """Entries ever added to the blacklist (callers count new ones by difference)."""
+        return self._bl.added
 
     def restart_timers(self, now_s: float) -> None:
         """Restart the progress and arrival timers at ``now_s`` (after a clock jump)."""
@@ -117,19 +117,27 @@ class GoalManager:
     def set_params(self, params: SelectionParams) -> None:
         """Apply new parameters (the blacklist keeps its newest entries)."""
         self.params = params
-        self._blacklist = deque(self._blacklist, maxlen=params.blacklist_max)
-        self._blacklist_version += 1
+        self._bl.resize(params.blacklist_max)
 
     @property
     def blacklist(self) -> tuple[tuple[float, float], ...]:
         """Blacklisted goal positions (x, y) in metres, oldest first."""
-        return tuple(self._blacklist)
+        return tuple(self._bl)
 
     def add_to_blacklist(self, xy_m: tuple[float, float]) -> None:
         """Blacklist a position (e.g. after the navigator reported a failure)."""
-        self._blacklist.append((float(xy_m[0]), float(xy_m[1])))
-        self.blacklist_added += 1
-        self._blacklist_version += 1
+        self._bl.add(xy_m)
+
+    def retry_changed(self, grid: GridMap, occupied_threshold: int) -> int:
+        """Unblacklist the goals near which the map changed by ``retry_change_m2``
+        (:meth:`.blacklist.Blacklist.changed`), ``change_retries`` times per area at most:
+        their frontiers are candidates again. Returns how many."""
+        p = self.params
+        if p.retry_change_m2 <= 0 or p.change_retries < 1 or not len(self._bl):
+            return 0
+        cells = max(1, round(p.retry_change_m2 / grid.resolution_m ** 2))
+        return self._bl.drop_changed(grid, (p.flicker_radius_m, occupied_threshold, cells),
+                                     self._changed, p.change_retries)
 
     def abandon_goal(self, blacklist: bool = True) -> None:
         """Drop the current goal (blacklisting it unless told not to)."""
@@ -145,9 +153,9 @@ class GoalManager:
         at a later :meth:`step`, on a map newer than the arrival's and stamped at or after
         it, or after ``arrival_wait_s``; a return-to-start goal ends exploration there);
         ABORTED drops the goal and leaves it to :meth:`judge_aborted` at the next
-        decision; REJECTED and CANCELED (by someone else) blacklist the goal at once. Either way the next
+        decision; REJECTED and CANCELED (by someone else) blacklist it at once, so the next
         :meth:`step` picks another frontier instead of waiting ``progress_timeout_s``.
-        CANCELED_BY_US drops the goal without blacklisting it.
+        CANCELED_BY_US, and any other end of a turn look, drop the goal unblacklisted.
 
         Parameters
         ----------
@@ -156,10 +164,7 @@ class GoalManager:
             The goal the outcome belongs to; an outcome for another goal (an older one
             that the navigator finished late) is ignored. None: the current goal.
 
-        Returns
-        -------
-        bool
-            True when the outcome was applied to the current goal.
+        Returns ``True`` when the outcome was applied to the current goal.
         """
         goal = self.goal
         if goal is None or not isinstance(outcome, NavOutcome):
@@ -170,9 +175,11 @@ class GoalManager:
         if outcome is NavOutcome.SUCCEEDED:
             self._nav_succeeded = True
             return True
-        if outcome is NavOutcome.CANCELED_BY_US:
+        if outcome is NavOutcome.CANCELED_BY_US or goal.is_turn:
+            # a turn the navigator could not make has no frontier to blacklist
             self.goal = None
-            self._outcome_reason = "goal canceled by us"
+            self._outcome_reason = ("goal canceled by us" if not goal.is_turn else
+                                    f"navigation {outcome.value} turning in place")
             return True
         if goal.is_return:
             self.goal = None
@@ -236,36 +243,15 @@ class GoalManager:
         self.start_xy_m = (float(xy_m[0]), float(xy_m[1]))
         self._start_yaw = float(yaw_rad)
 
-    def _note_vanished(self, xy_m: tuple[float, float]) -> bool:
-        """Count a goal whose frontier vanished before arrival; True when its area reached
-        ``flicker_vanish_count`` (its goal points are then blacklisted)."""
-        return self._note_area(self._vanished, xy_m, self.params.flicker_vanish_count)
-
-    def _note_revealed(self, xy_m: tuple[float, float]) -> bool:
-        """Count a reached goal whose frontier remains with its cells revealed; True when
-        its area reached ``revealed_arrivals_max`` (its goal points are then
-        blacklisted)."""
-        return self._note_area(self._revealed, xy_m, self.params.revealed_arrivals_max)
-
-    def _note_area(self, areas: list[tuple[list[int], list[tuple[float, float]]]],
-                   xy_m: tuple[float, float], limit: int) -> bool:
-        """Count an event at ``xy_m`` in the area (within ``flicker_radius_m`` of its
-        first point) it falls in; True, with the area's points blacklisted, when the
-        area's count reached ``limit`` (never when ``limit`` < 1)."""
+    def _note_area(self, areas: AreaCounts, xy_m: tuple[float, float], limit: int) -> bool:
+        """Count an event at ``xy_m`` in its area (within ``flicker_radius_m`` of the
+        area's first point): vanished frontiers (``flicker_vanish_count``), revealed
+        arrivals (``revealed_arrivals_max``), aborts (``abort_retries``). True, with the
+        area's points blacklisted, when its count reached ``limit`` (never when < 1)."""
         if limit < 1:
             return False
-        x, y = float(xy_m[0]), float(xy_m[1])
-        for count, pts in areas:
-            if math.hypot(x - pts[0][0], y - pts[0][1]) <= self.params.flicker_radius_m:
-                count[0] += 1
-                pts.append((x, y))
-                del pts[1:-_AREA_POINTS]
-                break
-        else:
-            count, pts = [1], [(x, y)]
-            areas.append((count, pts))
-            del areas[:-_AREAS_KEPT]
-        if count[0] < limit:
+        count, pts = areas.note(xy_m, self.params.flicker_radius_m)
+        if count < limit:
             return False
         for pt in pts:
             self.add_to_blacklist(pt)
@@ -274,40 +260,29 @@ class GoalManager:
     def aborted_near(self, xy_m: tuple[float, float]) -> bool:
         """True when the navigator aborted a goal the map had no path to either within
         ``flicker_radius_m`` of ``xy_m`` (see :meth:`judge_aborted`)."""
-        r = self.params.flicker_radius_m
-        return any(math.hypot(xy_m[0] - pts[0][0], xy_m[1] - pts[0][1]) <= r
-                   for _, pts in self._aborted_areas)
+        return self._aborted_areas.count_near(xy_m, self.params.flicker_radius_m) > 0
 
     def excluded(self, frontiers: Sequence[Frontier]) -> npt.NDArray[np.bool_]:
         """Frontiers whose cPoint lies within ``blacklist_radius_m`` of a blacklisted
         goal (not candidates now)."""
-        if not self._blacklist or not frontiers:
+        if not len(self._bl) or not frontiers:
             return np.zeros(len(frontiers), dtype=bool)
-        pts = np.asarray([f.point_xy_m for f in frontiers])
-        bl = np.asarray(self._blacklist)
-        d2 = ((pts[:, None, :] - bl[None, :, :]) ** 2).sum(axis=2)
-        return (d2 <= self.params.blacklist_radius_m ** 2).any(axis=1)
+        return self._bl.excluded(np.asarray([f.point_xy_m for f in frontiers]),
+                                 self.params.blacklist_radius_m)
 
     def goal_frontier(self, grid: GridMap, frontiers: Sequence[Frontier]) -> int | None:
         """Index of the frontier owning the current goal (a cell within
         ``frontier_match_radius_m`` + the goal's gap to its frontier), None if none."""
-        if self.goal is None or self.goal.is_return:
+        if self.goal is None or self.goal.is_return or self.goal.is_turn:
             return None
         return self._matching(grid, frontiers)
 
     def _matching(self, grid: GridMap, frontiers: Sequence[Frontier]) -> int | None:
         """Index of the frontier owning the current goal (closest cell within radius)."""
-        if self.goal is None or not frontiers:
+        if self.goal is None:
             return None
-        gx, gy = self.goal.xy_m
-        best, best_d = None, math.inf
-        for i, f in enumerate(frontiers):
-            x, y = grid.cells_to_world(f.cells[:, 0], f.cells[:, 1])
-            d = float(np.min(np.hypot(x - gx, y - gy)))
-            if d < best_d:
-                best, best_d = i, d
-        radius = self.params.frontier_match_radius_m + self.goal.frontier_gap_m
-        return best if best_d <= radius else None
+        return goal_frontier_index(self.goal, grid, frontiers,
+                                   self.params.frontier_match_radius_m)
 
     def _remember_cells(self, grid: GridMap, f: Frontier) -> None:
         """Keep the (world) positions of the current goal's frontier cells."""
@@ -317,14 +292,7 @@ class GoalManager:
     def _still_unknown(self, grid: GridMap) -> float:
         """Share of the goal frontier's last cells that are still unknown in ``grid``
         (a frontier that vanished with its cells unexplored was not cleared by sensing)."""
-        xy = self._goal_cells_xy
-        if xy is None or len(xy) == 0:
-            return 0.0
-        r, c = grid.world_to_cells(xy[:, 0], xy[:, 1])
-        inside = (r >= 0) & (r < grid.height) & (c >= 0) & (c < grid.width)
-        unknown = ~inside
-        unknown[inside] = grid.data[r[inside], c[inside]] < 0
-        return float(unknown.mean())
+        return unknown_share(grid, self._goal_cells_xy)
 
     def _new_goal(self, f: Frontier, cost: float, robot_xy_m: tuple[float, float],
                   now_s: float) -> Goal:
@@ -372,6 +340,7 @@ class GoalManager:
         """
         known = known if known is not None else StepInputs()
         labels, robot_rc, excluded = known.labels, known.robot_rc, known.excluded
+        self._yaw = known.robot_yaw_rad
         if self.done:
             reason, self._outcome_reason = self._outcome_reason or "exploration done", ""
             return StepResult(Action.DONE, None, reason)
@@ -379,7 +348,7 @@ class GoalManager:
             self.set_start(robot_xy_m, 0.0)
         if robot_rc is None:
             robot_rc = grid.world_to_cell(*robot_xy_m)
-        version = self._blacklist_version
+        version = self._bl.version
         if self._aborted is not None and dist_m is not None:
             self.judge_aborted(grid, frontiers, dist_m)
         # 1. progress and arrival on the current goal
@@ -391,11 +360,14 @@ class GoalManager:
             action = Action.KEEP if self.goal is not None else Action.WAIT
             return StepResult(action, self.goal, reason or "no path distances")
         # 2. candidates
-        if excluded is None or self._blacklist_version != version:
+        if excluded is None or self._bl.version != version:
             excluded = self.excluded(frontiers)
         sel = select_goal(frontiers, dist_m, labels, robot_rc, self.params, grid.resolution_m,
                           excluded, known.tour_cost_m)
         if sel.index is None:
+            # frontiers left without a path, or blacklisted: worth a turn look
+            self._unreached = bool(np.any(~np.isfinite(np.asarray(dist_m, dtype=np.float64))
+                                          | excluded))
             return self._no_candidate(now_s, robot_xy_m, grid, reason, sel)
         self._empty_ticks = 0
         # 3. keep or switch
@@ -411,6 +383,8 @@ class GoalManager:
         """
         if self.goal is None:
             return None, ""
+        if self.goal.is_turn:
+            return self._on_turn(now_s, grid)
         d_goal = math.hypot(robot_xy_m[0] - self.goal.xy_m[0],
                             robot_xy_m[1] - self.goal.xy_m[1])
         self._note_straight_progress(now_s, d_goal)
@@ -440,6 +414,24 @@ class GoalManager:
                 if math.isfinite(self._best_path_dist):
                     self._last_progress_s = now_s
                 self._best_path_dist = d_path
+
+    def _on_turn(self, now_s: float, grid: GridMap) -> tuple[StepResult | None, str]:
+        """A turn look ends once the navigator reports it done (or the heading is
+        there) and a map that shows it came (or ``arrival_wait_s`` passed); it is given
+        up, not blacklisted, after ``progress_timeout_s``. The decisions without a
+        frontier before DONE count again from its end."""
+        assert self.goal is not None
+        if self._nav_succeeded or turned(self.goal, self._yaw, TURN_DONE_RAD):
+            self._nav_succeeded = True
+            if self._waiting_for_map(now_s, grid):
+                return StepResult(Action.KEEP, self.goal,
+                                  "turned in place: waiting for the map to update"), ""
+            self.goal, self._arrived_s, self._empty_ticks = None, None, 0
+            return None, "turned in place"
+        if now_s - self._last_progress_s > self.params.progress_timeout_s:
+            self.goal, self._empty_ticks = None, 0
+            return None, "turn in place not done in time: given up"
+        return None, ""
 
     def _within_reach(self, d_goal: float) -> bool:
         """The goal counts as reached at ``goal_reached_tolerance_m`` (at ``handover_m``
@@ -492,7 +484,7 @@ class GoalManager:
                 or self._still_unknown(grid) >= p.reached_unknown_fraction):
             self.abandon_goal(blacklist=True)
             return "goal reached but its frontier remains: blacklisted"
-        if self._note_revealed(self.goal.xy_m):   # blacklists the area's goals
+        if self._note_area(self._revealed, self.goal.xy_m, p.revealed_arrivals_max):
             self.goal = None
             return (f"goal reached, its frontier's cells revealed "
                     f"{p.revealed_arrivals_max} times here and it remains: area blacklisted")
@@ -516,8 +508,9 @@ class GoalManager:
         ``done_confirmations`` ticks, return to start, retry the blacklist, then DONE."""
         p = self.params
         self._empty_ticks += 1
-        if self.goal is not None and self.goal.is_return:
-            return StepResult(Action.KEEP, self.goal, "returning to start", sel)
+        if self.goal is not None and (self.goal.is_return or self.goal.is_turn):
+            return StepResult(Action.KEEP, self.goal, "returning to start"
+                              if self.goal.is_return else "turning in place", sel)
         if self.goal is not None and self._still_unknown(grid) >= 0.5:
             # A thin frontier seen at a grazing angle (a doorway from the side) comes
             # and goes: its cells are still unknown, so drive on and look.
@@ -526,6 +519,13 @@ class GoalManager:
         self.goal = None
         if self._empty_ticks < p.done_confirmations:
             return StepResult(Action.WAIT, None, reason or "no reachable frontier", sel)
+        if (self._yaw is not None and self._unreached
+                and self._turns.count_near(robot_xy_m, p.flicker_radius_m) < p.turn_looks):
+            self._turns.note(robot_xy_m, p.flicker_radius_m)
+            self.goal = turn_goal(robot_xy_m, self._yaw, grid.world_to_cell(*robot_xy_m))
+            self._start_progress(self.goal, robot_xy_m, now_s)
+            return StepResult(Action.NEW_GOAL, self.goal, "no reachable frontier: turning in "
+                              "place, so that the map gains a scan from here", sel)
         if p.return_to_start and self.start_xy_m is not None:
             d0 = math.hypot(robot_xy_m[0] - self.start_xy_m[0],
                             robot_xy_m[1] - self.start_xy_m[1])
@@ -536,18 +536,18 @@ class GoalManager:
                 self._start_progress(self.goal, robot_xy_m, now_s)
                 return StepResult(Action.NEW_GOAL, self.goal,
                                   "no reachable frontier: returning to start", sel)
-        known = int(np.count_nonzero(grid.data >= 0)) if self._blacklist else 0
+        known = int(np.count_nonzero(grid.data >= 0)) if len(self._bl) else 0
         # the last retry revealed space: this one does not count
         free = (self._known_at_retry is not None and p.retry_reveal_m2 > 0
                 and (known - self._known_at_retry) * grid.resolution_m ** 2
                 >= p.retry_reveal_m2)
-        if self._blacklist and (free or self._retries_left > 0):
+        if len(self._bl) and (free or self._retries_left > 0):
             # The map changed since those goals failed (a doorway seen, a false
             # obstacle cleared): give the blacklisted frontiers another chance.
             if not free:
                 self._retries_left -= 1
             self._known_at_retry = known
-            self._clear_blacklist()
+            self._bl.clear()
             self._empty_ticks = 0
             return StepResult(Action.WAIT, None, "no reachable frontier: blacklist "
                               "cleared, retrying its frontiers", sel)
@@ -563,7 +563,7 @@ class GoalManager:
         best = sel.index
         assert best is not None
         best_cost = float(sel.costs[best])
-        if self.goal is not None and not self.goal.is_return:
+        if self.goal is not None and not (self.goal.is_return or self.goal.is_turn):
             cur = self._matching(grid, frontiers)
             if cur is not None:
                 self._remember_cells(grid, frontiers[cur])
@@ -578,7 +578,8 @@ class GoalManager:
             if cur is not None and not excluded[cur] and np.isfinite(sel.costs[cur]):
                 reason = reason or "a better frontier appeared"
             elif (cur is None and self._still_unknown(grid) >= 0.5
-                  and self._note_vanished(self.goal.xy_m)):
+                  and self._note_area(self._vanished, self.goal.xy_m,
+                                      p.flicker_vanish_count)):
                 reason = (f"goal frontier vanished {p.flicker_vanish_count} times here before "
                           "arrival (flickering): area blacklisted")
             elif cur is None:

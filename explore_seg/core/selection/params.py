@@ -134,12 +134,37 @@ class GoalParams:
         "robot's width but left wider than twice this gets an approach too. Lowering it "
         "opens more passages to a look; at or above the robot radius only speckle does",
         "m", default=0.15)
+    approach_keeps_objects: bool = field(default=True, metadata=param_meta(
+        "the relaxed map of approach goals keeps the object layer's obstacles. False: it "
+        "drops them, so a box that closes a passage (depth points of a wall mapped at a "
+        "drifted pose, a real table) gets an approach too: the robot drives up to it and "
+        "looks, and the navigator, which keeps the layer, decides whether to pass"))
+    retry_change_m2: float = non_negative(
+        "a blacklisted goal is dropped from the blacklist (its frontier a candidate again) "
+        "once the map's occupied plus unknown cells within flicker_radius_m of it changed "
+        "by this much since it was blacklisted: a doorway that later scans or a "
+        "loop-closure re-render opened, space seen; at most change_retries times per area "
+        "(flicker_radius_m). Raising it needs a bigger change; 0 = never", "m^2",
+        default=0.1)
+    change_retries: int = field(default=2, metadata=param_meta(
+        "retries of blacklisted goals on a map change (retry_change_m2) per area "
+        "(flicker_radius_m); 0 = none", range=(0, INT_MAX)))
+    turn_looks: int = field(default=2, metadata=param_meta(
+        "when frontiers without a path (or blacklisted) remain and none, nor a lookout or "
+        "approach, is selectable for done_confirmations decisions, turn in place by half a "
+        "turn this many times per "
+        "area (flicker_radius_m) before the blacklist retry and DONE: slam_toolbox adds a "
+        "scan only after 0.5 m or 0.5 rad of motion (minimum_travel_distance / _heading), "
+        "so a robot that stands still adds none, and the scans of a turn clear map noise "
+        "(speckle, ragged wall ends) that closes a passage next to it; 0 = no turns",
+        range=(0, INT_MAX)))
 
     def __post_init__(self) -> None:
         check_non_negative(self, ("hysteresis_margin", "progress_min_m",
                                   "goal_reached_tolerance_m", "frontier_match_radius_m",
                                   "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
-                                  "flicker_radius_m", "retry_reveal_m2", "approach_radius_m"))
+                                  "flicker_radius_m", "retry_reveal_m2", "approach_radius_m",
+                                  "retry_change_m2"))
         if not (math.isfinite(self.progress_timeout_s) and self.progress_timeout_s > 0):
             raise ValueError(f"progress_timeout_s must be finite and > 0, "
                              f"got {self.progress_timeout_s}")
@@ -156,6 +181,8 @@ class GoalParams:
             raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
         if self.speckle_max_cells < 0:
             raise ValueError(f"speckle_max_cells must be >= 0, got {self.speckle_max_cells}")
+        if self.turn_looks < 0:
+            raise ValueError(f"turn_looks must be >= 0, got {self.turn_looks}")
 
 
 @dataclass(frozen=True)
