@@ -181,8 +181,9 @@ class GoalParams:
             raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
         if self.speckle_max_cells < 0:
             raise ValueError(f"speckle_max_cells must be >= 0, got {self.speckle_max_cells}")
-        if self.turn_looks < 0:
-            raise ValueError(f"turn_looks must be >= 0, got {self.turn_looks}")
+        for name in ("turn_looks", "change_retries"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
 
 
 @dataclass(frozen=True)
