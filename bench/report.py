@@ -687,7 +687,10 @@ def _count(v: Any) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description="Plots and BENCHMARKS.md from a bench folder.")
     ap.add_argument("out", help="folder written by bench/run_bench.py")
-    ap.add_argument("--md", default=str(Path(__file__).resolve().parents[1] / "BENCHMARKS.md"))
+    ap.add_argument("--md", default=None,
+                    help="where to write the report; default: the repository's BENCHMARKS.md "
+                         "for the matrix's own folder (out/bench), OUT/BENCHMARKS.md for any "
+                         "other")
     ap.add_argument("--allow-mixed", action="store_true",
                     help="report runs of several code versions, every row marked with its "
                          "versions (without it they are refused)")
@@ -701,7 +704,8 @@ def main(argv: list[str] | None = None) -> int:
                          "under mapping error; repeatable")
     a = ap.parse_args(argv)
     try:
-        path = write_all(Path(a.out), Path(a.md) if a.md else None, None,
+        md = store.default_report_path(Path(a.out)) if a.md is None else a.md
+        path = write_all(Path(a.out), Path(md) if md else None, None,
                          allow_mixed=a.allow_mixed,
                          certificates=[Path(c) for c in a.certificate],
                          noise_dirs=noise_table.parse_dirs(a.mapping_noise_dir))

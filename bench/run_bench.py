@@ -122,8 +122,10 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                     help="with --executor ray: the Ray cluster to join ('auto', HOST:6379 "
                          "or ray://HOST:10001; default: start a local Ray)")
     ap.add_argument("--out", default="out/bench", help="output folder")
-    ap.add_argument("--md", default=str(ROOT / "BENCHMARKS.md"),
-                    help="where to write BENCHMARKS.md ('' = not at all)")
+    ap.add_argument("--md", default=None,
+                    help="where to write the report ('' = not at all); default: the "
+                         "repository's BENCHMARKS.md for the matrix's own folder (out/bench), "
+                         "OUT/BENCHMARKS.md for any other --out")
     ap.add_argument("--seed0", type=int, default=0, help="seed of the first run")
     ap.add_argument("--max-sim-time", type=float, default=0.0,
                     help=f"sim time limit per run in s (0 = {TIME_PER_AREA_S} s per m^2 "
@@ -172,6 +174,8 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
                          "with the same settings (e.g. a part run on another machine) to "
                          "--out; its parts are listed with --out's")
     a = ap.parse_args(argv)
+    if a.md is None:
+        a.md = str(store.default_report_path(Path(a.out)))
     if a.address and a.executor != "ray":
         ap.error("--address needs --executor ray")
     if a.executor == "ray" and importlib.util.find_spec("ray") is None:

@@ -42,6 +42,15 @@ def code_version() -> str:
     return (rev or "unknown") + ("+modified" if dirty and rev else "")
 
 
+def default_report_path(out: Path) -> Path:
+    """The repository's BENCHMARKS.md when ``out`` is the matrix's folder (``out/bench``
+    of the repository), else ``out/BENCHMARKS.md``: a small or experimental run never
+    overwrites the committed report."""
+    if out.resolve() == (ROOT / "out" / "bench").resolve():
+        return ROOT / "BENCHMARKS.md"
+    return out / "BENCHMARKS.md"
+
+
 def read_json(path: Path) -> dict[str, Any]:
     """A JSON object file, {} when absent or unreadable."""
     try:

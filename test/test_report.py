@@ -364,3 +364,11 @@ def test_full_matrix_report_with_two_noise_profiles_fits_in_400_lines(tmp_path):
     lines = md.read_text().splitlines()
     assert len(lines) <= 400, len(lines)
     assert sum(1 for ln in lines if ln.startswith("| routed | harsh |")) == 1
+
+
+def test_a_run_outside_the_matrix_folder_never_overwrites_the_committed_report(tmp_path):
+    assert store.default_report_path(ROOT / "out" / "bench") == ROOT / "BENCHMARKS.md"
+    assert store.default_report_path(tmp_path / "x") == tmp_path / "x" / "BENCHMARKS.md"
+    assert run_bench._parse(["--out", str(tmp_path / "x")]).md == str(tmp_path / "x" /
+                                                                       "BENCHMARKS.md")
+    assert run_bench._parse(["--out", str(tmp_path / "x"), "--md", ""]).md == ""
