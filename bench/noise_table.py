@@ -57,7 +57,8 @@ def noise_lines(base: list[dict[str, Any]], profiles: list[tuple[str, list[dict[
                                                                   str]],
                 strategies: list[str], t_or_end: Callable[[dict[str, Any], str],
                                                           tuple[float, bool]],
-                bootstrap: Callable[[list[float]], tuple[float, float]]) -> list[str]:
+                bootstrap: Callable[[list[float]], tuple[float, float]],
+                median_time: Callable[[list[dict[str, Any]], str], str]) -> list[str]:
     """The section's lines: a row per strategy and profile (``none`` = ``base``).
 
     Parameters
@@ -68,9 +69,10 @@ def noise_lines(base: list[dict[str, Any]], profiles: list[tuple[str, list[dict[
         Each other profile's runs and the code version they ran on.
     strategies : list of str
         Row order; strategies without runs in a profile are left out of it.
-    t_or_end, bootstrap
+    t_or_end, bootstrap, median_time
         The report's time-to-milestone (a run that never got there: its end time and
-        True) and bootstrap interval, so the figures read as the report's others.
+        True), bootstrap interval and median time cell, so the figures read as the
+        report's others.
     """
     ref = {(r["world"], r["strategy"], int(r["seed"])): r for r in base}
     head = ("| strategy | mapping error | worlds | runs | complete | done < "
@@ -83,13 +85,11 @@ def noise_lines(base: list[dict[str, Any]], profiles: list[tuple[str, list[dict[
             if not mine:
                 continue
             n = len(mine)
-            t95 = [t_or_end(r, "95") for r in mine]
-            med = float(np.median([t if not never else np.inf for t, never in t95]))
             line = (f"| {st} | {profile} | {len({r['world'] for r in mine})} | {n} | "
                     f"{sum(1 for r in mine if r['completed'])}/{n} | "
                     f"{sum(1 for r in mine if early_done(r))} | "
                     f"{sum(int(r.get('collisions') or 0) for r in mine)} | "
-                    + (f"{med:.0f}" if np.isfinite(med) else "never") + " |")
+                    f"{median_time(mine, '95')} |")
             line += " " + _ratio_cell(mine, ref, profile, t_or_end, bootstrap) + " |"
             lines.append(line)
     codes = ", ".join(f"`{p}` on `{c}`" for p, _, c in profiles)

@@ -580,7 +580,8 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
               "below that coverage; *T95 ÷ no error* = median over the seeds of the per-seed "
               "ratio of T95 to the same strategy's run without mapping error (same world, "
               "same seeded start), 95 % bootstrap interval, † and n as above.", ""]
-        L += noise_table.noise_lines(runs, noise, strategies, _t_or_end, bootstrap_ci) + [""]
+        L += noise_table.noise_lines(runs, noise, strategies, _t_or_end, bootstrap_ci,
+                                        _median_time) + [""]
     L += ["## Results per world", ""]
     for w in worlds:
         a = area.get(w)
