@@ -11,7 +11,7 @@ An arm is ``NAME`` (no override: today's defaults) or ``NAME:KEY=VALUE[;KEY=VALU
 where KEY is
 
 * ``explorer.SECTION.FIELD``: a field of :class:`ExplorerParams` (SECTION frontier,
-  selection, segmentation, objects or rrt), on top of ``config/explorer.yaml``;
+  selection, segmentation, objects, rrt or overlay), on top of ``config/explorer.yaml``;
 * ``sim.FIELD``: a :class:`SimParams` field (e.g. ``sim.nav_inflation_soft_margin_m``);
 * ``lockstep.FIELD``: a :class:`LockstepParams` field (e.g. ``lockstep.nav_feedback``).
 

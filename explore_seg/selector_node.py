@@ -8,7 +8,9 @@ from ``regions``, nearest, explore_lite, or rrt_exploration, whose candidates co
 RRTs) and keeps, switches, blacklists and finishes. Its parameters:
 :class:`~explore_seg.core.selection.SelectorNodeParams`, the detection parameters
 :class:`~explore_seg.core.frontiers.FrontierParams` under ``frontier.`` and the RRT
-detector's :class:`~explore_seg.core.rrt.RrtParams` under ``rrt.``.
+detector's :class:`~explore_seg.core.rrt.RrtParams` under ``rrt.``. With ``scan_overlay.enabled``
+it subscribes ``scan`` too: the scans since the last maps fill the map's unknown cells for
+the decisions (:mod:`explore_seg.core.scan_overlay`, :mod:`explore_seg.scan_input`).
 
 One timer ``_tick`` on the ROS clock (``rate_hz``) runs the state machine::
 
@@ -33,7 +35,7 @@ import numpy as np
 from geometry_msgs.msg import Point, PoseStamped
 from nav_msgs.msg import MapMetaData, OccupancyGrid
 from rclpy.node import Node
-from sensor_msgs.msg import Image
+from sensor_msgs.msg import Image, LaserScan
 from std_msgs.msg import Bool, ColorRGBA, Float64MultiArray, MultiArrayDimension
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
@@ -45,6 +47,7 @@ from explore_seg.core.grid import GridMap, resample_array
 from explore_seg.core.limits import InputLimits
 from explore_seg.core.pose_fusion import PoseFusionParams
 from explore_seg.core.rrt import RrtParams
+from explore_seg.core.scan_overlay import ScanOverlayParams
 from explore_seg.core.selection import Action, Goal, NavOutcome, SelectorNodeParams
 from explore_seg.done_gate import DoneGate
 from explore_seg.frontier_msgs import FrontierPublisher
@@ -53,7 +56,8 @@ from explore_seg.nav_client import NavClient
 from explore_seg.node_util import WarnThrottle, failsafe, run
 from explore_seg.params import ParamBinding
 from explore_seg.pose_input import PoseHooks, PoseInput
-from explore_seg.qos import MAP_QOS, POSE_QOS, RELIABLE_QOS, map_qos
+from explore_seg.qos import MAP_QOS, POSE_QOS, RELIABLE_QOS, SENSOR_QOS, map_qos
+from explore_seg.scan_input import ScanInput
 from explore_seg.time_guard import StallWatchdog, TimeGuard
 
 #: Seconds between repeated warnings of one kind.
@@ -86,8 +90,9 @@ class TargetSelectorNode(Node):
         self._lp = ParamBinding(self, InputLimits(), prefix="input.")
         self._pfp = ParamBinding(self, PoseFusionParams(), prefix="pose_fusion.")
         self._rp = ParamBinding(self, RrtParams(), prefix="rrt.")
+        self._op = ParamBinding(self, ScanOverlayParams(), prefix="scan_overlay.")
         p = self._p.params
-        self._explorer = Explorer(self._fp.params, p, self._rp.params)
+        self._explorer = Explorer(self._fp.params, p, self._rp.params, self._op.params)
         self._grid: GridMap | None = None
         self._layer: GridMap | None = None
         self._regions_img: Image | None = None
@@ -119,6 +124,8 @@ class TargetSelectorNode(Node):
         self.create_subscription(OccupancyGrid, "object_costmap", self._on_layer, qos)
         self.create_subscription(Image, "regions", self._on_regions, qos)
         self.create_subscription(MapMetaData, "regions/info", self._on_regions_info, qos)
+        self._scans = ScanInput(lambda: self._op.params, self._explorer.add_scan, self._warn)
+        self.create_subscription(LaserScan, "scan", self._scans.on_scan, SENSOR_QOS)
         # The pose stream is unsubscribed while exploration_done is true (idle after done;
         # ~/start or ~/resume publish false, which subscribes again).
         self._done_gate = DoneGate(self, "pose subscription", lambda: [], lambda: True)
@@ -139,6 +146,7 @@ class TargetSelectorNode(Node):
         self._p.on_change(self._params_changed)
         self._fp.on_change(lambda old, new: self._explorer.set_params(frontier=new))
         self._rp.on_change(lambda old, new: self._explorer.set_params(rrt=new))
+        self._op.on_change(lambda old, new: self._explorer.set_params(overlay=new))
         self._publish_done(False)
 
     # ---------------------------------------------------------------- helpers
@@ -219,6 +227,7 @@ class TargetSelectorNode(Node):
         self._pose_stamp_ns = t_ns
         self._pose = pose
         self._pose_time_ns = self.get_clock().now().nanoseconds
+        self._scans.note_pose(t_ns, pose)
 
     # --------------------------------------------------------------- services
     def _srv_start(self, request: Trigger.Request, response: Trigger.Response
@@ -317,6 +326,7 @@ class TargetSelectorNode(Node):
         if jump.backwards:
             self._pose = None
             self._pose_in.clear()
+            self._scans.clear()
         self._explorer.clock_jumped(now_ns * 1e-9)
         self._warn("clock_jump", jump.describe() + "; goal timers restarted")
 

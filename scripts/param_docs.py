@@ -37,7 +37,9 @@ NODE_PARAMS: dict[str, list[tuple[str, str]]] = {
                        ("detector.", "explore_seg.core.detector:DetectorParams"), _LIMITS,
                        _POSE_FUSION],
     "target_selector": [("", "explore_seg.core.selection:SelectorNodeParams"),
-                        ("rrt.", "explore_seg.core.rrt:RrtParams"), _LIMITS, _POSE_FUSION],
+                        ("rrt.", "explore_seg.core.rrt:RrtParams"),
+                        ("scan_overlay.", "explore_seg.core.scan_overlay:ScanOverlayParams"),
+                        _LIMITS, _POSE_FUSION],
     "sim_bridge": [("", "sim_bridge.engine:SimParams")],
 }
 #: docs/parameters.md heading of a NODE_PARAMS key that is not a node.

@@ -13,6 +13,7 @@ from explore_seg.core.frontiers import FrontierParams
 from explore_seg.core.objects import ObjectCostmapNodeParams
 from explore_seg.core.param_files import dataclass_from_values, load_node_params
 from explore_seg.core.rrt import RrtParams
+from explore_seg.core.scan_overlay import ScanOverlayParams
 from explore_seg.core.segmentation import SegmentationNodeParams
 from explore_seg.core.selection import SelectorNodeParams
 
@@ -26,6 +27,7 @@ class ExplorerParams:
     segmentation: SegmentationNodeParams = field(default_factory=SegmentationNodeParams)
     objects: ObjectCostmapNodeParams = field(default_factory=ObjectCostmapNodeParams)
     rrt: RrtParams = field(default_factory=RrtParams)
+    overlay: ScanOverlayParams = field(default_factory=ScanOverlayParams)
 
 
 #: ExplorerParams field -> (node whose section sets it, parameter prefix). The frontier
@@ -34,7 +36,8 @@ _SECTIONS = {"frontier": ("target_selector", "frontier."),
              "selection": ("target_selector", ""),
              "segmentation": ("segmentation", ""),
              "objects": ("object_costmap", ""),
-             "rrt": ("target_selector", "rrt.")}
+             "rrt": ("target_selector", "rrt."),
+             "overlay": ("target_selector", "scan_overlay.")}
 
 
 def default_explorer_params_file() -> Path | None:

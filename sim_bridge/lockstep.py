@@ -321,8 +321,14 @@ class _LockstepRun:
         if ground_truth is None and sim.compute_coverage:
             ground_truth = worlds.ground_truth(run_world, resolution_m=sim.map_resolution_m)
         self.engine = engine = SimEngine(run_world, sim, ground_truth=ground_truth)
+        # the explorer knows where the simulated robot's lidar sits (as its launch file would)
         self.explorer = Explorer(config.frontier, config.selection,
-                                 replace(config.explorer.rrt, seed=int(seed) & 0x7FFFFFFF))
+                                 replace(config.explorer.rrt, seed=int(seed) & 0x7FFFFFFF),
+                                 replace(config.explorer.overlay,
+                                         lidar_x_m=sim.lidar_mount_x_m, lidar_y_m=0.0,
+                                         lidar_yaw_rad=0.0))
+        g = engine.scan_geometry
+        self.scan_angles = g.angle_min_rad + g.angle_increment_rad * np.arange(g.num_beams)
         self.segmenter = (IncrementalSegmenter(config.explorer.segmentation)
                           if spec.use_regions else None)
         self.objects = (ObjectPipeline(engine, config.explorer.objects, seed, lockstep)
@@ -471,6 +477,10 @@ class _LockstepRun:
         ended = self.follower.poll(self.engine.nav_status) if self.follower is not None else None
         if ended is not None:
             self.explorer.report_navigation(*ended)
+        g = self.engine.scan_geometry
+        for scan in self.engine.drain_scans():
+            self.explorer.add_scan(scan.stamp_s, scan.map_pose or scan.pose, self.scan_angles,
+                                   scan.ranges, g.range_max_m, g.range_min_m)
         step = self.last_step = self.explorer.step(now, grid, self.engine.slam_pose, self.layer,
                                                    labels)
         timings, res = self.result.timings_ms, self.result

@@ -53,6 +53,7 @@ from explore_seg.core.frontiers import (Frontier, FrontierCache, FrontierParams,
                                         traversable_mask)
 from explore_seg.core.grid import GridMap, metres_to_cells
 from explore_seg.core.rrt import RrtFrontierDetector, RrtParams
+from explore_seg.core.scan_overlay import ScanOverlay, ScanOverlayParams
 from explore_seg.core.selection import (Action, Goal, GoalManager, NavOutcome, PathGraphs,
                                         Selection, SelectionParams, StepInputs)
 from explore_seg.core.selection.blockage import RelaxedMap, approaches
@@ -169,11 +170,17 @@ class Explorer:
         Strategy and goal handling.
     rrt : RrtParams
         The RRT frontier detector's (used by the RRT strategies only).
+    overlay : ScanOverlayParams, optional
+        The scans laid over the map's unknown cells (:meth:`add_scan`); None: decisions
+        on the map alone.
     """
 
     def __init__(self, frontier: FrontierParams = FrontierParams(),
                  selection: SelectionParams = SelectionParams(),
-                 rrt: RrtParams = RrtParams()) -> None:
+                 rrt: RrtParams = RrtParams(),
+                 overlay: ScanOverlayParams | None = None) -> None:
+        self._overlay = (ScanOverlay(overlay) if overlay is not None and overlay.enabled
+                         else None)
         self._frontier_params = frontier
         self._selection_params = selection
         self._rrt_params = rrt
@@ -227,9 +234,13 @@ class Explorer:
 
     def set_params(self, frontier: FrontierParams | None = None,
                    selection: SelectionParams | None = None,
-                   rrt: RrtParams | None = None) -> None:
+                   rrt: RrtParams | None = None,
+                   overlay: ScanOverlayParams | None = None) -> None:
         """Apply new parameters; frontiers and paths are recomputed at the next step (new
-        RRT or detection parameters restart the RRT detector: new trees, no points)."""
+        RRT or detection parameters restart the RRT detector: new trees, no points; new
+        overlay parameters start an empty overlay)."""
+        if overlay is not None:
+            self._overlay = ScanOverlay(overlay) if overlay.enabled else None
         if frontier is not None:
             self._frontier_params = frontier
             self._rrt = None
@@ -258,6 +269,8 @@ class Explorer:
         ``routed`` tour forgets its kept gains and path lengths."""
         self.manager.reset(clear_blacklist=clear_blacklist)
         self._fcache.reset()
+        if self._overlay is not None:
+            self._overlay.reset()
         if self._planner is not None:
             self._planner.reset()
 
@@ -291,6 +304,8 @@ class Explorer:
         reference; the ``routed`` tour forgets its kept path lengths and gains (a sim
         reset comes with a new map)."""
         self.manager.restart_timers(now_s)
+        if self._overlay is not None:
+            self._overlay.reset()
         if self._planner is not None:
             self._planner.reset()
 
@@ -345,17 +360,13 @@ class Explorer:
         """
         warnings: list[tuple[str, str]] = []
         t0 = time.perf_counter()
-        key = self._key
-        detected = key is None or not (_same_map(key[0], grid) and _same_map(key[1], layer))
+        # the map near blacklisted goals changed: their frontiers are candidates again
+        self.manager.retry_changed(grid, self._frontier_params.occupied_threshold)
+        grid = self._seen_map(grid, layer, pose)
         # The goal manager gets the map as given (its stamp tells a newer map); everything
         # map-derived gets the map the products were made from (identity caches hit).
         stamped = grid
-        if detected:
-            self._detect(grid, layer)
-        elif key is not None:
-            grid = key[0]
-        # the map near blacklisted goals changed: their frontiers are candidates again
-        self.manager.retry_changed(grid, self._frontier_params.occupied_threshold)
+        detected, grid = self._detected(grid, layer)
         x, y, yaw = (float(v) for v in pose)
         if self._strategy.candidates == "rrt":
             self._detect_rrt(grid, (x, y))
@@ -404,6 +415,47 @@ class Explorer:
                             robot_rc, detected, blacklisted, switched, tuple(warnings),
                             t1 - t0, time.perf_counter() - t1, tour,
                             planner.viewpoint_s + planner.tour_s if planner is not None else 0.0)
+
+    def add_scan(self, stamp_s: float, robot_pose: tuple[float, float, float],
+                 angles: npt.ArrayLike, ranges: npt.ArrayLike, range_max_m: float,
+                 range_min_m: float = 0.0) -> None:
+        """A lidar scan and the robot's map-frame pose when it was taken, for the next
+        steps' map (see :class:`~explore_seg.core.scan_overlay.ScanOverlay`; ignored
+        without an overlay). Raises ValueError on a malformed scan, changing nothing."""
+        if self._overlay is not None:
+            self._overlay.add_scan(stamp_s, robot_pose, angles, ranges, range_max_m,
+                                   range_min_m)
+
+    def _detected(self, grid: GridMap, layer: GridMap | None) -> tuple[bool, GridMap]:
+        """Detect on ``grid`` unless the products are of an equal map and layer; returns
+        whether it detected and the map the products belong to."""
+        key = self._key
+        if key is None or not (_same_map(key[0], grid) and _same_map(key[1], layer)):
+            self._detect(grid, layer)
+            return True, grid
+        return False, key[0]
+
+    def _seen_map(self, grid: GridMap, layer: GridMap | None,
+                  pose: tuple[float, float, float]) -> GridMap:
+        """The map with the overlay's scans when they leave a selectable frontier, else
+        the map alone: the SLAM map, not the recent scans, decides that nothing is left
+        (a view that never became a keyframe is not in the map the user keeps)."""
+        if self._overlay is None:
+            return grid
+        seen = self._overlay.apply(grid)
+        if seen is grid:
+            return grid
+        self._detected(seen, layer)
+        robot_rc = seen.world_to_cell(float(pose[0]), float(pose[1]))
+        if not seen.in_bounds(*robot_rc) or self._graph is None:
+            return grid
+        radius = metres_to_cells(self._selection_params.start_search_radius_m,
+                                 seen.resolution_m)
+        start = self._graph.graph.nearest_passable(robot_rc, radius)
+        dist, excluded = self._distances(start, robot_rc, self._frontiers)
+        if dist is None or excluded is None or not (np.isfinite(dist) & ~excluded).any():
+            return grid
+        return seen
 
     def _any_selectable(self, frontiers: list[Frontier], dist: npt.NDArray[np.float64],
                         excluded: npt.NDArray[np.bool_]) -> bool:
