@@ -522,7 +522,7 @@ def xyz_from_cloud(points: np.ndarray, drop_nan: bool = True) -> npt.NDArray[np.
 
 
 def scan_ranges(msg: LaserScan) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
-    """(angles, ranges) of a scan; ranges outside [range_min, range_max] or NaN become inf."""
+    """(angles, ranges) of a scan; NaN or below range_min: NaN, above range_max: inf."""
     r = np.asarray(msg.ranges, dtype=np.float64)
     if r.size == 0:
         raise ValueError("scan has no ranges")
@@ -531,8 +531,7 @@ def scan_ranges(msg: LaserScan) -> tuple[npt.NDArray[np.float64], npt.NDArray[np
         raise ValueError(f"scan angle_min/increment must be finite and increment != 0, "
                          f"got {msg.angle_min}/{inc}")
     angles = float(msg.angle_min) + inc * np.arange(r.size)
-    bad = ~np.isfinite(r) | (r < msg.range_min) | (r > msg.range_max)
-    r = np.where(bad, np.inf, r)
+    r = np.where(np.isnan(r) | (r < msg.range_min), np.nan, np.where(r > msg.range_max, np.inf, r))
     return angles, r
 
 

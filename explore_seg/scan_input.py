@@ -81,8 +81,7 @@ class ScanInput:
             return
         try:
             t_ns = convert.checked_stamp_ns(msg.header.stamp, "scan")
-            angles, _ = convert.scan_ranges(msg)
-            ranges = np.asarray(msg.ranges, dtype=np.float64)
+            angles, ranges = convert.scan_ranges(msg)
         except ValueError as err:
             self._drop("scan", f"dropped scan: {err}")
             return

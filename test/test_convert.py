@@ -257,6 +257,15 @@ def test_scan_to_points_in_map_frame_drops_invalid():
     np.testing.assert_allclose(pts, [[2.0, 2.0], [-1.0, 2.0]], atol=1e-6)
 
 
+def test_scan_ranges_tell_no_reading_from_no_return():
+    msg = convert.scan_to_msg([1.0, float("nan"), 10.0, 0.0, float("inf")], 0.0, 0.1, 0.12, 5.0)
+    angles, r = convert.scan_ranges(msg)
+    np.testing.assert_allclose(angles, [0.0, 0.1, 0.2, 0.3, 0.4], atol=1e-6)
+    # a driver's 0 (below range_min) is no reading, as NaN; beyond range_max: no return
+    assert r[0] == 1.0 and np.isnan(r[1]) and np.isnan(r[3])
+    assert np.isposinf(r[2]) and np.isposinf(r[4])
+
+
 def test_scan_errors():
     msg = LaserScan()
     with pytest.raises(ValueError, match="no ranges"):
