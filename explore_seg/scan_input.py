@@ -3,7 +3,9 @@ for the decision core's scan overlay (:class:`~explore_seg.core.scan_overlay.Sca
 
 There is no tf here: the robot's map-frame poses come from the node's pose input, and the
 scan's stamp picks the nearest of the recent ones (at most ``scan_overlay.max_pose_age_s``
-away); the scanner's mount on the robot is ``scan_overlay.lidar_*``. A scan without such a
+away); the scanner's mount on the robot is ``scan_overlay.lidar_*``. A scan that arrives
+before any pose of its time or later (a driver publishing the scan before the odometry of
+the same instant) waits for one, up to :data:`MAX_WAITING` scans. A scan without such a
 pose, or a malformed one, is dropped with a throttled warning naming what was expected.
 """
 
@@ -21,6 +23,8 @@ from explore_seg.core.scan_overlay import ScanOverlayParams
 
 #: Robot poses kept for matching scan stamps (at 50 Hz odometry: 4 s).
 POSE_HISTORY = 200
+#: Scans kept waiting for a pose of their time (at 10 Hz: 1 s).
+MAX_WAITING = 10
 
 #: (stamp_s, robot pose, angles, ranges, range_max_m, range_min_m) -> None
 ScanSink = Callable[[float, tuple[float, float, float], np.ndarray, np.ndarray, float, float],
@@ -47,21 +51,25 @@ class ScanInput:
         self._warn = warn
         self._stamps: deque[int] = deque(maxlen=POSE_HISTORY)
         self._poses: deque[tuple[float, float, float]] = deque(maxlen=POSE_HISTORY)
+        self._waiting: deque[tuple[int, np.ndarray, np.ndarray, float, float]] = deque()
         self.used = 0
         self.dropped = 0
 
     def clear(self) -> None:
-        """Forget the poses (time went back)."""
+        """Forget the poses and the waiting scans (time went back)."""
         self._stamps.clear()
         self._poses.clear()
+        self._waiting.clear()
 
     def note_pose(self, t_ns: int, pose: tuple[float, float, float]) -> None:
         """A new newest map-frame robot pose; an older stamp than the last restarts the
-        history (time went back)."""
+        history (time went back). Scans waiting for a pose of this time are handed on."""
         if self._stamps and t_ns < self._stamps[-1]:
             self.clear()
         self._stamps.append(int(t_ns))
         self._poses.append(pose)
+        while self._waiting and self._waiting[0][0] <= t_ns:
+            self._hand_on(*self._waiting.popleft())
 
     def pose_at(self, t_ns: int) -> tuple[tuple[float, float, float] | None, float]:
         """The kept pose nearest to ``t_ns`` and its distance in seconds (None, inf:
@@ -85,6 +93,18 @@ class ScanInput:
         except ValueError as err:
             self._drop("scan", f"dropped scan: {err}")
             return
+        item = (t_ns, angles, ranges, float(msg.range_max), float(msg.range_min))
+        if self._stamps and self._stamps[-1] >= t_ns:
+            self._hand_on(*item)
+            return
+        self._waiting.append(item)
+        while len(self._waiting) > MAX_WAITING:
+            self._hand_on(*self._waiting.popleft())
+
+    def _hand_on(self, t_ns: int, angles: np.ndarray, ranges: np.ndarray, range_max: float,
+                 range_min: float) -> None:
+        """Give the scan to the sink with the pose nearest its stamp, or drop it."""
+        p = self._params()
         pose, age_s = self.pose_at(t_ns)
         if pose is None or age_s > p.max_pose_age_s:
             self._drop("scan_pose", f"dropped scan stamped {t_ns * 1e-9:.3f} s: expected a "
@@ -92,8 +112,7 @@ class ScanInput:
                                     + ("none" if pose is None else f"one {age_s:.3f} s away"))
             return
         try:
-            self._sink(t_ns * 1e-9, pose, angles, ranges, float(msg.range_max),
-                       float(msg.range_min))
+            self._sink(t_ns * 1e-9, pose, angles, ranges, range_max, range_min)
         except ValueError as err:
             self._drop("scan", f"dropped scan: {err}")
             return

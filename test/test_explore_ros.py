@@ -38,7 +38,7 @@ def test_sim_and_explorer_explore_small_house_to_completion(ros, strategy):
     ]))
     ros.add(SegmentationNode(context=ros.context, parameter_overrides=[SIM_TIME]))
     ros.add(FrontierDetectorNode(context=ros.context, parameter_overrides=[SIM_TIME]))
-    ros.add(TargetSelectorNode(context=ros.context, parameter_overrides=[
+    selector = ros.add(TargetSelectorNode(context=ros.context, parameter_overrides=[
         SIM_TIME, Parameter("strategy", value=strategy)]))
 
     probe = ros.node("probe")
@@ -56,3 +56,5 @@ def test_sim_and_explorer_explore_small_house_to_completion(ros, strategy):
     assert coverage >= 99.0, f"{strategy}: coverage {coverage:.1f} % at done; metrics {metrics}"
     assert int(metrics["collisions"]) == 0, metrics
     assert int(metrics["goals_received"]) >= 2, metrics
+    # the simulator's scans reached the decisions (scan overlay), each with a pose of its time
+    assert selector._scans.used > 0 and selector._scans.dropped <= selector._scans.used // 10
