@@ -222,3 +222,15 @@ def test_the_slam_map_alone_decides_done():
     out = ex.step(1.0, grid, (x, y, 0.0))
     assert out.action is Action.NEW_GOAL
     assert out.goal is not None and out.goal.xy_m[0] > 0.5
+
+
+def test_rrt_exploration_decides_on_the_scans_too():
+    grid, marks = grid_from_ascii(_ROOMS, resolution_m=0.1)
+    ex = Explorer(FrontierParams(min_group_size_cells=1, robot_radius_m=0.0),
+                  SelectionParams(strategy="rrt_exploration"), overlay=ScanOverlayParams())
+    x, y = grid.cell_to_world(*marks["R"][0])
+    ex.step(0.0, grid, (x, y, 0.0))
+    _look_into_the_room(ex, grid, 1.0)
+    ex.step(1.0, grid, (x, y, 0.0))
+    # the map its RRT grew in is the one with the scanned room: no unknown cell is left there
+    assert ex._key is not None and (ex._key[0].data[1:6, 8:13] != -1).all()

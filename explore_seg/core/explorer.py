@@ -452,7 +452,12 @@ class Explorer:
         radius = metres_to_cells(self._selection_params.start_search_radius_m,
                                  seen.resolution_m)
         start = self._graph.graph.nearest_passable(robot_rc, radius)
-        dist, excluded = self._distances(start, robot_rc, self._frontiers)
+        frontiers = self._frontiers
+        if self._strategy.candidates == "rrt" and self._det is not None:
+            # the RRT detection has no frontier groups: judge the map by its groups
+            frontiers = find_frontiers(seen, self._det.extra_obstacles, self._frontier_params,
+                                       passable=self._det.passable)
+        dist, excluded = self._distances(start, robot_rc, frontiers)
         if dist is None or excluded is None or not (np.isfinite(dist) & ~excluded).any():
             return grid
         return seen
