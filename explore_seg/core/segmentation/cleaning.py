@@ -163,10 +163,17 @@ def _small_objects(occ_u8: npt.NDArray[np.uint8],
     obj[0] = False
     if not obj.any():
         return None
-    objects = np.take(obj, lab)
+    # the objects' cells, looked up only in the bounding box of their components
     r_near = 2 * length_to_cells(params.obstacle_inflation_m, res) + 1
-    box = bbox(objects, r_near)
-    assert box is not None
+    k = np.flatnonzero(obj)
+    x, y = stats[k, cv2.CC_STAT_LEFT], stats[k, cv2.CC_STAT_TOP]
+    x1, y1 = x + stats[k, cv2.CC_STAT_WIDTH], y + stats[k, cv2.CC_STAT_HEIGHT]
+    h, w = occ_u8.shape
+    inside = (slice(int(y.min()), int(y1.max())), slice(int(x.min()), int(x1.max())))
+    objects = np.zeros(occ_u8.shape, dtype=bool)
+    objects[inside] = np.take(obj, lab[inside])
+    box = (slice(max(0, inside[0].start - r_near), min(h, inside[0].stop + r_near)),
+           slice(max(0, inside[1].start - r_near), min(w, inside[1].stop + r_near)))
     big = (occ_u8[box] > 0) & ~objects[box]
     near = cv2.dilate(big.view(np.uint8), _square(r_near)) > 0
     touch = near & objects[box]
