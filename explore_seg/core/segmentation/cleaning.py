@@ -21,7 +21,7 @@ from explore_seg.core.segmentation.furniture import (FillCache, fill_furniture,
                                                      furniture_cells,
                                                      furniture_cells_update,
                                                      furniture_reach_cells, open_disk)
-from explore_seg.core.segmentation.labels import bbox
+from explore_seg.core.segmentation.labels import bbox, lookup_mask
 from explore_seg.core.segmentation.params import SegmentationParams
 
 
@@ -171,7 +171,7 @@ def _small_objects(occ_u8: npt.NDArray[np.uint8],
     h, w = occ_u8.shape
     inside = (slice(int(y.min()), int(y1.max())), slice(int(x.min()), int(x1.max())))
     objects = np.zeros(occ_u8.shape, dtype=bool)
-    objects[inside] = np.take(obj, lab[inside])
+    objects[inside] = lookup_mask(obj, lab[inside])
     box = (slice(max(0, inside[0].start - r_near), min(h, inside[0].stop + r_near)),
            slice(max(0, inside[1].start - r_near), min(w, inside[1].stop + r_near)))
     big = (occ_u8[box] > 0) & ~objects[box]
@@ -223,8 +223,8 @@ def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.ui
     if big.any() and params.furniture_min_thickness_m > 0:
         big &= ~_thick_blocks(olab, ost, big, params, res)
     if big.any():
-        small[lab[np.take(big, olab)]] = False
-    return free_clean | np.take(small, lab)
+        small[lab[lookup_mask(big, olab)]] = False
+    return free_clean | lookup_mask(small, lab)
 
 
 def _thick_blocks(olab: npt.NDArray[np.int32], ost: npt.NDArray[np.int32],

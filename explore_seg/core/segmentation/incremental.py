@@ -27,8 +27,9 @@ from explore_seg.core.segmentation.crop import (CROP_CHUNK_CELLS, crop_grid,  # 
 from explore_seg.core.segmentation.dude import decompose_mask, find_cuts
 from explore_seg.core.segmentation.furniture import FillCache
 from explore_seg.core.segmentation.labels import (apply_mapping, bbox, fill_gaps,
-                                                  label_counts, match_ids, pair_counts,
-                                                  renumber, resample_labels, shift_into)
+                                                  label_counts, lookup_mask, match_ids,
+                                                  pair_counts, renumber, resample_labels,
+                                                  shift_into)
 from explore_seg.core.segmentation.merging import max_concavity, merge_regions
 from explore_seg.core.segmentation.params import SegmentationParams, dude_settings
 
@@ -419,7 +420,7 @@ class IncrementalSegmenter:
         if not big.any():
             return dirty, None
         blobs = np.zeros(shape, dtype=bool)
-        blobs[box_new] = np.take(big, lab)
+        blobs[box_new] = lookup_mask(big, lab)
         t = p.inc_touch_cells
         bb = bbox(blobs, t + 1)
         near = cv2.dilate(blobs[bb].astype(np.uint8),
@@ -471,7 +472,7 @@ class IncrementalSegmenter:
         else:
             lut = np.zeros(max(max(old_area, default=0), max(dirty)) + 2, dtype=bool)
             lut[list(dirty)] = True
-            work = np.take(lut, labels)
+            work = lookup_mask(lut, labels)
         if blobs is not None:
             work |= blobs
         return work
