@@ -307,3 +307,19 @@ def furniture_reach_cells(params: SegmentationParams, res: float) -> int:
     shape = d_max + d_min + ext + r_c + r_inf
     areas = 2 * r_inf + 2 * r_door + 2 + ext + r_c
     return max(shape, areas) + 2
+
+
+def fill_window_cells(params: SegmentationParams, res: float) -> tuple[int, int]:
+    """(how far (cells) a change of :func:`fill_furniture`'s inputs can change its
+    result, how much context beyond a ``roi`` it reads for an exact result there).
+
+    A bulge's fill reads the inputs in its bounding box grown by the neighbourhood
+    margin, depends on its whole component (at most ``furniture_max_extent_m``), and
+    lies within the corner dilation and the inflation of it; with a ``roi``, the bulges
+    within that reach plus the widest bulge are tested, each with its neighbourhood."""
+    r_inf = int(round(params.obstacle_inflation_m / res))
+    r_c = int(math.ceil(0.25 * params.furniture_min_thickness_m / res))
+    reach = r_c + r_inf + 1
+    ext = int(math.ceil(params.furniture_max_extent_m / res))
+    m = int(round(params.furniture_max_thickness_m / res)) + r_inf + _door_cells(params, res) + 4
+    return m + ext + reach + 2, reach + ext + 1 + m + 1
