@@ -22,7 +22,7 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.segmentation.cleaning import (CleanState, base_masks, base_reach_cells,
-                                                    clutter_components, clutter_table)
+                                                    clutter_table)
 from explore_seg.core.segmentation.furniture import (FillCache, bulge_reach_cells,
                                                      fill_furniture, fill_window_cells,
                                                      furniture_cells_update)
@@ -115,15 +115,14 @@ def _update_clutter(st: CleanState, data: npt.NDArray[np.int8], b1: Box,
     if params.clutter_max_extent_m > 0 and params.clutter_max_area_m2 > 0:
         _n, lab, stats, _ = cv2.connectedComponentsWithStats((~base).astype(np.uint8),
                                                              connectivity=8)
-        occ_cc = clutter_components(data[w2], st.occ[w2], params, res)
-        table = clutter_table(lab, stats, st.occ[w2], params, res, occ_cc)
-        if table is not None:
-            new |= lookup_mask(table, lab)
         near = inner(grow(b1, 1, shape), w2)
         meet = np.zeros(len(stats), dtype=bool)
         meet[lab[near]] = True
         meet[0] = False
         write |= lookup_mask(meet, lab)
+        table = clutter_table(lab, stats, st.occ[w2], params, res, only=meet, data=data[w2])
+        if table is not None:
+            new |= lookup_mask(table, lab)
     np.copyto(st.clutter[w2], new, where=write)
     st.shown[w2] = st.free_raw[w2] | (st.clutter[w2] & (data[w2] > params.occupied_min_occupancy))
     changed = bbox(old != st.clutter[w2], 0)

@@ -255,10 +255,17 @@ def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.ui
 
 def clutter_table(lab: npt.NDArray[np.int32], stats: npt.NDArray[np.int32],
                   occ: npt.NDArray[np.uint8], params: SegmentationParams, res: float,
-                  occ_cc: OccComponents | None = None) -> npt.NDArray[np.bool_] | None:
+                  occ_cc: OccComponents | None = None,
+                  only: npt.NDArray[np.bool_] | None = None,
+                  data: npt.NDArray[np.int8] | None = None) -> npt.NDArray[np.bool_] | None:
     """Which components of the cleaned free space's complement (``lab``, ``stats``:
     OpenCV's 8-connected labelling) are clutter holes (:func:`fill_clutter_holes`), or
-    None when none is."""
+    None when none is.
+
+    ``only`` (optional): the components to judge (the others are no clutter here).
+    ``data`` (optional, instead of ``occ_cc``): the grid the obstacles come from; the
+    occupied components are then labelled only round the holes judged (an occupied
+    component lies in one hole)."""
     ext = params.clutter_max_extent_m / res
     area = params.clutter_max_area_m2 / (res * res)
     h, w = lab.shape
@@ -267,8 +274,16 @@ def clutter_table(lab: npt.NDArray[np.int32], stats: npt.NDArray[np.int32],
     small = ((x > 0) & (y > 0) & (x + bw < w) & (y + bh < h)
              & (np.maximum(bw, bh) <= ext) & (stats[:, cv2.CC_STAT_AREA] <= area))
     small[0] = False
+    if only is not None:
+        small &= only
     if not small.any():
         return None
+    if data is not None:
+        k = np.flatnonzero(small)
+        box = (slice(max(0, int(y[k].min()) - 1), min(h, int((y[k] + bh[k]).max()) + 1)),
+               slice(max(0, int(x[k].min()) - 1), min(w, int((x[k] + bw[k]).max()) + 1)))
+        lab, occ = lab[box], occ[box]
+        occ_cc = clutter_components(data[box], occ, params, res)
     olab, ost, gone = occ_cc if occ_cc is not None else occupied_components(occ)
     diag = np.hypot(ost[:, cv2.CC_STAT_WIDTH], ost[:, cv2.CC_STAT_HEIGHT])
     big = (diag > params.clutter_max_object_m / res) & ~gone
