@@ -44,6 +44,14 @@ def inner(box: Box, window: Box) -> Box:
             slice(box[1].start - window[1].start, box[1].stop - window[1].start))
 
 
+def offset(box: Box | None, window: Box) -> Box | None:
+    """``box`` in a window's own cells as cells of the whole array (None stays None)."""
+    if box is None:
+        return None
+    return (slice(box[0].start + window[0].start, box[0].stop + window[0].start),
+            slice(box[1].start + window[1].start, box[1].stop + window[1].start))
+
+
 def union(a: Box | None, b: Box | None) -> Box | None:
     """Bounding box of two boxes (either may be None)."""
     if a is None or b is None:
@@ -76,11 +84,13 @@ def update_clean_state(st: CleanState, data: npt.NDArray[np.int8], changed: Box,
         # the old obstacles round the change, for the bulges' update
         occ_box = grow(b1, 2 * bulge_reach_cells(params, res) + 1, shape)
         occ_old = st.occ[occ_box].copy()
+    # the furniture fill reads the obstacles, the clutter fill and the bulges
+    diff = offset(bbox(occ_u8[ib] != st.occ[b1], 0), b1)
     st.free_raw[b1] = fr[ib]
     st.occ[b1] = occ_u8[ib]
     st.base[b1] = base[ib]
     # 2. clutter holes, then the published cells
-    diff = _update_clutter(st, data, b1, params, res)
+    diff = union(diff, _update_clutter(st, data, b1, params, res))
     # 3. bulges
     if st.bulge is not None and occ_box is not None:
         diff = union(diff, _update_bulges(st, occ_box, occ_old, b1, params, res))
@@ -96,7 +106,7 @@ def _update_clutter(st: CleanState, data: npt.NDArray[np.int8], b1: Box,
                     params: SegmentationParams, res: float) -> Box | None:
     """Stage 2 of :func:`update_clean_state`, in place: the clutter fill and the
     published cells round ``b1`` (where the base masks were redone). Returns the
-    bounding box of the cells whose clutter fill changed, with ``b1`` (None: none).
+    bounding box of the cells whose clutter fill changed (None: none).
 
     A hole whose status can change meets ``b1`` (grown by a cell: a hole cut apart
     there touches it still) and, as a clutter hole, is at most ``clutter_max_extent_m``
@@ -125,11 +135,7 @@ def _update_clutter(st: CleanState, data: npt.NDArray[np.int8], b1: Box,
             new |= lookup_mask(table, lab)
     np.copyto(st.clutter[w2], new, where=write)
     st.shown[w2] = st.free_raw[w2] | (st.clutter[w2] & (data[w2] > params.occupied_min_occupancy))
-    changed = bbox(old != st.clutter[w2], 0)
-    if changed is None:
-        return b1
-    return union(b1, (slice(changed[0].start + w2[0].start, changed[0].stop + w2[0].start),
-                      slice(changed[1].start + w2[1].start, changed[1].stop + w2[1].start)))
+    return offset(bbox(old != st.clutter[w2], 0), w2)
 
 
 def _update_bulges(st: CleanState, window: Box, occ_old: npt.NDArray[np.uint8], b1: Box,
@@ -143,12 +149,9 @@ def _update_bulges(st: CleanState, window: Box, occ_old: npt.NDArray[np.uint8], 
     new = furniture_cells_update(st.occ[window], params, res, occ_old, st.bulge[window])
     io = inner(out, window)
     sub = new[io]
-    changed = bbox(sub != st.bulge[out], 0)
+    changed = offset(bbox(sub != st.bulge[out], 0), out)
     st.bulge[out] = sub
-    if changed is None:
-        return None
-    return (slice(changed[0].start + out[0].start, changed[0].stop + out[0].start),
-            slice(changed[1].start + out[1].start, changed[1].stop + out[1].start))
+    return changed
 
 
 def _update_fill(st: CleanState, diff: Box, params: SegmentationParams, res: float,
@@ -159,6 +162,10 @@ def _update_fill(st: CleanState, diff: Box, params: SegmentationParams, res: flo
     shape = st.occ.shape
     reach, ctx = fill_window_cells(params, res)
     roi = grow(diff, reach, shape)
+    if not st.bulge[roi].any():
+        # no bulge whose neighbourhood meets the change, nor whose fill reaches it
+        st.free_clean[diff] = st.clutter[diff]
+        return
     w3 = grow(roi, ctx, shape)
     ir = inner(roi, w3)
     out = fill_furniture(st.clutter[w3], st.occ[w3], params, res, ir, st.bulge[w3],
