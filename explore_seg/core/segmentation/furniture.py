@@ -216,10 +216,12 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
         hit = seen.get(key)
         if hit is not None and all(np.array_equal(a, b) for a, b in zip(hit[0], inputs)):
             fill = hit[1]
+            if cache is not None:
+                cache.fills[key] = hit
         else:
             fill = _bulge_fill(*inputs, k_corner, k_inf, r_door, half_min)
-        if cache is not None:
-            cache.fills[key] = (tuple(a.copy() for a in inputs), fill)
+            if cache is not None:
+                cache.fills[key] = (tuple(a.copy() for a in inputs), fill)
         if fill is not None:
             out[box] |= fill
     return out
