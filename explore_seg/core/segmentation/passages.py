@@ -45,10 +45,10 @@ def border_spans(labels: npt.NDArray[np.int32],
     >>> border_spans(lab)
     {(1, 2): (3.0, 0.0)}
     """
-    return _BorderPairs(labels).spans(clearance)
+    return BorderPairs(labels).spans(clearance)
 
 
-class _BorderPairs:
+class BorderPairs:
     """The 4-neighbour cell pairs between two different regions of a label image,
     grouped by region pair: found once, measured with or without a clearance image."""
 
@@ -72,6 +72,7 @@ class _BorderPairs:
             cells.append((r, c, dr, dc))
             keys.append(lo * (1 << 32) + hi)
         self.cells = cells
+        self.sizes = [len(k) for k in keys]
         self.uk: npt.NDArray[np.int64] | None = None
         self.inv: npt.NDArray[np.intp] | None = None
         self.span: npt.NDArray[np.float64] | None = None
@@ -95,6 +96,22 @@ class _BorderPairs:
         span = np.hypot((rmax - rmin) / 2 + 1, (cmax - cmin) / 2 + 1)
         self.span = np.where((rmax == rmin) | (cmax == cmin),
                              np.maximum(rmax - rmin, cmax - cmin) / 2 + 1, span)
+
+    def counts(self) -> dict[tuple[int, int], int]:
+        """Number of cell pairs between every two regions, as
+        :func:`.labels.pair_counts` gives it (the same order of keys)."""
+        out: dict[tuple[int, int], int] = {}
+        if self.uk is None or self.inv is None:
+            return out
+        start = 0
+        for size in self.sizes:
+            c = np.bincount(self.inv[start:start + size], minlength=len(self.uk))
+            start += size
+            nz = np.flatnonzero(c)
+            for x, n in zip(self.uk[nz].tolist(), c[nz].tolist()):
+                key = (x >> 32, x & 0xFFFFFFFF)
+                out[key] = out.get(key, 0) + n
+        return out
 
     def spans(self, clearance: npt.NDArray[np.float32] | None = None
               ) -> dict[tuple[int, int], tuple[float, float]]:
@@ -129,17 +146,20 @@ def inscribed_diameters(labels: npt.NDArray[np.int32],
 
 def merge_passages(labels: npt.NDArray[np.int32], mg: _Merger, cand: set[int],
                    params: SegmentationParams, res: float, both: bool = False,
-                   inner: npt.NDArray[np.bool_] | None = None) -> None:
+                   inner: npt.NDArray[np.bool_] | None = None,
+                   pairs: BorderPairs | None = None) -> None:
     """Merge neighbouring parts of one passage in the union-find ``mg`` (see the module
     docstring); one of each pair is in ``cand`` (with ``both``: the two). The part
-    outside ``cand`` (an old, kept region) keeps its id, else the larger one."""
+    outside ``cand`` (an old, kept region) keeps its id, else the larger one.
+    ``pairs``: the border pairs of ``labels``, when the caller has them."""
     ratio = params.passage_merge_ratio
     if ratio <= 0 or not cand:
         return
     door = params.max_door_width_m / res
     # the widths and clearances cost two distance transforms: only when a border
     # between candidate regions is longer than a door
-    pairs = _BorderPairs(labels)
+    if pairs is None:
+        pairs = BorderPairs(labels)
     if not any(sp > door and ((a in cand and b in cand) if both else (a in cand or b in cand))
                for (a, b), (sp, _c) in pairs.spans().items()):
         return
