@@ -157,15 +157,15 @@ def clutter_components(data: npt.NDArray[np.int8], occ_u8: npt.NDArray[np.uint8]
 
 
 def base_reach_cells(params: SegmentationParams, res: float) -> int:
-    """How far (cells) a changed grid cell can change :func:`base_masks`: a speck or a
-    small object is judged whole, with the obstacles near it, and its change reaches as
-    far as the inflation or the free growth."""
+    """How far (cells) a changed grid cell can change :func:`base_masks`: a speck is
+    judged whole; so is a small object, with the obstacles (specks dropped) near it; and
+    an obstacle's change reaches as far as the inflation, a free cell's as the growth."""
     speck = int(math.ceil(params.obstacle_speck_area_m2 / (res * res)))
     r_inf = length_to_cells(params.obstacle_inflation_m, res)
     obj = 0
     if params.small_object_max_m > 0:
         obj = int(math.ceil(params.small_object_max_m / res)) + 2 * r_inf + 1
-    return max(speck, obj) + max(r_inf, length_to_cells(params.free_close_m, res)) + 2
+    return speck + obj + max(r_inf, length_to_cells(params.free_close_m, res)) + 2
 
 
 def clean_state(data: npt.NDArray[np.int8], params: SegmentationParams, res: float,
