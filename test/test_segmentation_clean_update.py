@@ -75,3 +75,27 @@ def test_exploring_a_cluttered_house_keeps_the_masks_of_a_full_cleaning(rules):
             assert np.array_equal(seg._bulge, want.bulge), f"bulge: update {len(modes)}"
         modes.append(seg.last_update_info.mode)
     assert modes.count("incremental") >= 10
+
+
+@pytest.mark.parametrize("gap", [1, 4, 8])
+def test_an_object_joined_to_a_wall_changes_the_object_beside_it(gap):
+    """Two small objects (1 x 9 cells) on a wall's line, the first ``gap`` cells from the
+    wall's end, the second 8 cells past the first: when the gap closes, the first is part
+    of the wall, so the second, near it, is inflated again. The update reaches that far
+    (the second object's inflation ends 30 cells from the change)."""
+    p = SegmentationParams(small_object_max_m=0.5)
+    data = np.zeros((120, 300), np.int8)
+    data[60, 10:100] = 100
+    data[60, 100 + gap:109 + gap] = 100
+    data[60, 117 + gap:126 + gap] = 100
+    cache = FillCache()
+    st = clean_state(data, p, RES, fill_cache=cache)
+    new = data.copy()
+    new[60, 100:100 + gap] = 100
+    box = bbox(new != data, 0)
+    assert box is not None
+    st = update_clean_state(st, new, box, p, RES, cache, (0, 0))
+    want = clean_state(new, p, RES)
+    assert_same(st, want, f"gap {gap}")
+    # the second object is an obstacle (inflated) after the change, not before
+    assert want.occ[60, 120 + gap] and not clean_state(data, p, RES).occ[60, 120 + gap]

@@ -158,13 +158,14 @@ def clutter_components(data: npt.NDArray[np.int8], occ_u8: npt.NDArray[np.uint8]
 
 def base_reach_cells(params: SegmentationParams, res: float) -> int:
     """How far (cells) a changed grid cell can change :func:`base_masks`: a speck is
-    judged whole; so is a small object, with the obstacles (specks dropped) near it; and
-    an obstacle's change reaches as far as the inflation, a free cell's as the growth."""
+    judged whole; so is a small object, with the obstacles (specks dropped) near it, so a
+    change that joins one object to a wall changes the objects near that one; and an
+    obstacle's change reaches as far as the inflation, a free cell's as the growth."""
     speck = int(math.ceil(params.obstacle_speck_area_m2 / (res * res)))
     r_inf = length_to_cells(params.obstacle_inflation_m, res)
     obj = 0
     if params.small_object_max_m > 0:
-        obj = int(math.ceil(params.small_object_max_m / res)) + 2 * r_inf + 1
+        obj = 2 * int(math.ceil(params.small_object_max_m / res)) + 2 * r_inf + 1
     return speck + obj + max(r_inf, length_to_cells(params.free_close_m, res)) + 2
 
 
