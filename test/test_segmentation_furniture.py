@@ -168,6 +168,24 @@ def test_border_spans_and_inscribed_diameters():
     assert 8.0 <= w[1] <= 10.0 and 8.0 <= w[2] <= 10.0
 
 
+def test_border_pairs_count_as_pair_counts():
+    """The passage merge's border pairs give the merge the same border lengths, keys in
+    the same order, as pair_counts (the merge's ties follow that order)."""
+    import cv2
+
+    from explore_seg.core.segmentation.labels import pair_counts
+    from explore_seg.core.segmentation.passages import BorderPairs
+
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        coarse = rng.integers(0, 7, (5, 6)).astype(np.uint8)
+        size = (int(rng.integers(4, 40)), int(rng.integers(4, 40)))
+        lab = cv2.resize(coarse, size, interpolation=cv2.INTER_NEAREST).astype(np.int32)
+        want = pair_counts(lab)
+        got = BorderPairs(lab).counts()
+        assert got == want and list(got) == list(want)
+
+
 def _reveal(grid: GridMap, y_max_m: float) -> GridMap:
     data = grid.data.copy()
     data[round(y_max_m / grid.resolution_m):, :] = -1

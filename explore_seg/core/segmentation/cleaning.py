@@ -19,9 +19,8 @@ import numpy.typing as npt
 from explore_seg.core.grid import GridMap
 from explore_seg.core.segmentation.furniture import (FillCache, fill_furniture,
                                                      furniture_cells,
-                                                     furniture_cells_update,
                                                      furniture_reach_cells, open_disk)
-from explore_seg.core.segmentation.labels import bbox
+from explore_seg.core.segmentation.labels import bbox, lookup_mask
 from explore_seg.core.segmentation.params import SegmentationParams
 
 
@@ -71,13 +70,10 @@ def clean_free_space(grid: GridMap, params: SegmentationParams
     return clean_masks(grid.data, params, grid.resolution_m)
 
 
-def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: float,
-                roi: tuple[slice, slice] | None = None
+def clean_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: float
                 ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
-    """:func:`clean_free_space` of an occupancy array; ``roi`` (optional): the part of
-    ``free_clean`` the caller uses (work outside it that cannot reach it is skipped,
-    so free_clean is exact only there)."""
-    st = clean_state(data, params, res, roi)
+    """:func:`clean_free_space` of an occupancy array."""
+    st = clean_state(data, params, res)
     return st.free_raw, st.free_clean
 
 
@@ -94,38 +90,29 @@ class CleanState(NamedTuple):
     #: clutter fill and the small objects make room (free-standing furniture); the
     #: furniture fill's cells are not, as wall and furniture are one obstacle there
     shown: npt.NDArray[np.bool_]
+    #: the cleaned free space before the clutter and furniture fills
+    base: npt.NDArray[np.bool_] | None = None
+    #: ``base`` with the clutter holes filled (``free_clean`` less the furniture fill)
+    clutter: npt.NDArray[np.bool_] | None = None
 
 
-def clean_state(data: npt.NDArray[np.int8], params: SegmentationParams, res: float,
-                roi: tuple[slice, slice] | None = None,
-                prev: tuple[npt.NDArray[np.uint8], npt.NDArray[np.bool_]] | None = None,
-                fill_cache: FillCache | None = None, origin: tuple[int, int] = (0, 0)
-                ) -> CleanState:
-    """:func:`clean_masks` plus the published cells and what an incremental update keeps
-    to redo less: the obstacles as inflated and their furniture bulges
-    (:class:`CleanState`). ``prev``: those two of an
-    earlier map in this array's geometry (cells it did not cover: obstacle value 2), so
-    that the bulges' distance transforms run only around changed obstacles;
-    ``fill_cache`` and ``origin``: the bulges' fills of that map (:class:`FillCache`) and
-    this array's cell (0, 0) in the cache's reference cells."""
+OccComponents = tuple[npt.NDArray[np.int32], npt.NDArray[np.int32], npt.NDArray[np.bool_]]
+
+
+def base_masks(data: npt.NDArray[np.int8], params: SegmentationParams, res: float
+               ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.uint8], npt.NDArray[np.bool_],
+                          OccComponents | None]:
+    """The first stage of :func:`clean_state`: raw free cells, the obstacles less specks
+    and small objects (uint8), the cleaned free space before the fills, and the occupied
+    components the clutter fill reads (None: it labels the obstacles itself). A cell's
+    values depend on the grid within :func:`base_reach_cells` of it."""
     free_raw = (data >= 0) & (data < params.free_max_occupancy)
-    if data.size == 0:
-        return CleanState(free_raw, free_raw.copy(), np.zeros(data.shape, np.uint8), None,
-                          free_raw.copy())
     occ = data > params.occupied_min_occupancy
     occ_u8 = occ.astype(np.uint8)
     occ_cc = None
     speck_px = math.floor(params.obstacle_speck_area_m2 / (res * res) + 1e-6)
     if speck_px >= 1 and occ.any():
-        n, lab, stats, _ = cv2.connectedComponentsWithStats(occ_u8, connectivity=8)
-        small = stats[:, cv2.CC_STAT_AREA] <= speck_px
-        small[0] = False
-        if small.any():
-            keep = (~small).astype(np.uint8)
-            keep[0] = 0
-            occ_u8 = np.take(keep, lab)      # the occupied cells less the specks
-        # the components left in occ_u8 are these minus the specks
-        occ_cc = (lab, stats, small)
+        occ_u8, occ_cc = _drop_specks(occ_u8, speck_px)
     objects = None
     if params.small_object_max_m > 0 and occ.any():
         objects = _small_objects(occ_u8, occ_cc, params, res)
@@ -140,14 +127,70 @@ def clean_state(data: npt.NDArray[np.int8], params: SegmentationParams, res: flo
     if objects is not None:
         # small free-standing objects are free space for the decomposition
         free_clean |= objects & (grown > 0) & (obst == 0)
-    free_clean = fill_clutter_holes(free_clean, occ_u8, params, res, occ_cc)
+    return free_raw, occ_u8, free_clean, occ_cc
+
+
+def _drop_specks(occ_u8: npt.NDArray[np.uint8], speck_px: int
+                 ) -> tuple[npt.NDArray[np.uint8], OccComponents]:
+    """The obstacles less the components of at most ``speck_px`` cells, and the
+    components of ``occ_u8`` with those marked removed."""
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(occ_u8, connectivity=8)
+    small = stats[:, cv2.CC_STAT_AREA] <= speck_px
+    small[0] = False
+    if small.any():
+        keep = (~small).astype(np.uint8)
+        keep[0] = 0
+        occ_u8 = np.take(keep, lab)      # the occupied cells less the specks
+    return occ_u8, (lab, stats, small)
+
+
+def clutter_components(data: npt.NDArray[np.int8], occ_u8: npt.NDArray[np.uint8],
+                       params: SegmentationParams, res: float) -> OccComponents | None:
+    """The occupied components :func:`base_masks` hands the clutter fill, from the grid
+    and its result (for a window of the grid: components cut by the window's edge lie in
+    holes that reach it)."""
+    occ = data > params.occupied_min_occupancy
+    speck_px = math.floor(params.obstacle_speck_area_m2 / (res * res) + 1e-6)
+    if speck_px >= 1 and occ.any():
+        return _drop_specks(occ.view(np.uint8), speck_px)[1]
+    return None
+
+
+def base_reach_cells(params: SegmentationParams, res: float) -> int:
+    """How far (cells) a changed grid cell can change :func:`base_masks`: a speck is
+    judged whole; so is a small object, with the obstacles (specks dropped) near it, so a
+    change that joins one object to a wall changes the objects near that one; and an
+    obstacle's change reaches as far as the inflation, a free cell's as the growth."""
+    speck = int(math.ceil(params.obstacle_speck_area_m2 / (res * res)))
+    r_inf = length_to_cells(params.obstacle_inflation_m, res)
+    obj = 0
+    if params.small_object_max_m > 0:
+        obj = 2 * int(math.ceil(params.small_object_max_m / res)) + 2 * r_inf + 1
+    return speck + obj + max(r_inf, length_to_cells(params.free_close_m, res)) + 2
+
+
+def clean_state(data: npt.NDArray[np.int8], params: SegmentationParams, res: float,
+                fill_cache: FillCache | None = None) -> CleanState:
+    """:func:`clean_masks` plus the published cells and what an incremental update keeps
+    to redo less (:class:`CleanState`): the obstacles as inflated, their furniture
+    bulges, the cleaned free space before the fills and after the clutter fill.
+    ``fill_cache``: the bulges' fills, kept for a later update (:class:`FillCache`)."""
+    if data.size == 0:
+        free_raw = np.zeros(data.shape, dtype=bool)
+        return CleanState(free_raw, free_raw.copy(), np.zeros(data.shape, np.uint8), None,
+                          free_raw.copy(), free_raw.copy(), free_raw.copy())
+    free_raw, occ_u8, base, occ_cc = base_masks(data, params, res)
+    clutter = fill_clutter_holes(base, occ_u8, params, res, occ_cc)
     bulge = None
     if params.furniture_min_thickness_m > 0:
-        bulge = (furniture_cells(occ_u8, params, res) if prev is None else
-                 furniture_cells_update(occ_u8, params, res, prev[0], prev[1]))
-    shown = free_raw | (free_clean & occ)
-    filled = fill_furniture(free_clean, occ_u8, params, res, roi, bulge, fill_cache, origin)
-    return CleanState(free_raw, filled, occ_u8, bulge, shown)
+        bulge = furniture_cells(occ_u8, params, res)
+    if clutter is base:
+        clutter = base.copy()          # an update writes the two apart
+    shown = free_raw | (clutter & (data > params.occupied_min_occupancy))
+    filled = fill_furniture(clutter, occ_u8, params, res, None, bulge, fill_cache)
+    if filled is clutter and bulge is not None:
+        filled = clutter.copy()
+    return CleanState(free_raw, filled, occ_u8, bulge, shown, base, clutter)
 
 
 def _small_objects(occ_u8: npt.NDArray[np.uint8],
@@ -163,10 +206,17 @@ def _small_objects(occ_u8: npt.NDArray[np.uint8],
     obj[0] = False
     if not obj.any():
         return None
-    objects = np.take(obj, lab)
+    # the objects' cells, looked up only in the bounding box of their components
     r_near = 2 * length_to_cells(params.obstacle_inflation_m, res) + 1
-    box = bbox(objects, r_near)
-    assert box is not None
+    k = np.flatnonzero(obj)
+    x, y = stats[k, cv2.CC_STAT_LEFT], stats[k, cv2.CC_STAT_TOP]
+    x1, y1 = x + stats[k, cv2.CC_STAT_WIDTH], y + stats[k, cv2.CC_STAT_HEIGHT]
+    h, w = occ_u8.shape
+    inside = (slice(int(y.min()), int(y1.max())), slice(int(x.min()), int(x1.max())))
+    objects = np.zeros(occ_u8.shape, dtype=bool)
+    objects[inside] = lookup_mask(obj, lab[inside])
+    box = (slice(max(0, inside[0].start - r_near), min(h, inside[0].stop + r_near)),
+           slice(max(0, inside[1].start - r_near), min(w, inside[1].stop + r_near)))
     big = (occ_u8[box] > 0) & ~objects[box]
     near = cv2.dilate(big.view(np.uint8), _square(r_near)) > 0
     touch = near & objects[box]
@@ -178,9 +228,7 @@ def _small_objects(occ_u8: npt.NDArray[np.uint8],
 
 def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8],
                        params: SegmentationParams, res: float,
-                       occ_cc: tuple[npt.NDArray[np.int32], npt.NDArray[np.int32],
-                                     npt.NDArray[np.bool_]] | None = None
-                       ) -> npt.NDArray[np.bool_]:
+                       occ_cc: OccComponents | None = None) -> npt.NDArray[np.bool_]:
     """``free_clean`` with its clutter holes filled.
 
     A hole of the cleaned free space (a component of its complement that does not reach
@@ -195,20 +243,48 @@ def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.ui
     ``occ_cc`` (optional): the 8-connected components of an occupied mask that ``occ``
     is with some whole components removed, as (labels, stats, removed).
     """
+    if params.clutter_max_extent_m <= 0 or params.clutter_max_area_m2 <= 0 \
+            or free_clean.size == 0:
+        return free_clean
+    _n, lab, stats, _ = cv2.connectedComponentsWithStats((~free_clean).astype(np.uint8),
+                                                         connectivity=8)
+    small = clutter_table(lab, stats, occ, params, res, occ_cc)
+    if small is None:
+        return free_clean
+    return free_clean | lookup_mask(small, lab)
+
+
+def clutter_table(lab: npt.NDArray[np.int32], stats: npt.NDArray[np.int32],
+                  occ: npt.NDArray[np.uint8], params: SegmentationParams, res: float,
+                  occ_cc: OccComponents | None = None,
+                  only: npt.NDArray[np.bool_] | None = None,
+                  data: npt.NDArray[np.int8] | None = None) -> npt.NDArray[np.bool_] | None:
+    """Which components of the cleaned free space's complement (``lab``, ``stats``:
+    OpenCV's 8-connected labelling) are clutter holes (:func:`fill_clutter_holes`), or
+    None when none is.
+
+    ``only`` (optional): the components to judge (the others are no clutter here).
+    ``data`` (optional, instead of ``occ_cc``): the grid the obstacles come from; the
+    occupied components are then labelled only round the holes judged (an occupied
+    component lies in one hole)."""
     ext = params.clutter_max_extent_m / res
     area = params.clutter_max_area_m2 / (res * res)
-    if ext <= 0 or area <= 0 or free_clean.size == 0:
-        return free_clean
-    n, lab, stats, _ = cv2.connectedComponentsWithStats((~free_clean).astype(np.uint8),
-                                                        connectivity=8)
-    h, w = free_clean.shape
+    h, w = lab.shape
     x, y = stats[:, cv2.CC_STAT_LEFT], stats[:, cv2.CC_STAT_TOP]
     bw, bh = stats[:, cv2.CC_STAT_WIDTH], stats[:, cv2.CC_STAT_HEIGHT]
     small = ((x > 0) & (y > 0) & (x + bw < w) & (y + bh < h)
              & (np.maximum(bw, bh) <= ext) & (stats[:, cv2.CC_STAT_AREA] <= area))
     small[0] = False
+    if only is not None:
+        small &= only
     if not small.any():
-        return free_clean
+        return None
+    if data is not None:
+        k = np.flatnonzero(small)
+        box = (slice(max(0, int(y[k].min()) - 1), min(h, int((y[k] + bh[k]).max()) + 1)),
+               slice(max(0, int(x[k].min()) - 1), min(w, int((x[k] + bw[k]).max()) + 1)))
+        lab, occ = lab[box], occ[box]
+        occ_cc = clutter_components(data[box], occ, params, res)
     olab, ost, gone = occ_cc if occ_cc is not None else occupied_components(occ)
     diag = np.hypot(ost[:, cv2.CC_STAT_WIDTH], ost[:, cv2.CC_STAT_HEIGHT])
     big = (diag > params.clutter_max_object_m / res) & ~gone
@@ -216,8 +292,8 @@ def fill_clutter_holes(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.ui
     if big.any() and params.furniture_min_thickness_m > 0:
         big &= ~_thick_blocks(olab, ost, big, params, res)
     if big.any():
-        small[lab[np.take(big, olab)]] = False
-    return free_clean | np.take(small, lab)
+        small[lab[lookup_mask(big, olab)]] = False
+    return small if small.any() else None
 
 
 def _thick_blocks(olab: npt.NDArray[np.int32], ost: npt.NDArray[np.int32],

@@ -216,10 +216,12 @@ def fill_furniture(free_clean: npt.NDArray[np.bool_], occ: npt.NDArray[np.uint8]
         hit = seen.get(key)
         if hit is not None and all(np.array_equal(a, b) for a, b in zip(hit[0], inputs)):
             fill = hit[1]
+            if cache is not None:
+                cache.fills[key] = hit
         else:
             fill = _bulge_fill(*inputs, k_corner, k_inf, r_door, half_min)
-        if cache is not None:
-            cache.fills[key] = (tuple(a.copy() for a in inputs), fill)
+            if cache is not None:
+                cache.fills[key] = (tuple(a.copy() for a in inputs), fill)
         if fill is not None:
             out[box] |= fill
     return out
@@ -307,3 +309,19 @@ def furniture_reach_cells(params: SegmentationParams, res: float) -> int:
     shape = d_max + d_min + ext + r_c + r_inf
     areas = 2 * r_inf + 2 * r_door + 2 + ext + r_c
     return max(shape, areas) + 2
+
+
+def fill_window_cells(params: SegmentationParams, res: float) -> tuple[int, int]:
+    """(how far (cells) a change of :func:`fill_furniture`'s inputs can change its
+    result, how much context beyond a ``roi`` it reads for an exact result there).
+
+    A bulge's fill reads the inputs in its bounding box grown by the neighbourhood
+    margin, depends on its whole component (at most ``furniture_max_extent_m``), and
+    lies within the corner dilation and the inflation of it; with a ``roi``, the bulges
+    within that reach plus the widest bulge are tested, each with its neighbourhood."""
+    r_inf = int(round(params.obstacle_inflation_m / res))
+    r_c = int(math.ceil(0.25 * params.furniture_min_thickness_m / res))
+    reach = r_c + r_inf + 1
+    ext = int(math.ceil(params.furniture_max_extent_m / res))
+    m = int(round(params.furniture_max_thickness_m / res)) + r_inf + _door_cells(params, res) + 4
+    return m + ext + reach + 2, reach + ext + 1 + m + 1

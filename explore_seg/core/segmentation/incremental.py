@@ -20,15 +20,16 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.grid import GridMap
-from explore_seg.core.segmentation.cleaning import (CleanState, clean_influence_cells,
-                                                    clean_state, length_to_cells)
+from explore_seg.core.segmentation.clean_update import union, update_clean_state
+from explore_seg.core.segmentation.cleaning import CleanState, clean_state, length_to_cells
 from explore_seg.core.segmentation.crop import (CROP_CHUNK_CELLS, crop_grid,  # noqa: F401
                                                 crop_margin_cells, known_crop)
 from explore_seg.core.segmentation.dude import decompose_mask, find_cuts
 from explore_seg.core.segmentation.furniture import FillCache
 from explore_seg.core.segmentation.labels import (apply_mapping, bbox, fill_gaps,
-                                                  label_counts, match_ids, pair_counts,
-                                                  renumber, resample_labels, shift_into)
+                                                  label_counts, lookup_mask, match_ids,
+                                                  pair_counts, renumber, resample_labels,
+                                                  shift_into)
 from explore_seg.core.segmentation.merging import max_concavity, merge_regions
 from explore_seg.core.segmentation.params import SegmentationParams, dude_settings
 
@@ -99,6 +100,9 @@ class IncrementalSegmenter:
         self._occ: npt.NDArray[np.uint8] | None = None
         self._bulge: npt.NDArray[np.bool_] | None = None
         self._shown: npt.NDArray[np.bool_] | None = None
+        # the cleaned free space before the fills and after the clutter fill
+        self._base: npt.NDArray[np.bool_] | None = None
+        self._clutter: npt.NDArray[np.bool_] | None = None
         # the bulges' fills, keyed in cells of the first grid of this state; that grid's
         # cell (0, 0) is cell _ref_rc of the current one
         self._fill_cache = FillCache()
@@ -118,6 +122,8 @@ class IncrementalSegmenter:
         self._occ = None
         self._bulge = None
         self._shown = None
+        self._base = None
+        self._clutter = None
         self._fill_cache = FillCache()
 
     def set_params(self, params: SegmentationParams) -> None:
@@ -206,6 +212,7 @@ class IncrementalSegmenter:
         self._geom = grid.with_data(self._data)
         self._free_raw, self._free_clean = free_raw, free_clean
         self._occ, self._bulge, self._shown = cs.occ, cs.bulge, cs.shown
+        self._base, self._clutter = cs.base, cs.clutter
         # free cells, and free-standing furniture the cleaning counts as room: a table in
         # an office is part of it
         shown = cs.shown
@@ -234,55 +241,34 @@ class IncrementalSegmenter:
     def _clean_update(self, grid: GridMap, shift: tuple[int, int] | None
                       ) -> CleanState:
         """:func:`.cleaning.clean_state` of ``grid``, recomputed only around changed
-        cells when possible."""
+        cells when possible (:func:`.clean_update.update_clean_state`)."""
         p = self.params
         res = grid.resolution_m
         if (shift is None or self._data is None or self._free_raw is None
                 or self._free_clean is None or self._occ is None or self._shown is None
+                or self._base is None or self._clutter is None
                 or (p.furniture_min_thickness_m > 0) != (self._bulge is not None)):
             self._fill_cache = FillCache()
             self._ref_rc = (0, 0)
             return clean_state(grid.data, p, res, fill_cache=self._fill_cache)
         self._ref_rc = (self._ref_rc[0] + shift[0], self._ref_rc[1] + shift[1])
         old = shift_into(self._data, grid.shape, *shift, fill=-1, reuse=True)
-        changed = old != grid.data
-        infl = clean_influence_cells(p, res)
-        box = bbox(changed, infl)
-        # cells the old masks did not cover (grown area) are recomputed too
-        # the old masks are replaced by the result, so they may be updated in place
-        free_raw = shift_into(self._free_raw, grid.shape, *shift, reuse=True)
-        free_clean = shift_into(self._free_clean, grid.shape, *shift, reuse=True)
-        # cells the old state did not cover count as changed obstacles (value 2)
-        occ = shift_into(self._occ, grid.shape, *shift, fill=2, reuse=True)
-        bulge = (None if self._bulge is None
-                 else shift_into(self._bulge, grid.shape, *shift, reuse=True))
+        box = bbox(old != grid.data, 0)
         if shift != (0, 0) or self._data.shape != grid.shape:
+            # cells the old masks did not cover (grown area) are recomputed too
             cover = shift_into(np.ones(self._data.shape, dtype=bool), grid.shape, *shift)
-            edge = bbox(~cover, infl)
-            if edge is not None:
-                box = edge if box is None else (
-                    slice(min(box[0].start, edge[0].start), max(box[0].stop, edge[0].stop)),
-                    slice(min(box[1].start, edge[1].start), max(box[1].stop, edge[1].stop)))
-        shown = shift_into(self._shown, grid.shape, *shift, reuse=True)
+            box = union(box, bbox(~cover, 0))
+        # the old masks are replaced by the result, so they may be updated in place;
+        # cells the old state did not cover count as changed obstacles (value 2)
+        st = CleanState(*(None if a is None else shift_into(a, grid.shape, *shift, reuse=True,
+                                                            fill=f)
+                          for a, f in ((self._free_raw, 0), (self._free_clean, 0),
+                                       (self._occ, 2), (self._bulge, 0), (self._shown, 0),
+                                       (self._base, 0), (self._clutter, 0))))
         if box is None:
-            return CleanState(free_raw, free_clean, occ, bulge, shown)
-        h, w = grid.shape
-        wr = slice(max(0, box[0].start - infl), min(h, box[0].stop + infl))
-        wc = slice(max(0, box[1].start - infl), min(w, box[1].stop + infl))
-        ir = slice(box[0].start - wr.start, box[0].stop - wr.start)
-        ic = slice(box[1].start - wc.start, box[1].stop - wc.start)
-        prev = None if bulge is None else (occ[wr, wc], bulge[wr, wc])
-        fr, fc, oc, bu, sh = clean_state(grid.data[wr, wc], p, res, roi=(ir, ic), prev=prev,
-                                         fill_cache=self._fill_cache,
-                                         origin=(wr.start - self._ref_rc[0],
-                                                 wc.start - self._ref_rc[1]))
-        free_raw[box] = fr[ir, ic]
-        free_clean[box] = fc[ir, ic]
-        occ[box] = oc[ir, ic]
-        shown[box] = sh[ir, ic]
-        if bulge is not None and bu is not None:
-            bulge[box] = bu[ir, ic]
-        return CleanState(free_raw, free_clean, occ, bulge, shown)
+            return st
+        return update_clean_state(st, grid.data, box, p, res, self._fill_cache,
+                                  (-self._ref_rc[0], -self._ref_rc[1]))
 
     def _fresh(self) -> int:
         k = self._next_id
@@ -419,7 +405,7 @@ class IncrementalSegmenter:
         if not big.any():
             return dirty, None
         blobs = np.zeros(shape, dtype=bool)
-        blobs[box_new] = np.take(big, lab)
+        blobs[box_new] = lookup_mask(big, lab)
         t = p.inc_touch_cells
         bb = bbox(blobs, t + 1)
         near = cv2.dilate(blobs[bb].astype(np.uint8),
@@ -471,7 +457,7 @@ class IncrementalSegmenter:
         else:
             lut = np.zeros(max(max(old_area, default=0), max(dirty)) + 2, dtype=bool)
             lut[list(dirty)] = True
-            work = np.take(lut, labels)
+            work = lookup_mask(lut, labels)
         if blobs is not None:
             work |= blobs
         return work

@@ -11,7 +11,7 @@ import numpy.typing as npt
 from explore_seg.core.segmentation.labels import (apply_mapping, label_counts, pair_counts,
                                                   region_edges)
 from explore_seg.core.segmentation.params import SegmentationParams
-from explore_seg.core.segmentation.passages import merge_passages
+from explore_seg.core.segmentation.passages import BorderPairs, merge_passages
 
 
 def max_concavity(mask: npt.NDArray[np.uint8]) -> float:
@@ -81,7 +81,9 @@ def merge_regions(labels: npt.NDArray[np.int32], out_mask: npt.NDArray[np.bool_]
     if not areas:
         return
     cand = set(areas) if candidates is None else {c for c in candidates if c in areas}
-    borders = pair_counts(labels)
+    # the passage merge measures the borders' cell pairs: found once for both
+    pairs = BorderPairs(labels) if params.passage_merge_ratio > 0 and cand else None
+    borders = pair_counts(labels) if pairs is None else pairs.counts()
     mg = _Merger(areas, borders)
     min_area = params.min_region_area_m2 / (res * res)
     thin: set[int] = set()
@@ -115,7 +117,8 @@ def merge_regions(labels: npt.NDArray[np.int32], out_mask: npt.NDArray[np.bool_]
         if mg.area[into] >= min_area:
             thin.discard(into)
     # in an update, only new pieces join: an old region stays as it was (§11.7)
-    merge_passages(labels, mg, cand, params, res, both=candidates is not None, inner=inner)
+    merge_passages(labels, mg, cand, params, res, both=candidates is not None, inner=inner,
+                   pairs=pairs)
     if params.corridor_merge:
         _corridor_merge(labels, mg, cand, params, res)
     lut_keys = [k for k in mg.parent if mg.root(k) != k or k in dropped]

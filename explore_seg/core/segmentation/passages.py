@@ -45,53 +45,86 @@ def border_spans(labels: npt.NDArray[np.int32],
     >>> border_spans(lab)
     {(1, 2): (3.0, 0.0)}
     """
-    rows: list[npt.NDArray[np.int64]] = []
-    cols: list[npt.NDArray[np.int64]] = []
-    keys: list[npt.NDArray[np.int64]] = []
-    clear: list[npt.NDArray[np.float32]] = []
-    pos = labels > 0
-    for a, b, pa, pb, dr, dc in ((labels[:, :-1], labels[:, 1:], pos[:, :-1], pos[:, 1:], 0, 1),
-                                 (labels[:-1, :], labels[1:, :], pos[:-1, :], pos[1:, :], 1, 0)):
-        m = a != b
-        m &= pa
-        m &= pb
-        r, c = np.nonzero(m)
-        if r.size == 0:
-            continue
-        av, bv = a[r, c], b[r, c]
-        lo = np.minimum(av, bv).astype(np.int64)
-        hi = np.maximum(av, bv).astype(np.int64)
-        # the point between the two cells of a pair
-        rows.append(2 * r + dr)
-        cols.append(2 * c + dc)
-        keys.append(lo * (1 << 32) + hi)
+    return BorderPairs(labels).spans(clearance)
+
+
+class BorderPairs:
+    """The 4-neighbour cell pairs between two different regions of a label image,
+    grouped by region pair: found once, measured with or without a clearance image."""
+
+    def __init__(self, labels: npt.NDArray[np.int32]) -> None:
+        cells: list[tuple[npt.NDArray[np.intp], npt.NDArray[np.intp], int, int]] = []
+        keys: list[npt.NDArray[np.int64]] = []
+        pos = labels > 0
+        for a, b, pa, pb, dr, dc in ((labels[:, :-1], labels[:, 1:], pos[:, :-1],
+                                      pos[:, 1:], 0, 1),
+                                     (labels[:-1, :], labels[1:, :], pos[:-1, :],
+                                      pos[1:, :], 1, 0)):
+            m = a != b
+            m &= pa
+            m &= pb
+            r, c = np.nonzero(m)
+            if r.size == 0:
+                continue
+            av, bv = a[r, c], b[r, c]
+            lo = np.minimum(av, bv).astype(np.int64)
+            hi = np.maximum(av, bv).astype(np.int64)
+            cells.append((r, c, dr, dc))
+            keys.append(lo * (1 << 32) + hi)
+        self.cells = cells
+        self.sizes = [len(k) for k in keys]
+        self.uk: npt.NDArray[np.int64] | None = None
+        self.inv: npt.NDArray[np.intp] | None = None
+        self.span: npt.NDArray[np.float64] | None = None
+        if not keys:
+            return
+        self.uk, self.inv = np.unique(np.concatenate(keys), return_inverse=True)
+        # the point between the two cells of a pair, in half-cell units
+        r = np.concatenate([2 * r + dr for r, _c, dr, _dc in cells])
+        c = np.concatenate([2 * c + dc for _r, c, _dr, dc in cells])
+        n = len(self.uk)
+        big = np.iinfo(np.int64).max
+        rmin = np.full(n, big)
+        rmax = np.full(n, -1)
+        cmin = np.full(n, big)
+        cmax = np.full(n, -1)
+        np.minimum.at(rmin, self.inv, r)
+        np.maximum.at(rmax, self.inv, r)
+        np.minimum.at(cmin, self.inv, c)
+        np.maximum.at(cmax, self.inv, c)
+        # a border of n cells spans n - 1 steps plus one cell
+        span = np.hypot((rmax - rmin) / 2 + 1, (cmax - cmin) / 2 + 1)
+        self.span = np.where((rmax == rmin) | (cmax == cmin),
+                             np.maximum(rmax - rmin, cmax - cmin) / 2 + 1, span)
+
+    def counts(self) -> dict[tuple[int, int], int]:
+        """Number of cell pairs between every two regions, as
+        :func:`.labels.pair_counts` gives it (the same order of keys)."""
+        out: dict[tuple[int, int], int] = {}
+        if self.uk is None or self.inv is None:
+            return out
+        start = 0
+        for size in self.sizes:
+            c = np.bincount(self.inv[start:start + size], minlength=len(self.uk))
+            start += size
+            nz = np.flatnonzero(c)
+            for x, n in zip(self.uk[nz].tolist(), c[nz].tolist()):
+                key = (x >> 32, x & 0xFFFFFFFF)
+                out[key] = out.get(key, 0) + n
+        return out
+
+    def spans(self, clearance: npt.NDArray[np.float32] | None = None
+              ) -> dict[tuple[int, int], tuple[float, float]]:
+        """{(a, b): (span, largest clearance)} as :func:`border_spans` gives it."""
+        if self.uk is None or self.span is None or self.inv is None:
+            return {}
+        cl = np.zeros(len(self.uk), dtype=np.float64)
         if clearance is not None:
-            clear.append(np.maximum(clearance[r, c], clearance[r + dr, c + dc]))
-    if not keys:
-        return {}
-    k = np.concatenate(keys)
-    r = np.concatenate(rows)
-    c = np.concatenate(cols)
-    uk, inv = np.unique(k, return_inverse=True)
-    n = len(uk)
-    big = np.iinfo(np.int64).max
-    rmin = np.full(n, big)
-    rmax = np.full(n, -1)
-    cmin = np.full(n, big)
-    cmax = np.full(n, -1)
-    np.minimum.at(rmin, inv, r)
-    np.maximum.at(rmax, inv, r)
-    np.minimum.at(cmin, inv, c)
-    np.maximum.at(cmax, inv, c)
-    cl = np.zeros(n, dtype=np.float64)
-    if clear:
-        np.maximum.at(cl, inv, np.concatenate(clear))
-    # half-cell units; a border of n cells spans n - 1 steps plus one cell
-    span = np.hypot((rmax - rmin) / 2 + 1, (cmax - cmin) / 2 + 1)
-    span = np.where((rmax == rmin) | (cmax == cmin),
-                    np.maximum(rmax - rmin, cmax - cmin) / 2 + 1, span)
-    return {(int(x >> 32), int(x & 0xFFFFFFFF)): (float(s), float(q))
-            for x, s, q in zip(uk.tolist(), span.tolist(), cl.tolist())}
+            clear = np.concatenate([np.maximum(clearance[r, c], clearance[r + dr, c + dc])
+                                    for r, c, dr, dc in self.cells])
+            np.maximum.at(cl, self.inv, clear)
+        return {(int(x >> 32), int(x & 0xFFFFFFFF)): (float(s), float(q))
+                for x, s, q in zip(self.uk.tolist(), self.span.tolist(), cl.tolist())}
 
 
 def inscribed_diameters(labels: npt.NDArray[np.int32],
@@ -113,18 +146,22 @@ def inscribed_diameters(labels: npt.NDArray[np.int32],
 
 def merge_passages(labels: npt.NDArray[np.int32], mg: _Merger, cand: set[int],
                    params: SegmentationParams, res: float, both: bool = False,
-                   inner: npt.NDArray[np.bool_] | None = None) -> None:
+                   inner: npt.NDArray[np.bool_] | None = None,
+                   pairs: BorderPairs | None = None) -> None:
     """Merge neighbouring parts of one passage in the union-find ``mg`` (see the module
     docstring); one of each pair is in ``cand`` (with ``both``: the two). The part
-    outside ``cand`` (an old, kept region) keeps its id, else the larger one."""
+    outside ``cand`` (an old, kept region) keeps its id, else the larger one.
+    ``pairs``: the border pairs of ``labels``, when the caller has them."""
     ratio = params.passage_merge_ratio
     if ratio <= 0 or not cand:
         return
     door = params.max_door_width_m / res
     # the widths and clearances cost two distance transforms: only when a border
     # between candidate regions is longer than a door
+    if pairs is None:
+        pairs = BorderPairs(labels)
     if not any(sp > door and ((a in cand and b in cand) if both else (a in cand or b in cand))
-               for (a, b), (sp, _c) in border_spans(labels).items()):
+               for (a, b), (sp, _c) in pairs.spans().items()):
         return
     width = inscribed_diameters(labels, inner)
     # the free space's own width where two regions meet (region borders do not count):
@@ -135,7 +172,7 @@ def merge_passages(labels: npt.NDArray[np.int32], mg: _Merger, cand: set[int],
     # only grow, so a pair's ratio only falls)
     heap: list[tuple[float, int, int]] = []
     span: dict[tuple[int, int], float] = {}
-    for (a, b), (s, cl) in border_spans(labels, clearance).items():
+    for (a, b), (s, cl) in pairs.spans(clearance).items():
         if s > door and ((a in cand and b in cand) if both else (a in cand or b in cand)):
             # the narrower of the cut's length and the free width across it
             span[(a, b)] = min(s, (2.0 * cl + 1.0) / _FREE_WIDTH_SHARE)
