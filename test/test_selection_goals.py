@@ -324,6 +324,14 @@ def test_a_blacklist_retry_that_revealed_space_does_not_count(revealed_cells, fa
     if retried:                  # the free retry revealed nothing: its count is spent
         m.add_to_blacklist((9.0, 9.0))
         assert m.step(2.0, (1.0, 1.0), g, [], []).action is Action.DONE
+    whole = GoalManager(SelectionParams(strategy="nearest", done_confirmations=1,
+                                        blacklist_retries=1, retry_reveal_radius_m=0.0))
+    whole.add_to_blacklist((9.0, 9.0))
+    g.data[:2, :10] = -1
+    whole.step(0.0, (1.0, 1.0), g, [], [])
+    g.data[:2, :10] = 0                                        # known anywhere counts
+    whole.add_to_blacklist((9.0, 9.0))
+    assert "blacklist cleared" in whole.step(1.0, (1.0, 1.0), g, [], []).reason
     off = GoalManager(SelectionParams(strategy="nearest", done_confirmations=1,
                                       blacklist_retries=1, retry_reveal_m2=0.0))
     off.add_to_blacklist((9.0, 9.0))

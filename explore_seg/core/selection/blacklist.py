@@ -154,7 +154,7 @@ class RevealWatch:
     retry whose goals stayed as they were would not be spent. :meth:`start` takes the
     unknown cells within ``radius_m`` of each retried goal (:func:`near_counts`; a cell
     near two goals counts twice, on both maps alike), :meth:`revealed_m2` how many of
-    them are known now.
+    them are known now. ``radius_m`` 0: the cells that became known anywhere on the map.
     """
 
     def __init__(self, radius_m: float) -> None:
@@ -163,6 +163,8 @@ class RevealWatch:
         self._unknown: int | None = None
 
     def _unknown_near(self, grid: GridMap) -> int:
+        if self.radius_m <= 0:          # the whole map: minus its known cells
+            return -int(np.count_nonzero(grid.data >= 0))
         return sum(near_counts(grid, xy, self.radius_m, 101)[1] for xy in self._points)
 
     def start(self, grid: GridMap, points: Sequence[tuple[float, float]]) -> None:

@@ -100,8 +100,8 @@ class GoalParams:
         default=1.0)
     retry_reveal_radius_m: float = non_negative(
         "retry_reveal_m2 counts the cells within this of the retried goals that became "
-        "known (a loop-closure re-render that redraws the map elsewhere reveals nothing)",
-        "m", default=2.0)
+        "known (a loop-closure re-render that redraws the map elsewhere reveals nothing); "
+        "0 = anywhere on the map", "m", default=2.0)
     flicker_vanish_count: int = field(default=3, metadata=param_meta(
         "blacklist a goal area once its frontier vanished this many times before the robot "
         "got there with its cells still unknown (a wall edge flickering next to unknown "
