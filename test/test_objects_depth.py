@@ -156,3 +156,21 @@ def test_the_virtual_cloud_carries_the_depth_obstacles():
     cloud = om.virtual_cloud()
     assert len(cloud) == len(om.depth) > 0
     assert np.all((cloud[:, 0] > 1.3) & (cloud[:, 0] < 1.7) & (cloud[:, 2] < 0.3))
+
+
+def test_forget_since_drops_the_voxels_marked_after_a_correction():
+    """After a SLAM correction the voxels marked since the previous one go (they lie where
+    the uncorrected poses put them); older ones stay."""
+    d = DepthObstacles(ObjectParams())
+    pose = camera_pose(**PAPER_CAM)
+    d.update(DepthFrame(render_depth([LOW_BOX], pose), K, pose), 0.0)
+    old = len(d)
+    moved = camera_pose(yaw=np.pi, **PAPER_CAM)                  # the first box behind
+    other = [box_parts((-1.5, 0.1), (0.3, 0.3, 0.12))]
+    d.update(DepthFrame(render_depth(other, moved), K, moved), 10.0)
+    assert len(d) > old
+    version = d.version
+    assert d.forget_since(5.0)
+    assert len(d) == old and d.version == version + 1
+    assert d.mask(_grid())[_cells(_grid(), 1.3, 1.7, -0.1, 0.3)].any()
+    assert not d.forget_since(5.0)

@@ -180,6 +180,22 @@ class DepthObstacles:
             self.version += 1
         return changed
 
+    def forget_since(self, stamp_s: float) -> bool:
+        """Forget the voxels last marked at or after ``stamp_s`` (after a SLAM correction
+        moved the poses they were placed at: they are re-observed where the corrected
+        map has them); True when the obstacle columns changed."""
+        keep = self._stamp < stamp_s
+        if keep.all():
+            return False
+        self._keys, self._score, self._stamp = (self._keys[keep], self._score[keep],
+                                                self._stamp[keep])
+        columns = np.unique(self._keys >> _Z_BITS)
+        changed = not np.array_equal(columns, self._columns)
+        if changed:
+            self._columns = columns
+            self.version += 1
+        return changed
+
     def _seen_through(self, frame: DepthFrame, keys: npt.NDArray[np.int64]
                       ) -> npt.NDArray[np.bool_]:
         """Voxels whose centre the camera sees past by more than ``depth_clear_margin_m``."""

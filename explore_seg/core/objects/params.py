@@ -268,6 +268,11 @@ class ObjectParams:
         "map has it, wherever the (drifting) map draws it; desk tops, chair seats and "
         "objects lower than the scan plane still mark (0 = off)", "m",
         range=(0.0, math.inf)))
+    depth_forget_on_correction: bool = field(default=True, metadata=param_meta(
+        "When a SLAM correction (a loop closure) re-renders the map, forget the voxels "
+        "marked since the previous correction: they lie where the uncorrected poses put "
+        "them (a wall seen from a drifted pose stays across a door) and are re-observed "
+        "(sim_bridge's lock step; the object_costmap node does not detect corrections)"))
     depth_decay_s: float = field(default=300.0, metadata=param_meta(
         "A voxel not marked again for this long is forgotten (0 = never)", "s",
         range=(0.0, math.inf)))
