@@ -70,6 +70,22 @@ class ObjectPipeline:
         self._published_depth = 0
         self._walls: tuple[int, WallMask] | None = None   # (map version, its wall mask)
         self._walls_occ: npt.NDArray[np.bool_] | None = None   # its occupied cells
+        self._closures = 0               # SLAM corrections seen
+        self._correction_s = -math.inf   # sim time of the last one
+
+    def _after_correction(self) -> None:
+        """A loop closure that re-rendered the map since the last call: forget the depth
+        voxels marked since the previous one (``depth_forget_on_correction``)."""
+        slam = self.engine.slam_error
+        if slam is None or len(slam.closures) == self._closures:
+            return
+        new = slam.closures[self._closures:]
+        self._closures = len(slam.closures)
+        if not any(c.rerendered for c in new):
+            return
+        if self.params.depth_forget_on_correction and self.map.depth is not None:
+            self.map.depth.forget_since(self._correction_s)
+        self._correction_s = self.engine.time_s
 
     def _wall_mask(self) -> WallMask:
         """The wall mask of the engine's map, computed once per map version (as the node
@@ -95,6 +111,7 @@ class ObjectPipeline:
         (3D boxes, fusion; the layer is timed by the caller) to ``timings["objects"]``.
         """
         self.map.note_robot_position(*self.engine.slam_pose[:2])
+        self._after_correction()
         cam = self.engine.latest_camera
         if cam is None or cam.stamp_s <= self._last_stamp:
             return False

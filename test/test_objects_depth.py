@@ -16,6 +16,8 @@ from objects_scene import (K, PRIORS, Det, box_parts, camera_pose, desk_at_wall_
 
 # the paper's robot: camera 0.894 m up, pitched 0.1 rad down
 PAPER_CAM = dict(z=0.894, pitch=0.1)
+#: A box lower than the lidar's scan plane (0.17 m): the 2D map cannot have it.
+LOW_BOX = box_parts((1.5, 0.1), (0.3, 0.3, 0.12))
 
 
 def _grid():
@@ -27,9 +29,9 @@ def _cells(layer, x0, x1, y0, y1):
     return (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)
 
 
-def test_a_bin_of_an_undetected_class_is_in_the_layer_after_one_frame():
+def test_a_low_box_of_an_undetected_class_is_in_the_layer_after_one_frame():
     pose = camera_pose(**PAPER_CAM)
-    bin_ = [box_parts((1.5, 0.1), (0.3, 0.3, 0.6))]
+    bin_ = [LOW_BOX]
     frame = DepthFrame(render_depth(bin_, pose), K, pose)
     params = ObjectParams()
     res = process_frame(frame, [], PRIORS, params)      # no detection at all
@@ -38,8 +40,8 @@ def test_a_bin_of_an_undetected_class_is_in_the_layer_after_one_frame():
     assert len(om) == 0                                  # no box ...
     layer = om.rasterize(_grid())
     occ = layer.data >= 65
-    # ... but the bin's near face is an obstacle, and nothing else (the floor is not)
-    assert occ[_cells(layer, 1.34, 1.41, -0.02, 0.22)].all()
+    # ... but the box's near edge is an obstacle, and nothing else (the floor is not)
+    assert occ[_cells(layer, 1.36, 1.41, -0.02, 0.22)].all()
     assert not occ[~_cells(layer, 1.30, 1.70, -0.1, 0.3)].any()
     # off: the layer stays empty (the boxes' behaviour alone)
     om0 = ObjectMap(dataclasses.replace(params, depth_obstacles=False), PRIORS)
@@ -51,7 +53,7 @@ def test_seen_through_clears_out_of_view_keeps_and_decay_forgets():
     params = ObjectParams(depth_decay_s=100.0)
     d = DepthObstacles(params)
     pose = camera_pose(**PAPER_CAM)
-    bin_ = [box_parts((1.5, 0.1), (0.3, 0.3, 0.6))]
+    bin_ = [LOW_BOX]
     assert d.update(DepthFrame(render_depth(bin_, pose), K, pose), 0.0)
     assert d.version == 1 and len(d) > 0
     # turned away: the bin is out of view and stays
@@ -77,14 +79,51 @@ def test_height_band_and_walls_do_not_mark():
     d = DepthObstacles(ObjectParams())
     d.update(DepthFrame(render_depth(parts, pose), K, pose), 0.0)
     assert len(d) == 0
-    # a wall the 2D map has: its points do not mark (drop_wall_points)
+    # a wall the 2D map has: its points do not mark (drop_wall_points; the lidar band,
+    # which drops them too, off)
     wall = [box_parts((2.55, 0.0), (0.1, 4.0, 2.0))]
     frame = DepthFrame(render_depth(wall, pose), K, pose)
     grid = desk_at_wall_map([None], 2.55)
+    d = DepthObstacles(ObjectParams(depth_lidar_band_m=0.0))
     d.update(frame, 0.0, wall_mask(grid, ObjectParams()))
     assert len(d) == 0
     d.update(frame, 0.0)
     assert len(d) > 0
+
+
+def test_what_the_lidar_sees_does_not_mark_wherever_the_map_draws_it():
+    """A column holding points at the scan plane's height is the 2D map's (a bin's face,
+    a wall): it does not mark, whatever the map's walls say; the bin's top behind its face
+    and a top overhanging a narrow pedestal still mark. Under SLAM drift the map's walls
+    lie 0.3 m from where the frame puts the wall: the wall mask misses its points, the
+    lidar band drops them."""
+    pose = camera_pose(**PAPER_CAM)
+    d = DepthObstacles(ObjectParams())
+    d.update(DepthFrame(render_depth([box_parts((1.5, 0.1), (0.3, 0.3, 0.6))], pose), K,
+                        pose), 0.0)
+    assert len(d) > 0 and np.all(d.centres()[:, 2] > 0.5)             # the top only
+    off = DepthObstacles(ObjectParams(depth_lidar_band_m=0.0))
+    off.update(DepthFrame(render_depth([box_parts((1.5, 0.1), (0.3, 0.3, 0.6))], pose), K,
+                          pose), 0.0)
+    assert np.any(off.centres()[:, 2] < 0.3)                           # the face too
+    table = [box_parts((1.5, 0.1), (0.1, 0.1, 0.55)),
+             box_parts((1.5, 0.1), (0.5, 0.5, 0.05), z0=0.55)]
+    d = DepthObstacles(ObjectParams())
+    d.update(DepthFrame(render_depth(table, pose), K, pose), 0.0)
+    occ = d.mask(_grid())
+    grid = _grid()
+    assert occ[_cells(grid, 1.26, 1.40, -0.1, 0.3)].mean() > 0.5      # the top's near part
+    assert not occ[_cells(grid, 1.46, 1.49, 0.06, 0.14)].any()        # the pedestal face
+    # a wall 2.55 m ahead; the drifted map draws it at 2.85 m
+    wall = [box_parts((2.55, 0.0), (0.1, 4.0, 2.0))]
+    frame = DepthFrame(render_depth(wall, pose), K, pose)
+    walls = wall_mask(desk_at_wall_map([None], 2.85), ObjectParams())
+    d = DepthObstacles(ObjectParams())
+    d.update(frame, 0.0, walls)
+    assert len(d) == 0
+    off = DepthObstacles(ObjectParams(depth_lidar_band_m=0.0))     # the map's walls only
+    off.update(frame, 0.0, walls)
+    assert len(off) > 0
 
 
 def test_a_desk_top_seen_only_partly_still_becomes_a_full_box():
@@ -111,9 +150,27 @@ def test_a_desk_top_seen_only_partly_still_becomes_a_full_box():
 
 def test_the_virtual_cloud_carries_the_depth_obstacles():
     pose = camera_pose(**PAPER_CAM)
-    frame = DepthFrame(render_depth([box_parts((1.5, 0.1), (0.3, 0.3, 0.6))], pose), K, pose)
+    frame = DepthFrame(render_depth([LOW_BOX], pose), K, pose)
     om = ObjectMap(ObjectParams(), PRIORS)
     om.update([], frame, 10**9)
     cloud = om.virtual_cloud()
     assert len(cloud) == len(om.depth) > 0
-    assert np.all((cloud[:, 0] > 1.3) & (cloud[:, 0] < 1.7) & (cloud[:, 2] < 0.7))
+    assert np.all((cloud[:, 0] > 1.3) & (cloud[:, 0] < 1.7) & (cloud[:, 2] < 0.3))
+
+
+def test_forget_since_drops_the_voxels_marked_after_a_correction():
+    """After a SLAM correction the voxels marked since the previous one go (they lie where
+    the uncorrected poses put them); older ones stay."""
+    d = DepthObstacles(ObjectParams())
+    pose = camera_pose(**PAPER_CAM)
+    d.update(DepthFrame(render_depth([LOW_BOX], pose), K, pose), 0.0)
+    old = len(d)
+    moved = camera_pose(yaw=np.pi, **PAPER_CAM)                  # the first box behind
+    other = [box_parts((-1.5, 0.1), (0.3, 0.3, 0.12))]
+    d.update(DepthFrame(render_depth(other, moved), K, moved), 10.0)
+    assert len(d) > old
+    version = d.version
+    assert d.forget_since(5.0)
+    assert len(d) == old and d.version == version + 1
+    assert d.mask(_grid())[_cells(_grid(), 1.3, 1.7, -0.1, 0.3)].any()
+    assert not d.forget_since(5.0)

@@ -296,13 +296,19 @@ def test_blacklist_retried_once_before_done():
     assert actions[3].action is Action.DONE and m.done
 
 
-@pytest.mark.parametrize("revealed_cells,retried", [(0, False), (3, False), (4, True)])
-def test_a_blacklist_retry_that_revealed_space_does_not_count(revealed_cells, retried):
-    # 0.5 m cells: retry_reveal_m2 = 1 m^2 is 4 cells become known during the retry
+@pytest.mark.parametrize("revealed_cells,far_cells,retried",
+                         [(0, 0, False), (3, 0, False), (4, 0, True), (3, 20, False)])
+def test_a_blacklist_retry_that_revealed_space_does_not_count(revealed_cells, far_cells,
+                                                              retried):
+    # 0.5 m cells: retry_reveal_m2 = 1 m^2 is 4 cells become known during the retry,
+    # within retry_reveal_radius_m (2 m) of the retried goal at (9, 9); cells known far
+    # from it (a loop-closure re-render redrawing the map elsewhere) reveal nothing
     g, _ = manager_world()
     g = GridMap(g.data.copy(), 0.5)
-    g.data[:2, :10] = -1                                       # 20 unknown cells
-    unknown = np.argwhere(g.data < 0)
+    g.data[17:19, 16:22] = -1                                  # 12 unknown cells near it
+    g.data[:2, :10] = -1                                       # 20 unknown cells far away
+    unknown = np.argwhere(g.data[:, 12:] < 0) + [0, 12]
+    far = np.argwhere(g.data[:, :12] < 0)
     m = GoalManager(SelectionParams(strategy="nearest", done_confirmations=1,
                                     blacklist_retries=1, retry_reveal_m2=1.0))
     m.add_to_blacklist((9.0, 9.0))
@@ -310,6 +316,7 @@ def test_a_blacklist_retry_that_revealed_space_does_not_count(revealed_cells, re
     assert "blacklist cleared" in first.reason                 # the counted retry
     r, c = unknown[:revealed_cells].T
     g.data[r, c] = 0                                           # what the retry revealed
+    g.data[tuple(far[:far_cells].T)] = 0                       # and a re-render elsewhere
     m.add_to_blacklist((9.0, 9.0))                             # its goal failed again
     second = m.step(1.0, (1.0, 1.0), g, [], [])
     assert ("blacklist cleared" in second.reason) is retried
@@ -317,6 +324,14 @@ def test_a_blacklist_retry_that_revealed_space_does_not_count(revealed_cells, re
     if retried:                  # the free retry revealed nothing: its count is spent
         m.add_to_blacklist((9.0, 9.0))
         assert m.step(2.0, (1.0, 1.0), g, [], []).action is Action.DONE
+    whole = GoalManager(SelectionParams(strategy="nearest", done_confirmations=1,
+                                        blacklist_retries=1, retry_reveal_radius_m=0.0))
+    whole.add_to_blacklist((9.0, 9.0))
+    g.data[:2, :10] = -1
+    whole.step(0.0, (1.0, 1.0), g, [], [])
+    g.data[:2, :10] = 0                                        # known anywhere counts
+    whole.add_to_blacklist((9.0, 9.0))
+    assert "blacklist cleared" in whole.step(1.0, (1.0, 1.0), g, [], []).reason
     off = GoalManager(SelectionParams(strategy="nearest", done_confirmations=1,
                                       blacklist_retries=1, retry_reveal_m2=0.0))
     off.add_to_blacklist((9.0, 9.0))

@@ -2,14 +2,20 @@
 whatever its class (the idea of Nav2's voxel / obstacle layer).
 
 The YOLO boxes give the full extent of furniture the detector knows, including the parts
-the camera does not see; an object of a class it does not know (a bin, a box, a shelf
-overhang above the lidar plane) would be missed. :class:`DepthObstacles` keeps voxels in
+the camera does not see; an object of a class it does not know and the lidar does not
+cut (a box lower than the scan plane, a bin's rim, a shelf overhang above the scan
+plane) would be missed. :class:`DepthObstacles` keeps voxels in
 the map frame:
 
 * **marking**: the depth image is sampled every ``depth_pixel_stride``-th pixel up to
   ``depth_max_range_m``; points between ``depth_min_height_m`` (the floor margin) and
-  ``depth_max_height_m`` (the robot's height), not over a wall of the 2D map
-  (``drop_wall_points``), are binned into voxels of ``depth_voxel_m`` (x, y) by
+  ``depth_max_height_m`` (the robot's height), not in a voxel column that also holds a
+  point of the frame at the lidar's height (``depth_lidar_height_m`` within
+  ``depth_lidar_band_m``) or next to one (the lidar sees what stands there, so the 2D
+  map has it, and this holds however far the SLAM pose has drifted from the map's walls;
+  the neighbours because a pitched camera places a wall's points of one pixel column a
+  few centimetres apart sideways at different heights), not over a
+  wall of the 2D map (``drop_wall_points``), are binned into voxels of ``depth_voxel_m`` (x, y) by
   ``depth_voxel_height_m`` (z); a voxel with at least ``depth_min_points`` points in a
   frame gains one point of score (up to ``depth_max_score``);
 * **clearing**: a stored voxel that lies in the camera's view, in front of the measured
@@ -44,6 +50,13 @@ def _pack(ix: npt.NDArray[np.int64], iy: npt.NDArray[np.int64], iz: npt.NDArray[
           ) -> npt.NDArray[np.int64]:
     return (((ix + _XY_OFF) << (_XY_BITS + _Z_BITS)) | ((iy + _XY_OFF) << _Z_BITS)
             | iz).astype(np.int64)
+
+
+def _with_neighbours(columns: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
+    """Column keys (``key >> _Z_BITS``) of ``columns`` and of their 8 neighbours."""
+    steps = np.array([(dx << _XY_BITS) + dy for dx in (-1, 0, 1) for dy in (-1, 0, 1)],
+                     np.int64)
+    return np.unique((columns[:, None] + steps[None, :]).ravel())
 
 
 def _unpack(keys: npt.NDArray[np.int64]) -> tuple[npt.NDArray[np.int64], ...]:
@@ -92,10 +105,24 @@ class DepthObstacles:
         k = frame.intrinsics
         pts = np.stack([(cols[ok] - k.cx) * z / k.fx, (rows[ok] - k.cy) * z / k.fy, z], axis=1)
         pts = apply_transform(frame.map_from_optical, pts)
-        pts = pts[(pts[:, 2] > p.depth_min_height_m) & (pts[:, 2] < p.depth_max_height_m)]
+        lidar = (np.abs(pts[:, 2] - p.depth_lidar_height_m) <= p.depth_lidar_band_m
+                 if p.depth_lidar_band_m > 0 else None)
+        band = (pts[:, 2] > p.depth_min_height_m) & (pts[:, 2] < p.depth_max_height_m)
+        if lidar is not None and lidar.any():
+            cols = self._column_keys(pts)
+            band &= ~np.isin(cols, _with_neighbours(np.unique(cols[lidar])))
+        pts = pts[band]
         if walls is not None and p.drop_wall_points and len(pts):
             pts = pts[~walls.on(pts[:, :2])]
         return pts
+
+    def _column_keys(self, pts: npt.NDArray[np.float64]) -> npt.NDArray[np.int64]:
+        """The (ix, iy) voxel column key of each point (the stored voxels' ``key >> z
+        bits``), shape (N,)."""
+        v = self.params.depth_voxel_m
+        ix = np.floor(pts[:, 0] / v).astype(np.int64)
+        iy = np.floor(pts[:, 1] / v).astype(np.int64)
+        return _pack(ix, iy, np.zeros_like(ix)) >> _Z_BITS
 
     def update(self, frame: DepthFrame, stamp_s: float, walls: WallMask | None = None
                ) -> bool:
@@ -146,6 +173,22 @@ class DepthObstacles:
             old = np.argsort(stamp[keep], kind="stable")[:int(keep.sum()) - p.depth_max_voxels]
             keep[np.flatnonzero(keep)[old]] = False
         self._keys, self._score, self._stamp = keys[keep], score[keep].astype(np.int16), stamp[keep]
+        columns = np.unique(self._keys >> _Z_BITS)
+        changed = not np.array_equal(columns, self._columns)
+        if changed:
+            self._columns = columns
+            self.version += 1
+        return changed
+
+    def forget_since(self, stamp_s: float) -> bool:
+        """Forget the voxels last marked at or after ``stamp_s`` (after a SLAM correction
+        moved the poses they were placed at: they are re-observed where the corrected
+        map has them); True when the obstacle columns changed."""
+        keep = self._stamp < stamp_s
+        if keep.all():
+            return False
+        self._keys, self._score, self._stamp = (self._keys[keep], self._score[keep],
+                                                self._stamp[keep])
         columns = np.unique(self._keys >> _Z_BITS)
         changed = not np.array_equal(columns, self._columns)
         if changed:

@@ -232,7 +232,8 @@ class ObjectParams:
     depth_obstacles: bool = field(default=True, metadata=param_meta(
         "Mark every depth point between depth_min_height_m and depth_max_height_m in the "
         "object layer (voxels, cleared where the camera sees through them), whatever its "
-        "class: an undetected bin or box becomes an obstacle"))
+        "class: an undetected object the lidar does not cut (a low box, a bin's rim, an "
+        "overhang) becomes an obstacle"))
     depth_min_height_m: float = field(default=0.05, metadata=param_meta(
         "Floor margin: depth points lower than this above the floor do not mark", "m",
         range=(0.0, math.inf)))
@@ -257,6 +258,21 @@ class ObjectParams:
     depth_clear_margin_m: float = field(default=0.1, metadata=param_meta(
         "A voxel is seen through when the depth at its pixel lies this much beyond it", "m",
         range=(0.0, math.inf)))
+    depth_lidar_height_m: float = field(default=0.17, metadata=param_meta(
+        "Height of the 2D lidar's scan plane above the floor (the 2D map's obstacles are "
+        "what it cuts; sim_bridge's and a TurtleBot3's LDS: about 0.17 m)", "m",
+        range=(0.0, math.inf)))
+    depth_lidar_band_m: float = field(default=0.02, metadata=param_meta(
+        "A voxel column holding a depth point of the frame within this of "
+        "depth_lidar_height_m does not mark: the lidar sees what stands there and the 2D "
+        "map has it, wherever the (drifting) map draws it; desk tops, chair seats and "
+        "objects lower than the scan plane still mark (0 = off)", "m",
+        range=(0.0, math.inf)))
+    depth_forget_on_correction: bool = field(default=True, metadata=param_meta(
+        "When a SLAM correction (a loop closure) re-renders the map, forget the voxels "
+        "marked since the previous correction: they lie where the uncorrected poses put "
+        "them (a wall seen from a drifted pose stays across a door) and are re-observed "
+        "(sim_bridge's lock step; the object_costmap node does not detect corrections)"))
     depth_decay_s: float = field(default=300.0, metadata=param_meta(
         "A voxel not marked again for this long is forgotten (0 = never)", "s",
         range=(0.0, math.inf)))
@@ -284,7 +300,8 @@ class ObjectParams:
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
         non_negative = ("voxel_size_m", "miss_depth_margin_m", "leg_min_width_m",
                         "unknown_radius_m", "post_max_width_m", "post_overhang_m", "post_band_m",
-                        "depth_min_height_m", "depth_clear_margin_m", "depth_decay_s")
+                        "depth_min_height_m", "depth_clear_margin_m", "depth_decay_s",
+                        "depth_lidar_height_m", "depth_lidar_band_m")
         for name in non_negative:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):

@@ -32,7 +32,7 @@ Examples
 from __future__ import annotations
 
 from collections import deque
-from typing import Iterator
+from typing import Iterator, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -145,4 +145,39 @@ class Blacklist:
         return n
 
 
-__all__ = ["Blacklist", "near_counts"]
+class RevealWatch:
+    """How much of the map near the goals of the last blacklist retry became known since.
+
+    The blacklist retry (:meth:`.goals.GoalManager.step`) is free when it revealed space;
+    counted over the whole map, a loop-closure re-render that shifts the map (walls
+    redrawn a few centimetres over, blurred edges) would count as revealed space, and a
+    retry whose goals stayed as they were would not be spent. :meth:`start` takes the
+    unknown cells within ``radius_m`` of each retried goal (:func:`near_counts`; a cell
+    near two goals counts twice, on both maps alike), :meth:`revealed_m2` how many of
+    them are known now. ``radius_m`` 0: the cells that became known anywhere on the map.
+    """
+
+    def __init__(self, radius_m: float) -> None:
+        self.radius_m = float(radius_m)
+        self._points: tuple[tuple[float, float], ...] = ()
+        self._unknown: int | None = None
+
+    def _unknown_near(self, grid: GridMap) -> int:
+        if self.radius_m <= 0:          # the whole map: minus its known cells
+            return -int(np.count_nonzero(grid.data >= 0))
+        return sum(near_counts(grid, xy, self.radius_m, 101)[1] for xy in self._points)
+
+    def start(self, grid: GridMap, points: Sequence[tuple[float, float]]) -> None:
+        """A retry of the goals ``points`` begins on ``grid``."""
+        self._points = tuple(dict.fromkeys(points))
+        self._unknown = self._unknown_near(grid)
+
+    def revealed_m2(self, grid: GridMap) -> float:
+        """Area near the last retry's goals known now and unknown when it began (0
+        before any retry)."""
+        if self._unknown is None:
+            return 0.0
+        return (self._unknown - self._unknown_near(grid)) * grid.resolution_m ** 2
+
+
+__all__ = ["Blacklist", "RevealWatch", "near_counts"]

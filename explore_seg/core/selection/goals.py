@@ -15,7 +15,7 @@ import numpy.typing as npt
 from explore_seg.core.frontiers import Frontier
 from explore_seg.core.grid import GridMap
 from explore_seg.core.selection.areas import TURN_DONE_RAD, AreaCounts, turn_goal, turned
-from explore_seg.core.selection.blacklist import Blacklist
+from explore_seg.core.selection.blacklist import Blacklist, RevealWatch
 from explore_seg.core.selection.costs import Selection, select_goal
 from explore_seg.core.selection.goal_types import (Action, Goal, NavOutcome, StepInputs,
                                                    StepResult, goal_frontier_index, goal_yaw,
@@ -93,7 +93,7 @@ class GoalManager:
         self._empty_ticks = 0
         self._goal_cells_xy: npt.NDArray[np.float64] | None = None
         self._retries_left = self.params.blacklist_retries
-        self._known_at_retry: int | None = None     # known cells when the last retry began
+        self._reveal = RevealWatch(self.params.retry_reveal_radius_m)   # the last retry's
         self.start_xy_m: tuple[float, float] | None = None
         self._start_yaw = 0.0
         if clear_blacklist:
@@ -118,6 +118,7 @@ class GoalManager:
         """Apply new parameters (the blacklist keeps its newest entries)."""
         self.params = params
         self._bl.resize(params.blacklist_max)
+        self._reveal.radius_m = params.retry_reveal_radius_m
 
     @property
     def blacklist(self) -> tuple[tuple[float, float], ...]:
@@ -536,17 +537,15 @@ class GoalManager:
                 self._start_progress(self.goal, robot_xy_m, now_s)
                 return StepResult(Action.NEW_GOAL, self.goal,
                                   "no reachable frontier: returning to start", sel)
-        known = int(np.count_nonzero(grid.data >= 0)) if len(self._bl) else 0
-        # the last retry revealed space: this one does not count
-        free = (self._known_at_retry is not None and p.retry_reveal_m2 > 0
-                and (known - self._known_at_retry) * grid.resolution_m ** 2
-                >= p.retry_reveal_m2)
+        # the last retry revealed space near its goals: this one does not count
+        free = (p.retry_reveal_m2 > 0 and len(self._bl) > 0
+                and self._reveal.revealed_m2(grid) >= p.retry_reveal_m2)
         if len(self._bl) and (free or self._retries_left > 0):
             # The map changed since those goals failed (a doorway seen, a false
             # obstacle cleared): give the blacklisted frontiers another chance.
             if not free:
                 self._retries_left -= 1
-            self._known_at_retry = known
+            self._reveal.start(grid, tuple(self._bl))
             self._bl.clear()
             self._empty_ticks = 0
             return StepResult(Action.WAIT, None, "no reachable frontier: blacklist "

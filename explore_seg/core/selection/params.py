@@ -98,6 +98,10 @@ class GoalParams:
         "does not count against blacklist_retries, so retries go on while they reveal "
         "space. Raising it makes fewer retries free; 0 = every retry counts", "m^2",
         default=1.0)
+    retry_reveal_radius_m: float = non_negative(
+        "retry_reveal_m2 counts the cells within this of the retried goals that became "
+        "known (a loop-closure re-render that redraws the map elsewhere reveals nothing); "
+        "0 = anywhere on the map", "m", default=2.0)
     flicker_vanish_count: int = field(default=3, metadata=param_meta(
         "blacklist a goal area once its frontier vanished this many times before the robot "
         "got there with its cells still unknown (a wall edge flickering next to unknown "
@@ -164,7 +168,7 @@ class GoalParams:
                                   "goal_reached_tolerance_m", "frontier_match_radius_m",
                                   "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
                                   "flicker_radius_m", "retry_reveal_m2", "approach_radius_m",
-                                  "retry_change_m2"))
+                                  "retry_change_m2", "retry_reveal_radius_m"))
         if not (math.isfinite(self.progress_timeout_s) and self.progress_timeout_s > 0):
             raise ValueError(f"progress_timeout_s must be finite and > 0, "
                              f"got {self.progress_timeout_s}")
