@@ -145,21 +145,33 @@ def _key_counts(x: npt.NDArray[np.int64], y: npt.NDArray[np.int64]
 _MAX_TABLE = 1 << 21
 
 
-def pair_counts(lab: npt.NDArray[np.int32]) -> dict[tuple[int, int], int]:
-    """Number of 4-neighbour cell pairs between every two different non-zero labels."""
-    out: dict[tuple[int, int], int] = {}
+def border_pairs(lab: npt.NDArray[np.int32]) -> list[tuple[npt.NDArray[np.intp],
+                                                             npt.NDArray[np.intp], int, int,
+                                                             npt.NDArray[np.int64],
+                                                             npt.NDArray[np.int64]]]:
+    """The 4-neighbour cell pairs between two different non-zero labels, per direction
+    that has any: (rows, cols, dr, dc, lower label, higher label); the pair is the cell
+    (row, col) and the cell (row + dr, col + dc)."""
+    out = []
     pos = lab > 0
-    for a, b, pa, pb in ((lab[:, :-1], lab[:, 1:], pos[:, :-1], pos[:, 1:]),
-                         (lab[:-1, :], lab[1:, :], pos[:-1, :], pos[1:, :])):
+    for a, b, pa, pb, dr, dc in ((lab[:, :-1], lab[:, 1:], pos[:, :-1], pos[:, 1:], 0, 1),
+                                 (lab[:-1, :], lab[1:, :], pos[:-1, :], pos[1:, :], 1, 0)):
         m = a != b
         m &= pa
         m &= pb
         r, c = np.nonzero(m)
         if r.size == 0:
             continue
-        am, bm = a[r, c], b[r, c]
-        x = np.minimum(am, bm).astype(np.int64)
-        y = np.maximum(am, bm).astype(np.int64)
+        av, bv = a[r, c], b[r, c]
+        out.append((r, c, dr, dc, np.minimum(av, bv).astype(np.int64),
+                    np.maximum(av, bv).astype(np.int64)))
+    return out
+
+
+def pair_counts(lab: npt.NDArray[np.int32]) -> dict[tuple[int, int], int]:
+    """Number of 4-neighbour cell pairs between every two different non-zero labels."""
+    out: dict[tuple[int, int], int] = {}
+    for _, _, _, _, x, y in border_pairs(lab):
         for i, j, c in zip(*_key_counts(x, y)):
             out[(i, j)] = out.get((i, j), 0) + c
     return out

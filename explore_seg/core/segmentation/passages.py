@@ -22,7 +22,7 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from explore_seg.core.segmentation.labels import region_edges
+from explore_seg.core.segmentation.labels import border_pairs, region_edges
 from explore_seg.core.segmentation.params import SegmentationParams
 
 if TYPE_CHECKING:
@@ -55,20 +55,7 @@ class BorderPairs:
     def __init__(self, labels: npt.NDArray[np.int32]) -> None:
         cells: list[tuple[npt.NDArray[np.intp], npt.NDArray[np.intp], int, int]] = []
         keys: list[npt.NDArray[np.int64]] = []
-        pos = labels > 0
-        for a, b, pa, pb, dr, dc in ((labels[:, :-1], labels[:, 1:], pos[:, :-1],
-                                      pos[:, 1:], 0, 1),
-                                     (labels[:-1, :], labels[1:, :], pos[:-1, :],
-                                      pos[1:, :], 1, 0)):
-            m = a != b
-            m &= pa
-            m &= pb
-            r, c = np.nonzero(m)
-            if r.size == 0:
-                continue
-            av, bv = a[r, c], b[r, c]
-            lo = np.minimum(av, bv).astype(np.int64)
-            hi = np.maximum(av, bv).astype(np.int64)
+        for r, c, dr, dc, lo, hi in border_pairs(labels):
             cells.append((r, c, dr, dc))
             keys.append(lo * (1 << 32) + hi)
         self.cells = cells
