@@ -172,13 +172,7 @@ class DepthObstacles:
         if keep.sum() > p.depth_max_voxels:       # bounded: the oldest go first
             old = np.argsort(stamp[keep], kind="stable")[:int(keep.sum()) - p.depth_max_voxels]
             keep[np.flatnonzero(keep)[old]] = False
-        self._keys, self._score, self._stamp = keys[keep], score[keep].astype(np.int16), stamp[keep]
-        columns = np.unique(self._keys >> _Z_BITS)
-        changed = not np.array_equal(columns, self._columns)
-        if changed:
-            self._columns = columns
-            self.version += 1
-        return changed
+        return self._store(keys[keep], score[keep].astype(np.int16), stamp[keep])
 
     def forget_since(self, stamp_s: float) -> bool:
         """Forget the voxels last marked at or after ``stamp_s`` (after a SLAM correction
@@ -187,9 +181,14 @@ class DepthObstacles:
         keep = self._stamp < stamp_s
         if keep.all():
             return False
-        self._keys, self._score, self._stamp = (self._keys[keep], self._score[keep],
-                                                self._stamp[keep])
-        columns = np.unique(self._keys >> _Z_BITS)
+        return self._store(self._keys[keep], self._score[keep], self._stamp[keep])
+
+    def _store(self, keys: npt.NDArray[np.int64], score: npt.NDArray[np.int16],
+               stamp: npt.NDArray[np.float64]) -> bool:
+        """Keep these voxels; True (and a new :attr:`version`) when the obstacle columns
+        changed."""
+        self._keys, self._score, self._stamp = keys, score, stamp
+        columns = np.unique(keys >> _Z_BITS)
         changed = not np.array_equal(columns, self._columns)
         if changed:
             self._columns = columns
