@@ -22,7 +22,7 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.fields import param_meta
-from explore_seg.core.grid import FREE, OCCUPIED, UNKNOWN, GridMap
+from explore_seg.core.grid import FREE, OCCUPIED, UNKNOWN, GridMap, beam_samples, range_returns
 
 
 @dataclass(frozen=True)
@@ -205,19 +205,8 @@ class ScanMapper:
         before its end (the end cell is handled as a hit, or left alone for a miss)."""
         res = self.params.resolution_m
         ox, oy = self._origin_cells
-        step = float(self.params.ray_step_cells)
-        len_cells = length / res
-        n_samples = np.floor(len_cells / step).astype(np.int64)
-        total = int(n_samples.sum())
-        if not total:
-            return np.zeros(0, dtype=np.int64)
-        first = np.cumsum(n_samples) - n_samples
-        k = np.arange(total, dtype=np.float32) - np.repeat(
-            first.astype(np.float32) - np.float32(0.5), n_samples)
-        fc = np.floor(np.float32(x0 / res - ox)
-                      + k * np.repeat((ca * step).astype(np.float32), n_samples))
-        fr = np.floor(np.float32(y0 / res - oy)
-                      + k * np.repeat((sa * step).astype(np.float32), n_samples))
+        fr, fc = beam_samples(x0 / res - ox, y0 / res - oy, length / res, ca, sa,
+                              float(self.params.ray_step_cells))
         return self._flat_index(fr, fc)
 
     def integrate_scan(self, pose: tuple[float, float, float],
@@ -257,9 +246,7 @@ class ScanMapper:
         p = self.params
         res = p.resolution_m
         angles = yaw + float(angle_min_rad) + float(angle_increment_rad) * np.arange(r.size)
-        with np.errstate(invalid="ignore"):
-            hit = np.isfinite(r) & (r >= range_min_m) & (r < range_max_m)
-            miss = (np.isposinf(r) | (r >= range_max_m)) & ~np.isnan(r)
+        hit, miss = range_returns(r, range_min_m, range_max_m)
         keep = hit | miss
         if not keep.any():
             return

@@ -207,6 +207,37 @@ class GridMap:
         return resample_array(self.data, self, other, fill)
 
 
+def range_returns(ranges: npt.NDArray[np.float64], range_min_m: float, range_max_m: float
+                  ) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
+    """(hit, miss) of each range reading: a hit ends at a return (finite, in
+    [range_min, range_max)); a miss has no return (inf or >= range_max: free space up to
+    range_max); NaN and readings below range_min are neither."""
+    with np.errstate(invalid="ignore"):
+        hit = np.isfinite(ranges) & (ranges >= range_min_m) & (ranges < range_max_m)
+        miss = (np.isposinf(ranges) | (ranges >= range_max_m)) & ~np.isnan(ranges)
+    return hit, miss
+
+
+def beam_samples(start_col: float, start_row: float, len_cells: npt.NDArray[np.float64],
+                 ca: npt.NDArray[np.float64], sa: npt.NDArray[np.float64], step: float
+                 ) -> tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+    """(rows, cols), floored, of the samples along beams from (start_col, start_row) in
+    cell units, direction (ca, sa), ``len_cells`` long: beam b gets
+    ``floor(len_cells[b] / step)`` samples at (k + 0.5) * step cells, all strictly before
+    its end (the end cell is the caller's: a return, or nothing). Ragged, beam after beam;
+    float32 arithmetic (the simulator's map is bit-identical to it)."""
+    n = np.floor(len_cells / step).astype(np.int64)
+    total = int(n.sum())
+    if not total:
+        return np.zeros(0, np.float32), np.zeros(0, np.float32)
+    first = np.cumsum(n) - n
+    k = np.arange(total, dtype=np.float32) - np.repeat(
+        first.astype(np.float32) - np.float32(0.5), n)
+    cols = np.floor(np.float32(start_col) + k * np.repeat((ca * step).astype(np.float32), n))
+    rows = np.floor(np.float32(start_row) + k * np.repeat((sa * step).astype(np.float32), n))
+    return rows, cols
+
+
 def resample_array(values: npt.NDArray, src: GridMap, dst: GridMap, fill: int | float = 0
                    ) -> npt.NDArray:
     """Values laid out on ``src``'s cells, sampled at ``dst``'s cell centres (nearest cell).

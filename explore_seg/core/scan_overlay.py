@@ -46,7 +46,7 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.fields import param_meta
-from explore_seg.core.grid import OCCUPIED, UNKNOWN, GridMap
+from explore_seg.core.grid import OCCUPIED, UNKNOWN, GridMap, beam_samples, range_returns
 
 #: Beams per scan accepted (a 0.1 deg scanner has 3600).
 MAX_BEAMS = 100_000
@@ -136,11 +136,6 @@ class ScanOverlay:
         self._newest_s = -math.inf
         self._clear_lattice()
 
-    @property
-    def newest_s(self) -> float:
-        """Stamp of the newest scan added (-inf: none)."""
-        return self._newest_s
-
     def add_scan(self, stamp_s: float, robot_pose: tuple[float, float, float],
                  angles: npt.ArrayLike, ranges: npt.ArrayLike, range_max_m: float,
                  range_min_m: float = 0.0) -> None:
@@ -200,9 +195,7 @@ class ScanOverlay:
         c, s = math.cos(yaw), math.sin(yaw)
         sx = x + c * p.lidar_x_m - s * p.lidar_y_m
         sy = y + s * p.lidar_x_m + c * p.lidar_y_m
-        with np.errstate(invalid="ignore"):
-            hit = np.isfinite(r) & (r >= range_min_m) & (r < range_max_m)
-            miss = (np.isposinf(r) | (r >= range_max_m)) & ~np.isnan(r)
+        hit, miss = range_returns(r, range_min_m, range_max_m)
         keep = hit | miss
         if not keep.any():
             return None
@@ -271,16 +264,8 @@ class ScanOverlay:
         t = np.float32(scan.stamp_s - self._t0)
         ca, sa = np.cos(scan.angles), np.sin(scan.angles)
         len_cells = scan.length / res
-        step = 1.0 / _SAMPLES_PER_CELL
-        counts = np.floor(len_cells / step).astype(np.int64)
-        total = int(counts.sum())
-        if total:
-            first = np.cumsum(counts) - counts
-            k = (np.arange(total, dtype=np.float64)
-                 - np.repeat(first.astype(np.float64) - 0.5, counts)) * step
-            cols = np.floor(sc + k * np.repeat(ca, counts)).astype(np.int64)
-            rows = np.floor(sr + k * np.repeat(sa, counts)).astype(np.int64)
-            self._stamp(self._free_t, rows, cols, t)
+        rows_f, cols_f = beam_samples(sc, sr, len_cells, ca, sa, 1.0 / _SAMPLES_PER_CELL)
+        self._stamp(self._free_t, rows_f.astype(np.int64), cols_f.astype(np.int64), t)
         ends = scan.hit
         if ends.any():
             cols = np.floor(sc + len_cells[ends] * ca[ends]).astype(np.int64)
