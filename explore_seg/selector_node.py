@@ -8,9 +8,9 @@ from ``regions``, nearest, explore_lite, or rrt_exploration, whose candidates co
 RRTs) and keeps, switches, blacklists and finishes. Its parameters:
 :class:`~explore_seg.core.selection.SelectorNodeParams`, the detection parameters
 :class:`~explore_seg.core.frontiers.FrontierParams` under ``frontier.`` and the RRT
-detector's :class:`~explore_seg.core.rrt.RrtParams` under ``rrt.``. With ``scan_overlay.enabled``
-it subscribes ``scan`` too: the scans since the last maps fill the map's unknown cells for
-the decisions (:mod:`explore_seg.core.scan_overlay`, :mod:`explore_seg.scan_input`).
+detector's :class:`~explore_seg.core.rrt.RrtParams` under ``rrt.``. It subscribes ``scan``
+too: with ``scan_overlay.enabled`` the scans since the last maps fill the map's unknown
+cells for the decisions (:mod:`explore_seg.core.scan_overlay`, :mod:`explore_seg.scan_input`).
 
 One timer ``_tick`` on the ROS clock (``rate_hz``) runs the state machine::
 

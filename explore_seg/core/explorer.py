@@ -446,12 +446,9 @@ class Explorer:
         if seen is grid:
             return grid
         self._detected(seen, layer)
-        robot_rc = seen.world_to_cell(float(pose[0]), float(pose[1]))
-        if not seen.in_bounds(*robot_rc) or self._graph is None:
-            return grid
-        radius = metres_to_cells(self._selection_params.start_search_radius_m,
-                                 seen.resolution_m)
-        start = self._graph.graph.nearest_passable(robot_rc, radius)
+        xy = (float(pose[0]), float(pose[1]))
+        robot_rc = seen.world_to_cell(*xy)
+        start = self._start_cell(seen, robot_rc, xy, [])   # its warnings come from step
         frontiers = self._frontiers
         if self._strategy.candidates == "rrt" and self._det is not None:
             # the RRT detection has no frontier groups: judge the map by its groups
