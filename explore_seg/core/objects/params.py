@@ -272,7 +272,13 @@ class ObjectParams:
         "When a SLAM correction (a loop closure) re-renders the map, forget the voxels "
         "marked since the previous correction: they lie where the uncorrected poses put "
         "them (a wall seen from a drifted pose stays across a door) and are re-observed "
-        "(sim_bridge's lock step; the object_costmap node does not detect corrections)"))
+        "(the lock step is told of corrections by the simulator; the object_costmap node "
+        "detects them: correction_* parameters)"))
+    boxes_forget_on_correction: bool = field(default=True, metadata=param_meta(
+        "At such a correction, also drop the tracked boxes last seen since the previous "
+        "one: their evidence came at uncorrected poses (a box seen from a drifted pose "
+        "stands in a passage of the corrected map); the camera finds them again where "
+        "the corrected map has them"))
     depth_decay_s: float = field(default=300.0, metadata=param_meta(
         "A voxel not marked again for this long is forgotten (0 = never)", "s",
         range=(0.0, math.inf)))
