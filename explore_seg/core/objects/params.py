@@ -457,13 +457,14 @@ class ObjectCostmapNodeParams(ObjectParams):
     correction_pose_max_gap_s: float = field(default=1.0, metadata=param_meta(
         "Poses further apart in time are not compared (after a gap any jump is "
         "explained)", "s", range=(0.0, math.inf)))
-    correction_map_moved_fraction: float = field(default=0.1, metadata=param_meta(
+    correction_map_moved_fraction: float = field(default=0.02, metadata=param_meta(
         "A correction: at least this share of the previous map's occupied cells has no "
         "occupied cell within correction_map_tolerance_m in the new map (a re-render moved "
         "the walls; a map that only grew keeps them; 0 = not from the map)",
         range=(0.0, 1.0)))
-    correction_map_min_cells: int = field(default=30, metadata=param_meta(
-        "... and at least this many of them", range=(1, 2**31 - 1)))
+    correction_map_min_cells: int = field(default=100, metadata=param_meta(
+        "... and at least this many of them (drift between map updates moves a few walls "
+        "by a cell or two)", range=(1, 2**31 - 1)))
     correction_map_tolerance_m: float = field(default=0.1, metadata=param_meta(
         "An occupied cell of the previous map with an occupied cell of the new map within "
         "this has not moved", "m", range=(0.0, math.inf)))
