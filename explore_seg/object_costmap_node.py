@@ -15,6 +15,11 @@ camera's rate, whichever is lower) over ``_LAG_WINDOW_S`` of ROS time, it warns,
 cause (malformed frames, frames without a robot pose at their stamp, or too little CPU). A
 bad ``scan`` is dropped on arrival and the last good one kept. While ``exploration_done``
 is true (and ``idle_when_done``) the timer is paused (:class:`~explore_seg.done_gate.DoneGate`).
+A SLAM correction (a loop closure), found in the map-frame poses (a jump that driving does
+not explain) or in ``map`` (occupied cells that moved; ``correction_*`` parameters,
+:mod:`explore_seg.core.objects.corrections`), drops the boxes and depth voxels placed since
+the previous correction, as the lock step does at the simulator's closures
+(:class:`~explore_seg.object_costmap_helpers.CorrectionHandler`).
 """
 from __future__ import annotations
 
@@ -29,19 +34,20 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from sensor_msgs.msg import CameraInfo, Image, LaserScan, PointCloud2
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
-from visualization_msgs.msg import Marker, MarkerArray
+from visualization_msgs.msg import MarkerArray
 
 from explore_seg import convert
 from explore_seg.core.camera import base_from_optical, map_from_base
 from explore_seg.core.detector import Detector, DetectorParams
-from explore_seg.core.grid import GridMap, quaternion_from_yaw
+from explore_seg.core.grid import GridMap
 from explore_seg.core.limits import InputLimits
 from explore_seg.core.pose_fusion import PoseFusionParams
-from explore_seg.core.objects import (UNKNOWN_CLASS, DepthFrame, Object3D,
+from explore_seg.core.objects import (CorrectionDetector, DepthFrame, Object3D,
                                       ObjectCostmapNodeParams, ObjectMap, WallMask,
                                       load_priors, parse_class_ids, process_frame, wall_mask)
 from explore_seg.done_gate import DoneGate
 from explore_seg.node_util import WarnThrottle, config_file, failsafe, run
+from explore_seg.object_costmap_helpers import CorrectionHandler, closest, markers, stamp_ns
 from explore_seg.object_inputs import lag_warning, purge_newer, wait_reason
 from explore_seg.params import ParamBinding
 from explore_seg.pose_input import PoseHooks, PoseInput
@@ -61,10 +67,6 @@ _MIN_GAP_PERIODS = 0.9
 _LAG_WINDOW_S = 20.0
 #: Wall seconds between repeated lag warnings.
 _LAG_WARN_PERIOD_S = 30.0
-#: Marker colours (r, g, b) per class; others use the last entry.
-_CLASS_RGB = {"chair": (0.9, 0.3, 0.2), "dining table": (0.6, 0.4, 0.2),
-              "couch": (0.5, 0.3, 0.6), "bed": (0.3, 0.5, 0.8), UNKNOWN_CLASS: (0.9, 0.8, 0.1),
-              "": (0.6, 0.6, 0.6)}
 
 
 class State(Enum):
@@ -73,10 +75,6 @@ class State(Enum):
     WAITING_FOR_CAMERA_INFO = 0
     WAITING_FOR_FRAMES = 1
     RUNNING = 2
-
-
-def _stamp_ns(msg: Any) -> int:
-    return convert.stamp_to_ns(msg.header.stamp)
 
 
 class ObjectCostmapNode(Node):
@@ -94,6 +92,8 @@ class ObjectCostmapNode(Node):
         # the installed share's priors when no file is given (the core knows the source tree)
         self._priors = load_priors(p.priors_path or config_file("object_priors.yaml"))
         self._objects = ObjectMap(p, self._priors)
+        self._corrections = CorrectionHandler(CorrectionDetector(p), self._objects,
+                                              self.get_logger().info)
         self._detector: Detector | None = None
         self._detector_failed = False
         self._init_state()
@@ -200,6 +200,7 @@ class ObjectCostmapNode(Node):
     def _params_changed(self, old: ObjectCostmapNodeParams,
                         new: ObjectCostmapNodeParams) -> None:
         self._objects.params = new
+        self._corrections.detector.settings = new
         self._walls = None                      # wall_min_length_m / wall_margin_m
         if new.rate_hz != old.rate_hz:
             self._timer.cancel()
@@ -264,10 +265,11 @@ class ObjectCostmapNode(Node):
             # future-stamped): forget it, so that new frames are not held back by it.
             horizon = t_ns + int(self._time.jump_s * 1e9)
             for buf in (self._colors, self._depths, self._semantics):
-                purge_newer(buf, horizon, _stamp_ns)
+                purge_newer(buf, horizon, stamp_ns)
             self._pose_in.drop_newer(horizon)
             if self._last_depth_ns is not None and self._last_depth_ns > horizon:
                 self._last_depth_ns = None
+            self._corrections.time_went_back()
             self._lag_mark = None
         self._warn(f"jump_{stream}", jump.describe() + (
             "; frames, poses and stamps of the old time line dropped" if jump.backwards else ""))
@@ -293,14 +295,16 @@ class ObjectCostmapNode(Node):
         try:
             self._grid = convert.grid_from_msg(msg, self._lp.params)
             self._walls = None                  # recomputed once per map, not per frame
+            self._corrections.detector.observe_map(self._grid)
         except ValueError as err:
             self._drop("map", str(err))
 
     def _on_robot_pose(self, t_ns: int, pose: tuple[float, float, float]) -> None:
         self._objects.note_robot_position(pose[0], pose[1])   # swept path: cleared
+        self._corrections.detector.observe_pose(t_ns, pose)
         # A frame that waited for a pose at or after its stamp can be processed now.
         prev, self._pose_seen_ns = self._pose_seen_ns, t_ns
-        if prev is not None and any(prev < _stamp_ns(d) <= t_ns for d in list(self._depths)):
+        if prev is not None and any(prev < stamp_ns(d) <= t_ns for d in list(self._depths)):
             self._wake.trigger()
 
     @failsafe("object costmap update")
@@ -339,13 +343,13 @@ class ObjectCostmapNode(Node):
         if self._last_depth_ns is None:
             return bool(self._depths)
         due_ns = self._last_depth_ns + self._min_gap_ns()
-        return any(_stamp_ns(d) >= due_ns for d in self._depths)
+        return any(stamp_ns(d) >= due_ns for d in self._depths)
 
     def _wait_reason(self) -> str:
         p = self.params
         span = self._pose_in.span_ns()
-        text = wait_reason([_stamp_ns(m) for m in self._depths],
-                           [_stamp_ns(m) for m in self._colors],
+        text = wait_reason([stamp_ns(m) for m in self._depths],
+                           [stamp_ns(m) for m in self._colors],
                            [] if span is None else list(span),
                            self._last_depth_ns, p.sync_tolerance_s, p.pose_tolerance_s,
                            _MIN_GAP_PERIODS / p.rate_hz)
@@ -353,6 +357,8 @@ class ObjectCostmapNode(Node):
         return text + (f"; {skew}" if skew else "")
 
     def _tick_inner(self) -> None:
+        if self._corrections.apply():            # a SLAM correction: what it moved goes
+            self._publish_grid()
         if self._info is None:
             self._state = State.WAITING_FOR_CAMERA_INFO
             if self._depths:
@@ -408,15 +414,15 @@ class ObjectCostmapNode(Node):
         poses_flow = (arrival is not None
                       and self.get_clock().now().nanoseconds - arrival < pose_tol_ns)
         min_gap_ns = self._min_gap_ns()
-        for depth in sorted(self._depths, key=_stamp_ns):
-            t = _stamp_ns(depth)
+        for depth in sorted(self._depths, key=stamp_ns):
+            t = stamp_ns(depth)
             if self._last_depth_ns is not None and t < self._last_depth_ns + min_gap_ns:
                 continue        # processed, or too soon after the last one
             if newest_pose is not None and t > newest_pose and (
                     t > newest_pose + pose_tol_ns or poses_flow):
                 return None     # this one and every newer one wait for a pose
-            color = _closest(self._colors, t, tol_ns)
-            semantic = _closest(self._semantics, t, tol_ns) if oracle else None
+            color = closest(self._colors, t, tol_ns)
+            semantic = closest(self._semantics, t, tol_ns) if oracle else None
             if color is not None and (semantic is not None or not oracle):
                 return depth, color, semantic
         return None
@@ -443,7 +449,7 @@ class ObjectCostmapNode(Node):
 
     def _process(self, depth_msg: Image, color_msg: Image, semantic_msg: Image | None) -> None:
         p = self.params
-        t_ns = _stamp_ns(depth_msg)
+        t_ns = stamp_ns(depth_msg)
         pose = self._pose_at(t_ns)
         self._last_depth_ns = t_ns
         self._pose_missing = False
@@ -512,7 +518,7 @@ class ObjectCostmapNode(Node):
         p = self.params
         if not p.unknown_enabled or self._scan is None:
             return None
-        pose = self._pose_at(_stamp_ns(self._scan)) or frame_pose
+        pose = self._pose_at(stamp_ns(self._scan)) or frame_pose
         try:
             return convert.scan_to_points(self._scan, pose,
                                           (p.lidar_x_m, p.lidar_y_m, p.lidar_yaw_rad))
@@ -543,52 +549,7 @@ class ObjectCostmapNode(Node):
             cloud = self._objects.virtual_cloud()
             self._pub_cloud.publish(convert.cloud_to_msg(convert.xyz_cloud(cloud), header))
         if self._pub_markers.get_subscription_count() > 0:
-            self._pub_markers.publish(_markers(self._objects.boxes(), header))
-
-
-def _closest(msgs, t_ns: int, tol_ns: int):
-    best = min(msgs, key=lambda m: abs(_stamp_ns(m) - t_ns), default=None)
-    if best is None or abs(_stamp_ns(best) - t_ns) > tol_ns:
-        return None
-    return best
-
-
-def _markers(boxes: list[tuple[int, Object3D]], header) -> MarkerArray:
-    """A DELETEALL, then a CUBE and a class label per object (marker id = object id)."""
-    out = MarkerArray()
-    clear = Marker()
-    clear.header = header
-    clear.action = Marker.DELETEALL
-    out.markers.append(clear)
-    for oid, obj in boxes:
-        qx, qy, qz, qw = quaternion_from_yaw(obj.yaw)
-        r, g, b = _CLASS_RGB.get(obj.cls, _CLASS_RGB[""])
-        cube = Marker()
-        cube.header = header
-        cube.ns = "objects"
-        cube.id = int(oid)
-        cube.type = Marker.CUBE
-        cube.action = Marker.ADD
-        cube.pose.position.x, cube.pose.position.y, cube.pose.position.z = obj.center_xyz
-        cube.pose.orientation.x, cube.pose.orientation.y = qx, qy
-        cube.pose.orientation.z, cube.pose.orientation.w = qz, qw
-        cube.scale.x, cube.scale.y, cube.scale.z = (max(float(s), 1e-3) for s in obj.size_xyz)
-        cube.color.r, cube.color.g, cube.color.b, cube.color.a = r, g, b, 0.5
-        out.markers.append(cube)
-        text = Marker()
-        text.header = header
-        text.ns = "labels"
-        text.id = int(oid)
-        text.type = Marker.TEXT_VIEW_FACING
-        text.action = Marker.ADD
-        text.pose.position.x, text.pose.position.y = obj.center_xyz[0], obj.center_xyz[1]
-        text.pose.position.z = obj.center_xyz[2] + 0.5 * obj.size_xyz[2] + 0.15
-        text.pose.orientation.w = 1.0
-        text.scale.z = 0.15
-        text.color.r = text.color.g = text.color.b = text.color.a = 1.0
-        text.text = f"{obj.cls} {obj.score:.2f}"
-        out.markers.append(text)
-    return out
+            self._pub_markers.publish(markers(self._objects.boxes(), header))
 
 
 def main(args: list[str] | None = None) -> int:

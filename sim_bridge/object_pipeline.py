@@ -74,8 +74,13 @@ class ObjectPipeline:
         self._correction_s = -math.inf   # sim time of the last one
 
     def _after_correction(self) -> None:
-        """A loop closure that re-rendered the map since the last call: forget the depth
-        voxels marked since the previous one (``depth_forget_on_correction``)."""
+        """A loop closure that re-rendered the map since the last call: forget the boxes
+        and depth voxels placed since the previous one (:meth:`ObjectMap.forget_since`).
+
+        The simulator's own record of its closures is the signal (exact: no closure
+        missed, none invented); the object_costmap node, which has no such record,
+        detects corrections from its inputs (:mod:`explore_seg.core.objects.corrections`).
+        """
         slam = self.engine.slam_error
         if slam is None or len(slam.closures) == self._closures:
             return
@@ -83,8 +88,8 @@ class ObjectPipeline:
         self._closures = len(slam.closures)
         if not any(c.rerendered for c in new):
             return
-        if self.params.depth_forget_on_correction and self.map.depth is not None:
-            self.map.depth.forget_since(self._correction_s)
+        self.map.forget_since(None if self._correction_s == -math.inf
+                              else int(round(self._correction_s * 1e9)))
         self._correction_s = self.engine.time_s
 
     def _wall_mask(self) -> WallMask:

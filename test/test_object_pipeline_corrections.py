@@ -1,5 +1,6 @@
-"""The lock step's object pipeline after a SLAM correction: the depth voxels marked since
-the previous correction are forgotten when a loop closure re-rendered the map."""
+"""The lock step's object pipeline after a SLAM correction: the depth voxels marked and the
+boxes seen since the previous correction are forgotten when a loop closure re-rendered the
+map."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import dataclasses
 
 import pytest
 
-from explore_seg.core.objects import DepthFrame, ObjectParams
+from explore_seg.core.objects import DepthFrame, Object3D, ObjectParams
 from objects_scene import K, box_parts, camera_pose, render_depth
 from sim_bridge.engine import SimEngine, SimParams
 from sim_bridge.lockstep import LockstepParams
@@ -55,3 +56,44 @@ def test_voxels_since_the_last_correction_are_forgotten(forget):
     slam.closures.append(_closure(rerendered=True))
     pipe.update(timings)
     assert len(depth) == (before if forget else marked)
+
+
+def _table(x: float) -> Object3D:
+    return Object3D("dining table", 0.9, (x, 3.0, 0.37), (0.9, 0.75, 0.74), 0.0, 100)
+
+
+@pytest.mark.parametrize("drop", [True, False])
+def test_boxes_seen_since_the_last_correction_are_dropped(drop):
+    """A tracked box last seen since the previous correction was placed at uncorrected
+    poses: a re-rendering correction drops it (it is re-observed); one seen only before
+    the previous correction stays."""
+    eng = SimEngine(default_world("small_house"), SimParams(
+        seed=3, enable_camera=True, compute_coverage=False, mapping_error="harsh"))
+    # the default drops them
+    params = dataclasses.replace(ObjectParams(), depth_obstacles=False, **(
+        {} if drop else {"boxes_forget_on_correction": False}))
+    pipe = ObjectPipeline(eng, params, 3, LockstepParams())
+    timings = {"detection": [], "objects": []}
+    slam = eng.slam_error
+    assert slam is not None
+    eng.step(0.1)
+    pipe.update(timings)
+    pipe.map.update([_table(-5.0)], stamp_ns=int(eng.time_s * 1e9))
+    assert len(pipe.map) == 1
+    slam.closures.append(_closure(rerendered=False))  # too small to re-render: kept
+    eng.step(0.1)
+    pipe.update(timings)
+    assert len(pipe.map) == 1
+    slam.closures.append(_closure(rerendered=True))
+    eng.step(0.1)
+    pipe.update(timings)
+    assert (len(pipe.map) == 0) is drop
+    # seen before this correction: kept at the next one; seen since: dropped
+    old = len(pipe.map)
+    pipe.map.update([_table(5.0)], stamp_ns=int((eng.time_s - 0.05) * 1e9))
+    pipe.map.update([_table(9.0)], stamp_ns=int((eng.time_s + 0.05) * 1e9))
+    eng.step(0.1)
+    slam.closures.append(_closure(rerendered=True))
+    pipe.update(timings)
+    xs = sorted(round(o.center_xyz[0]) for o in pipe.map.objects())
+    assert xs == ([5] if drop else sorted([-5] * old + [5, 9]))

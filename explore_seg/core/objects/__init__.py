@@ -46,7 +46,8 @@ back-projection), :mod:`~.boxes` (:class:`Object3D`, box fitting, the prior's cl
 :mod:`~.walls` (the 2D map's walls), :mod:`~.depth_obstacles` (generic obstacles from
 depth, :class:`DepthObstacles`), :mod:`~.detections` (one detection -> box),
 :mod:`~.legs` (unclassified objects), :mod:`~.fusion` (:func:`fuse_boxes`),
-:mod:`~.object_map` (:class:`ObjectMap`) and :mod:`~.pipeline` (:func:`process_frame`).
+:mod:`~.object_map` (:class:`ObjectMap`), :mod:`~.pipeline` (:func:`process_frame`) and
+:mod:`~.corrections` (SLAM corrections from poses and maps, :class:`CorrectionDetector`).
 This package re-exports their public names.
 """
 
@@ -56,6 +57,7 @@ from explore_seg.core.objects.cloud import (box_mask, box_stride, euclidean_clus
                                             pixel_grid_edges, statistical_outlier_mask,
                                             voxel_downsample)
 from explore_seg.core.objects.depth_obstacles import DepthObstacles
+from explore_seg.core.objects.corrections import Correction, CorrectionDetector
 from explore_seg.core.objects.detections import (DetectionClusters, assign_clusters,
                                                  cluster_detection, fit_cluster,
                                                  object_from_detection, rank_clusters,
@@ -93,4 +95,6 @@ __all__ = [
     # fusion, object map, pipeline
     "DepthObstacles", "footprint_iou", "fuse_boxes", "TrackedObject", "box_samples", "ObjectMap",
     "FrameResult", "process_frame",
+    # corrections
+    "Correction", "CorrectionDetector",
 ]

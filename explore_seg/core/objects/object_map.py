@@ -106,6 +106,34 @@ class ObjectMap:
         if self.depth is not None:
             self.depth.clear()
 
+    def forget_since(self, stamp_ns: int | None) -> bool:
+        """After a SLAM correction: forget what was placed at poses it corrected.
+
+        The tracked boxes last seen at or after ``stamp_ns`` (the previous correction;
+        None: every box) are dropped when ``boxes_forget_on_correction``, the depth voxels
+        last marked then when ``depth_forget_on_correction``. Their evidence came at
+        uncorrected poses, and a pose-graph correction spreads over the poses since the
+        previous one, so no single transform moves them right; a dropped box in view is
+        found again, where the corrected map has it, by the next frame. Older boxes stay:
+        their evidence predates the poses the correction moved.
+
+        Returns
+        -------
+        bool
+            True when a box was dropped or the depth obstacle columns changed.
+        """
+        p = self.params
+        changed = False
+        if p.boxes_forget_on_correction:
+            keep = [t for t in self._objects
+                    if stamp_ns is not None and t.last_seen_ns < stamp_ns]
+            changed = len(keep) != len(self._objects)
+            self._objects = keep
+        if p.depth_forget_on_correction and self.depth is not None:
+            changed |= self.depth.forget_since(-math.inf if stamp_ns is None
+                                               else stamp_ns * 1e-9)
+        return changed
+
     # ------------------------------------------------------------------ update
     def update(self, observations: Sequence[Object3D], frame: DepthFrame | None = None,
                stamp_ns: int = 0, robot_xy: Sequence[float] | None = None,
