@@ -50,9 +50,9 @@ def _at(labels: np.ndarray, x_m: float, y_m: float) -> int:
     return int(labels[round(y_m / RES), round(x_m / RES)])
 
 
-def test_the_rules_are_off_by_default():
+def test_the_rules_are_on_by_default():
     p = SegmentationParams()
-    assert {k: getattr(p, k) for k in ON} == OFF
+    assert {k: getattr(p, k) for k in ON} == ON
 
 
 def test_desk_against_a_wall_does_not_cut_the_room():

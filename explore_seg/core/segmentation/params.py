@@ -55,22 +55,21 @@ class SegmentationParams:
         "a hole holding an occupied component whose bounding-box diagonal exceeds this "
         "(a wall piece, a long sofa) is structure, never filled as clutter", "m",
         range=(0.0, math.inf)))
-    small_object_max_m: float = field(default=0.0, metadata=param_meta(
+    small_object_max_m: float = field(default=0.5, metadata=param_meta(
         "free-standing obstacle components (8-connected, specks dropped) whose bounding-box "
         "diagonal is at most this (chair legs, castors, a chair, a bin) are not inflated "
         "and count as free space for the decomposition, so rows and rings of chairs do "
         "not wall off parts of a room; one whose inflation would touch a larger "
         "obstacle's (a cabinet row, a broken wall) keeps it; 0 disables", "m",
         range=(0.0, math.inf)))
-    furniture_min_thickness_m: float = field(default=0.0, metadata=param_meta(
+    furniture_min_thickness_m: float = field(default=0.7, metadata=param_meta(
         "obstacle bulges at least this thick (a disk of this diameter fits in them) and "
         "thinner than furniture_max_thickness_m are furniture against a wall (a pillar, "
         "a shelf, a desk): filled before decomposing when at most furniture_max_extent_m "
         "wide and the free space along it is one stretch; walls must be thinner; a "
         "free-standing block this thick nearly all over and at most "
         "furniture_max_extent_m wide is clutter (clutter_max_object_m does not apply); 0 "
-        "disables (the default until the benchmark has judged it; 0.7 for real furnished "
-        "scans, docs/experiments.md#segmentation-furniture-fill)", "m",
+        "disables", "m",
         range=(0.0, math.inf)))
     furniture_max_extent_m: float = field(default=2.5, metadata=param_meta(
         "furniture bulges wider or higher than this are structure, never filled", "m",
@@ -92,12 +91,11 @@ class SegmentationParams:
         "merge two adjacent regions whose shared border is longer than "
         "max_door_width_m and whose union stays convex enough (DuDe spec "
         "shared/docs/dude.md §15)"))
-    passage_merge_ratio: float = field(default=0.0, metadata=param_meta(
+    passage_merge_ratio: float = field(default=0.7, metadata=param_meta(
         "two neighbouring regions whose shared border is longer than max_door_width_m "
         "and at least this times the larger one's inscribed diameter are parts of one "
-        "passage (a corridor round a corner or a block) and are merged; 0 disables (the "
-        "default until the benchmark has judged it; 0.7 for real furnished scans, "
-        "docs/experiments.md#segmentation-passage-merge)", range=(0.0, math.inf)))
+        "passage (a corridor round a corner or a block) and are merged; 0 disables",
+        range=(0.0, math.inf)))
     max_door_width_m: float = field(default=1.2, metadata=param_meta(
         "passage and corridor merges: borders at most this long are doors and never "
         "merged", "m",
