@@ -22,7 +22,11 @@ Cells seen only by scans older than ``keep_s`` fall back to what the map says: a
 never became a keyframe reappears as a frontier, so the explorer goes back until the SLAM
 map has it. The window (``window_m`` on a side) follows the newest scan; memory is fixed.
 The overlay forgets everything when the map's resolution or cell lattice changes (a new
-map) or time goes back.
+map) or time goes back. At a SLAM correction (a loop closure that re-rendered the map from
+corrected poses) :meth:`ScanOverlay.forget_before` drops the cells last seen before it: the
+scans behind them were laid at the uncorrected poses, so they would fill unknown cells where
+the corrected map has no room (free cells beyond a wall that moved). A cell seen again since
+the correction keeps that newer, corrected view.
 
 Examples
 --------
@@ -135,6 +139,20 @@ class ScanOverlay:
         self._pending.clear()
         self._newest_s = -math.inf
         self._clear_lattice()
+
+    def forget_before(self, stamp_s: float | None = None) -> None:
+        """Forget what the scans taken before ``stamp_s`` saw (None: every scan), keeping
+        the cells a later scan saw (a SLAM correction at ``stamp_s``: module docstring)."""
+        if stamp_s is None or not math.isfinite(stamp_s):
+            self.reset()
+            return
+        kept = [s for s in self._pending if s.stamp_s >= stamp_s]
+        self._pending.clear()
+        self._pending.extend(kept)
+        if self._free_t is not None and self._hit_t is not None:
+            cut = np.float32(stamp_s - self._t0)
+            self._free_t[self._free_t < cut] = -np.inf
+            self._hit_t[self._hit_t < cut] = -np.inf
 
     def add_scan(self, stamp_s: float, robot_pose: tuple[float, float, float],
                  angles: npt.ArrayLike, ranges: npt.ArrayLike, range_max_m: float,
