@@ -244,11 +244,13 @@ def test_a_correction_forgets_the_scans_before_it():
     seen = ov.apply(grid)
     assert seen.data[30, 35] == 0 and seen.data[30, 40] == 100
     assert seen.data[35, 30] == 0
-    ov.forget_before(3.0)
+    ov.forget_before(4.9)
     seen = ov.apply(grid)
     assert seen.data[30, 35] == -1 and seen.data[30, 40] == -1     # laid before: gone
     assert seen.data[35, 30] == 0 and seen.data[40, 30] == 100     # laid after: kept
     assert seen.data[30, 30] == 0          # the sensor's cell, seen again at 5 s: kept
+    ov.add_scan(4.8, (3.0, 3.0, 0.0), [0.0], [1.0], 3.5)           # late, from before
+    assert ov.apply(grid).data[30, 35] == -1
     ov.add_scan(6.0, (3.0, 3.0, 0.0), [0.0], [1.0], 3.5)           # seen again: back
     assert ov.apply(grid).data[30, 35] == 0
     ov.forget_before(None)                                          # when unknown: all
