@@ -276,3 +276,26 @@ def test_explorer_map_corrected_empties_the_overlay():
     assert cells[:, 1].max() >= 7                   # they are forgotten: the map alone
     plain, _, _ = _explorer(overlay=False)
     plain.map_corrected(2.0)                        # no overlay: nothing to forget
+
+
+def test_correction_parameters_match_the_object_nodes():
+    """target_selector finds corrections with the object_costmap node's thresholds."""
+    import dataclasses
+
+    from explore_seg.core.objects import ObjectCostmapNodeParams
+
+    obj = ObjectCostmapNodeParams()
+    names = [f.name for f in dataclasses.fields(ScanOverlayParams)
+             if f.name.startswith("correction_")]
+    assert len(names) == 9
+    assert {n: getattr(ScanOverlayParams(), n) for n in names} == \
+        {n: getattr(obj, n) for n in names}
+
+
+@pytest.mark.parametrize("kw", [{"correction_pose_jump_m": -0.1},
+                                {"correction_merge_s": math.nan},
+                                {"correction_map_moved_fraction": 1.5},
+                                {"correction_map_min_cells": 0}])
+def test_correction_params_are_checked(kw):
+    with pytest.raises(ValueError):
+        ScanOverlayParams(**kw)
