@@ -98,7 +98,7 @@ class ObjectPipeline:
 
         The simulator's own record of its closures is the signal (exact: no closure
         missed, none invented); the object_costmap node, which has no such record,
-        detects corrections from its inputs (:mod:`explore_seg.core.objects.corrections`).
+        detects corrections from its inputs (:mod:`explore_seg.core.corrections`).
         """
         if not self._closures.rerendered():
             return
