@@ -11,6 +11,9 @@ RRTs) and keeps, switches, blacklists and finishes. Its parameters:
 detector's :class:`~explore_seg.core.rrt.RrtParams` under ``rrt.``. It subscribes ``scan``
 too: with ``scan_overlay.enabled`` the scans since the last maps fill the map's unknown
 cells for the decisions (:mod:`explore_seg.core.scan_overlay`, :mod:`explore_seg.scan_input`).
+A SLAM correction (a loop closure), found in the map-frame poses or in ``map``
+(``scan_overlay.correction_*``, :mod:`explore_seg.core.corrections`), makes the overlay
+forget the scans taken before it: they were laid at the uncorrected poses.
 
 One timer ``_tick`` on the ROS clock (``rate_hz``) runs the state machine::
 
@@ -41,6 +44,7 @@ from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 
 from explore_seg import convert
+from explore_seg.core.corrections import Correction, CorrectionDetector
 from explore_seg.core.explorer import Explorer, ExplorerStep
 from explore_seg.core.frontiers import Frontier, FrontierParams
 from explore_seg.core.grid import GridMap, resample_array
@@ -93,6 +97,7 @@ class TargetSelectorNode(Node):
         self._op = ParamBinding(self, ScanOverlayParams(), prefix="scan_overlay.")
         p = self._p.params
         self._explorer = Explorer(self._fp.params, p, self._rp.params, self._op.params)
+        self._corrections = CorrectionDetector(self._op.params)
         self._grid: GridMap | None = None
         self._layer: GridMap | None = None
         self._regions_img: Image | None = None
@@ -146,7 +151,7 @@ class TargetSelectorNode(Node):
         self._p.on_change(self._params_changed)
         self._fp.on_change(lambda old, new: self._explorer.set_params(frontier=new))
         self._rp.on_change(lambda old, new: self._explorer.set_params(rrt=new))
-        self._op.on_change(lambda old, new: self._explorer.set_params(overlay=new))
+        self._op.on_change(self._overlay_params_changed)
         self._publish_done(False)
 
     # ---------------------------------------------------------------- helpers
@@ -199,6 +204,19 @@ class TargetSelectorNode(Node):
         self._done_published = done
         self._pub_done.publish(Bool(data=done))
 
+    def _overlay_params_changed(self, old: ScanOverlayParams, new: ScanOverlayParams) -> None:
+        self._corrections.settings = new
+        self._explorer.set_params(overlay=new)
+
+    def _map_corrected(self, c: Correction | None) -> None:
+        """A SLAM correction found in the inputs: the overlay forgets the scans taken before
+        it (they were laid at uncorrected poses)."""
+        if c is None:
+            return
+        self._explorer.map_corrected(c.stamp_ns * 1e-9)
+        self.get_logger().info(f"SLAM correction at {c.stamp_ns * 1e-9:.3f} s ({c.source}: "
+                               f"{c.detail}): the scan overlay forgets the scans before it")
+
     # -------------------------------------------------------------- callbacks
     def _on_map(self, msg: OccupancyGrid) -> None:
         try:
@@ -207,6 +225,8 @@ class TargetSelectorNode(Node):
             self._warn("map", f"dropped map: {err}")
             return
         self._labels_dirty = True
+        if self._op.params.enabled:
+            self._map_corrected(self._corrections.observe_map(self._grid))
 
     def _on_layer(self, msg: OccupancyGrid) -> None:
         try:
@@ -228,6 +248,8 @@ class TargetSelectorNode(Node):
         self._pose = pose
         self._pose_time_ns = self.get_clock().now().nanoseconds
         self._scans.note_pose(t_ns, pose)
+        if self._op.params.enabled:
+            self._map_corrected(self._corrections.observe_pose(t_ns, pose))
 
     # --------------------------------------------------------------- services
     def _srv_start(self, request: Trigger.Request, response: Trigger.Response
@@ -327,6 +349,7 @@ class TargetSelectorNode(Node):
             self._pose = None
             self._pose_in.clear()
             self._scans.clear()
+            self._corrections.reset()
         self._explorer.clock_jumped(now_ns * 1e-9)
         self._warn("clock_jump", jump.describe() + "; goal timers restarted")
 

@@ -74,7 +74,7 @@ from sim_bridge.contacts import classify_contact
 from sim_bridge.early_stop import FrontiersLeft, explain_stop
 from sim_bridge.engine import Collider, SimEngine, SimParams
 from sim_bridge.navigation import OutcomeFollower
-from sim_bridge.object_pipeline import ObjectPipeline
+from sim_bridge.object_pipeline import ClosureWatch, ObjectPipeline
 from sim_bridge.explorer_params import (ExplorerParams, default_explorer_params_file,  # noqa: F401
                                         load_explorer_params)
 from sim_bridge.run_result import TIMING_KEYS, RunResult  # noqa: F401 (API)
@@ -353,6 +353,9 @@ class _LockstepRun:
         self.follower = (OutcomeFollower() if (lockstep.nav_feedback or spec.nav_feedback)
                          else None)
         self.last_step: ExplorerStep | None = None
+        # the simulator's closures that re-rendered the map, and when the last one was seen
+        self.closures = ClosureWatch(engine)
+        self.corrected_s: float | None = None
         engine.on_collision(self._record_contact)
         self.wall_start_s = time.perf_counter()
 
@@ -422,6 +425,8 @@ class _LockstepRun:
             self.result.completed = reason == "coverage"
             self.result.stop_reason = reason
             return False
+        if self.closures.rerendered():
+            self.corrected_s = now
         self._update_object_layer()
         if now >= self.next_decision_s - 1e-9:
             self.next_decision_s += self.config.lockstep.decision_period_s
@@ -481,6 +486,10 @@ class _LockstepRun:
         for scan in self.engine.drain_scans():
             self.explorer.add_scan(scan.stamp_s, scan.map_pose or scan.pose, self.scan_angles,
                                    scan.ranges, g.range_max_m, g.range_min_m)
+        if self.corrected_s is not None:
+            # a closure re-rendered the map: the scans laid before it are off the new map
+            self.explorer.map_corrected(self.corrected_s)
+            self.corrected_s = None
         step = self.last_step = self.explorer.step(now, grid, self.engine.slam_pose, self.layer,
                                                    labels)
         timings, res = self.result.timings_ms, self.result

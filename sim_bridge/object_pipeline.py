@@ -49,6 +49,25 @@ def scan_points_map(engine: SimEngine) -> npt.NDArray[np.float64]:
     return np.column_stack([ox + r[ok] * np.cos(a), oy + r[ok] * np.sin(a)])
 
 
+class ClosureWatch:
+    """The simulator's loop closures as the lock step's nodes see them: :meth:`rerendered`
+    says whether a closure since the previous call re-rendered the map (the exact signal:
+    no closure missed, none invented; the nodes detect corrections from their inputs)."""
+
+    def __init__(self, engine: SimEngine) -> None:
+        self.engine = engine
+        self._seen = 0
+
+    def rerendered(self) -> bool:
+        """True when a closure since the last call re-rendered the map."""
+        slam = self.engine.slam_error
+        if slam is None or len(slam.closures) == self._seen:
+            return False
+        new = slam.closures[self._seen:]
+        self._seen = len(slam.closures)
+        return any(c.rerendered for c in new)
+
+
 class ObjectPipeline:
     """The object costmap node's work on one engine: oracle detections + depth + scan."""
 
@@ -70,7 +89,7 @@ class ObjectPipeline:
         self._published_depth = 0
         self._walls: tuple[int, WallMask] | None = None   # (map version, its wall mask)
         self._walls_occ: npt.NDArray[np.bool_] | None = None   # its occupied cells
-        self._closures = 0               # SLAM corrections seen
+        self._closures = ClosureWatch(engine)   # SLAM corrections seen
         self._correction_s = -math.inf   # sim time of the last one
 
     def _after_correction(self) -> None:
@@ -79,14 +98,9 @@ class ObjectPipeline:
 
         The simulator's own record of its closures is the signal (exact: no closure
         missed, none invented); the object_costmap node, which has no such record,
-        detects corrections from its inputs (:mod:`explore_seg.core.objects.corrections`).
+        detects corrections from its inputs (:mod:`explore_seg.core.corrections`).
         """
-        slam = self.engine.slam_error
-        if slam is None or len(slam.closures) == self._closures:
-            return
-        new = slam.closures[self._closures:]
-        self._closures = len(slam.closures)
-        if not any(c.rerendered for c in new):
+        if not self._closures.rerendered():
             return
         self.map.forget_since(None if self._correction_s == -math.inf
                               else int(round(self._correction_s * 1e9)))

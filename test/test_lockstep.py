@@ -7,11 +7,13 @@ import math
 import numpy as np
 import pytest
 
+from explore_seg.core.explorer import Explorer
 from explore_seg.core.frontiers import FrontierParams
 from sim_bridge.coverage_tour import coverage_tour
-from sim_bridge.engine import Collider
+from sim_bridge.engine import Collider, SimParams
 from sim_bridge.lockstep import (STRATEGIES, LockstepParams, RunResult,
                                  load_explorer_params, perturbed_start, run_exploration)
+from sim_bridge.slam_error import LoopClosure
 from sim_bridge.worlds import default_world, ground_truth
 
 SEED = 1
@@ -166,3 +168,32 @@ def test_load_explorer_params_errors(tmp_path, text, match):
     f.write_text(text)
     with pytest.raises(ValueError, match=match):
         load_explorer_params(f)
+
+
+def test_a_rerendering_closure_makes_the_overlay_forget_its_scans(monkeypatch, small_house):
+    """The simulator's closures reach the target_selector's overlay: one that re-rendered
+    the map makes it forget the scans laid before it (at the next decision, with the time
+    the closure was seen); one that did not changes nothing."""
+    calls: list[tuple[float | None, float]] = []
+    forget = Explorer.map_corrected
+
+    def spy(self, stamp_s=None):
+        calls.append((stamp_s, self._overlay._newest_s))
+        forget(self, stamp_s)
+    monkeypatch.setattr(Explorer, "map_corrected", spy)
+    added: list[float] = []
+
+    def observer(state):
+        slam = state.engine.slam_error
+        t = state.engine.time_s
+        if len(added) < 2 and t >= 4.0 + 4.0 * len(added):
+            slam.closures.append(LoopClosure(keyframe=1, matched=0, shift_m=0.3,
+                                             shift_rad=0.0, rerendered=len(added) == 1))
+            added.append(t)
+    w, gt = small_house
+    run_exploration(w, "nearest", SEED, params=LockstepParams(max_sim_time_s=16.0),
+                    sim_params=SimParams(mapping_error="harsh"), ground_truth=gt, observer=observer)
+    assert len(added) == 2
+    assert len(calls) == 1                           # the re-rendering closure only
+    stamp, newest = calls[0]
+    assert added[1] < stamp <= added[1] + 1.0 and newest >= stamp - 0.2

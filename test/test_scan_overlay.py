@@ -234,3 +234,68 @@ def test_rrt_exploration_decides_on_the_scans_too():
     ex.step(1.0, grid, (x, y, 0.0))
     # the map its RRT grew in is the one with the scanned room: no unknown cell is left there
     assert ex._key is not None and (ex._key[0].data[1:6, 8:13] != -1).all()
+
+
+def test_a_correction_forgets_the_scans_before_it():
+    ov = ScanOverlay(ScanOverlayParams(keep_s=1e6))
+    grid = _unknown()
+    ov.add_scan(1.0, (3.0, 3.0, 0.0), [0.0], [1.0], 3.5)           # +x, before
+    ov.add_scan(5.0, (3.0, 3.0, math.pi / 2), [0.0], [1.0], 3.5)   # +y, after
+    seen = ov.apply(grid)
+    assert seen.data[30, 35] == 0 and seen.data[30, 40] == 100
+    assert seen.data[35, 30] == 0
+    ov.forget_before(4.9)
+    seen = ov.apply(grid)
+    assert seen.data[30, 35] == -1 and seen.data[30, 40] == -1     # laid before: gone
+    assert seen.data[35, 30] == 0 and seen.data[40, 30] == 100     # laid after: kept
+    assert seen.data[30, 30] == 0          # the sensor's cell, seen again at 5 s: kept
+    ov.add_scan(4.8, (3.0, 3.0, 0.0), [0.0], [1.0], 3.5)           # late, from before
+    assert ov.apply(grid).data[30, 35] == -1
+    ov.add_scan(6.0, (3.0, 3.0, 0.0), [0.0], [1.0], 3.5)           # seen again: back
+    assert ov.apply(grid).data[30, 35] == 0
+    ov.forget_before(None)                                          # when unknown: all
+    assert ov.apply(grid) is grid
+
+
+def test_a_correction_before_the_first_map_drops_the_waiting_scans():
+    ov = ScanOverlay(ScanOverlayParams())
+    ov.add_scan(1.0, (3.0, 3.0, 0.0), [0.0], [1.0], 3.5)
+    ov.add_scan(5.0, (3.0, 3.0, math.pi / 2), [0.0], [1.0], 3.5)
+    ov.forget_before(3.0)                                           # no lattice yet
+    seen = ov.apply(_unknown())
+    assert seen.data[30, 35] == -1 and seen.data[35, 30] == 0
+
+
+def test_explorer_map_corrected_empties_the_overlay():
+    ex, grid, pose = _explorer(overlay=True)
+    _look_into_the_room(ex, grid, 1.0)
+    cells = np.concatenate([f.cells for f in ex.step(1.0, grid, pose).frontiers])
+    assert cells[:, 1].max() <= 3                   # the scans filled the room
+    ex.map_corrected(2.0)
+    cells = np.concatenate([f.cells for f in ex.step(2.0, grid, pose).frontiers])
+    assert cells[:, 1].max() >= 7                   # they are forgotten: the map alone
+    plain, _, _ = _explorer(overlay=False)
+    plain.map_corrected(2.0)                        # no overlay: nothing to forget
+
+
+def test_correction_parameters_match_the_object_nodes():
+    """target_selector finds corrections with the object_costmap node's thresholds."""
+    import dataclasses
+
+    from explore_seg.core.objects import ObjectCostmapNodeParams
+
+    obj = ObjectCostmapNodeParams()
+    names = [f.name for f in dataclasses.fields(ScanOverlayParams)
+             if f.name.startswith("correction_")]
+    assert len(names) == 9
+    assert {n: getattr(ScanOverlayParams(), n) for n in names} == \
+        {n: getattr(obj, n) for n in names}
+
+
+@pytest.mark.parametrize("kw", [{"correction_pose_jump_m": -0.1},
+                                {"correction_merge_s": math.nan},
+                                {"correction_map_moved_fraction": 1.5},
+                                {"correction_map_min_cells": 0}])
+def test_correction_params_are_checked(kw):
+    with pytest.raises(ValueError):
+        ScanOverlayParams(**kw)

@@ -72,3 +72,56 @@ def test_selector_drops_scans_without_a_pose_of_their_time(ros):
     timer.cancel()
     assert node._scans.used == 0
     assert min(_columns(node)) <= 9                    # the band is still unknown
+
+
+def test_selector_overlay_forgets_its_scans_at_a_map_moved_by_0_3_m(ros):
+    """A re-render that moved the map's walls by 0.3 m is a SLAM correction: the overlay
+    forgets the scans taken before it; a map that only grew is none."""
+    import dataclasses
+
+    import numpy as np
+    from nav_msgs.msg import OccupancyGrid, Odometry
+    from sensor_msgs.msg import LaserScan
+    from test_object_costmap_corrections import _room
+
+    from explore_seg import convert
+    from explore_seg.qos import MAP_QOS, RELIABLE_QOS, SENSOR_QOS
+
+    # the room is all known: the selector keeps deciding (and listening to poses) instead
+    # of finishing
+    node = start_selector(ros, done_confirmations=1_000_000)
+    pub = ros.node("slam")
+    maps = pub.create_publisher(OccupancyGrid, "map", MAP_QOS)
+    odom = pub.create_publisher(Odometry, "odom", RELIABLE_QOS)
+    scans = pub.create_publisher(LaserScan, "scan", SENSOR_QOS)
+    clock = pub.get_clock()
+
+    def send_odom():
+        msg = Odometry()
+        msg.header = convert.make_header("map", clock.now().to_msg())
+        msg.pose.pose = convert.pose_from_2d(0.0, 0.0, 0.0)
+        odom.publish(msg)
+
+    def send_map(grid) -> None:
+        maps.publish(convert.grid_to_msg(
+            dataclasses.replace(grid, stamp_ns=clock.now().nanoseconds)))
+
+    pub.create_timer(0.05, send_odom)
+    scan_timer = pub.create_timer(0.1, lambda: scans.publish(
+        _scan_msg(clock.now().nanoseconds)))
+    unknown = _room().with_data(np.full((120, 200), -1, np.int8))
+
+    def filled() -> bool:
+        return node._explorer._overlay.apply(unknown) is not unknown
+
+    send_map(_room())
+    ros.spin_until(lambda: node._scans.used >= 3 and filled(), what="scans on the overlay")
+    send_map(_room(grown=True))                     # the map grew: no correction
+    ros.spin_until(lambda: np.array_equal(node._grid.data, _room(grown=True).data),
+                   what="the grown map")
+    scan_timer.cancel()
+    ros.spin_for(0.3)
+    assert node._corrections.count == 0 and filled()
+    send_map(_room(0.3, grown=True))                # a re-render moved the map by 0.3 m
+    ros.spin_until(lambda: node._corrections.count == 1, what="the correction")
+    assert not filled()                             # the scans before it are forgotten

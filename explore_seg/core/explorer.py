@@ -426,6 +426,13 @@ class Explorer:
             self._overlay.add_scan(stamp_s, robot_pose, angles, ranges, range_max_m,
                                    range_min_m)
 
+    def map_corrected(self, stamp_s: float | None = None) -> None:
+        """A SLAM correction (a loop closure that re-rendered the map) at ``stamp_s`` (None:
+        unknown): the overlay forgets the scans taken before it, laid at uncorrected poses
+        (:meth:`ScanOverlay.forget_before`)."""
+        if self._overlay is not None:
+            self._overlay.forget_before(stamp_s)
+
     def _detected(self, grid: GridMap, layer: GridMap | None) -> tuple[bool, GridMap]:
         """Detect on ``grid`` unless the products are of an equal map and layer; returns
         whether it detected and the map the products belong to."""

@@ -22,7 +22,11 @@ Cells seen only by scans older than ``keep_s`` fall back to what the map says: a
 never became a keyframe reappears as a frontier, so the explorer goes back until the SLAM
 map has it. The window (``window_m`` on a side) follows the newest scan; memory is fixed.
 The overlay forgets everything when the map's resolution or cell lattice changes (a new
-map) or time goes back.
+map) or time goes back. At a SLAM correction (a loop closure that re-rendered the map from
+corrected poses) :meth:`ScanOverlay.forget_before` drops the cells last seen before it: the
+scans behind them were laid at the uncorrected poses, so they would fill unknown cells where
+the corrected map has no room (free cells beyond a wall that moved). A cell seen again since
+the correction keeps that newer, corrected view.
 
 Examples
 --------
@@ -84,6 +88,36 @@ class ScanOverlayParams:
     max_pose_age_s: float = field(default=0.2, metadata=param_meta(
         "a scan is used only with a robot pose stamped within this of it", "s",
         range=(0.0, math.inf)))
+    # SLAM corrections (explore_seg.core.corrections): the object_costmap node's
+    # correction_* parameters, with its defaults
+    correction_pose_jump_m: float = field(default=0.1, metadata=param_meta(
+        "a SLAM correction (a loop closure) makes the overlay forget the scans taken before "
+        "it; one is found when two consecutive map-frame robot poses lie further apart than "
+        "the robot drives in the time between them (correction_max_speed_mps) by at least "
+        "this (0 = not from the position)", "m", range=(0.0, math.inf)))
+    correction_pose_jump_rad: float = field(default=0.15, metadata=param_meta(
+        "... or turned more than correction_max_turn_rps allows by at least this (0 = not "
+        "from the heading)", "rad", range=(0.0, math.inf)))
+    correction_max_speed_mps: float = field(default=0.5, metadata=param_meta(
+        "fastest the robot drives (a TurtleBot3: 0.26)", "m/s", range=(0.0, math.inf)))
+    correction_max_turn_rps: float = field(default=3.0, metadata=param_meta(
+        "fastest the robot turns (a TurtleBot3: 2.84)", "rad/s", range=(0.0, math.inf)))
+    correction_pose_max_gap_s: float = field(default=1.0, metadata=param_meta(
+        "poses further apart in time are not compared", "s", range=(0.0, math.inf)))
+    correction_map_moved_fraction: float = field(default=0.02, metadata=param_meta(
+        "... or when at least this share of the previous map's occupied cells has no "
+        "occupied cell within correction_map_tolerance_m in the new map (a re-render moved "
+        "the walls; a map that only grew keeps them; 0 = not from the map)",
+        range=(0.0, 1.0)))
+    correction_map_min_cells: int = field(default=100, metadata=param_meta(
+        "... and at least this many of them", range=(1, 2**31 - 1)))
+    correction_map_tolerance_m: float = field(default=0.1, metadata=param_meta(
+        "an occupied cell of the previous map with an occupied cell of the new map within "
+        "this has not moved", "m", range=(0.0, math.inf)))
+    correction_merge_s: float = field(default=6.0, metadata=param_meta(
+        "a correction found within this of the previous one is the same (a loop closure "
+        "shows in the pose at once and in the map at the next map update)", "s",
+        range=(0.0, math.inf)))
 
     def __post_init__(self) -> None:
         for name in ("keep_s", "window_m", "max_pose_age_s"):
@@ -94,6 +128,19 @@ class ScanOverlayParams:
             v = getattr(self, name)
             if not math.isfinite(v):
                 raise ValueError(f"{name} must be finite, got {v}")
+        for name in ("correction_pose_jump_m", "correction_pose_jump_rad",
+                     "correction_max_speed_mps", "correction_max_turn_rps",
+                     "correction_pose_max_gap_s", "correction_map_tolerance_m",
+                     "correction_merge_s"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be finite and >= 0, got {v}")
+        if not 0.0 <= self.correction_map_moved_fraction <= 1.0:
+            raise ValueError(f"correction_map_moved_fraction must be in [0, 1], got "
+                             f"{self.correction_map_moved_fraction}")
+        if self.correction_map_min_cells < 1:
+            raise ValueError(f"correction_map_min_cells must be >= 1, got "
+                             f"{self.correction_map_min_cells}")
 
 
 @dataclass(frozen=True)
@@ -120,6 +167,7 @@ class ScanOverlay:
         self.params = params
         self._pending: deque[_Scan] = deque(maxlen=_PENDING_SCANS)
         self._newest_s = -math.inf
+        self._forgot_s = -math.inf        # scans taken before this are refused
         self._clear_lattice()
 
     def _clear_lattice(self) -> None:
@@ -134,7 +182,24 @@ class ScanOverlay:
         """Forget every scan (time jumped, a new map session)."""
         self._pending.clear()
         self._newest_s = -math.inf
+        self._forgot_s = -math.inf
         self._clear_lattice()
+
+    def forget_before(self, stamp_s: float | None = None) -> None:
+        """Forget what the scans taken before ``stamp_s`` saw (None: every scan), keeping
+        the cells a later scan saw (a SLAM correction at ``stamp_s``: module docstring).
+        A scan taken before ``stamp_s`` that arrives later is refused too."""
+        if stamp_s is None or not math.isfinite(stamp_s):
+            self.reset()
+            return
+        self._forgot_s = max(self._forgot_s, float(stamp_s))
+        kept = [s for s in self._pending if s.stamp_s >= stamp_s]
+        self._pending.clear()
+        self._pending.extend(kept)
+        if self._free_t is not None and self._hit_t is not None:
+            cut = np.float32(stamp_s - self._t0)
+            self._free_t[self._free_t < cut] = -np.inf
+            self._hit_t[self._hit_t < cut] = -np.inf
 
     def add_scan(self, stamp_s: float, robot_pose: tuple[float, float, float],
                  angles: npt.ArrayLike, ranges: npt.ArrayLike, range_max_m: float,
@@ -165,6 +230,8 @@ class ScanOverlay:
             return
         if stamp_s < self._newest_s - _BACK_TOL_S:
             self.reset()
+        if stamp_s < self._forgot_s:
+            return                        # laid at a pose from before a correction
         self._newest_s = max(self._newest_s, float(stamp_s))
         if self._free_t is None:
             self._pending.append(scan)
