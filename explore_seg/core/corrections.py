@@ -29,14 +29,14 @@ from __future__ import annotations
 
 import math
 import threading
-from dataclasses import dataclass
-from typing import Protocol
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.angles import wrap_angle
+from explore_seg.core.fields import param_meta
 from explore_seg.core.grid import GridMap
 
 #: An OccupancyGrid cell at or above this value is occupied (slam_toolbox writes 100; the
@@ -46,20 +46,64 @@ OCCUPIED_THRESHOLD = 65
 Pose2D = tuple[float, float, float]
 
 
-class CorrectionSettings(Protocol):
-    """The thresholds :class:`CorrectionDetector` reads (fields of
-    :class:`~explore_seg.core.objects.ObjectCostmapNodeParams` and of
-    :class:`~explore_seg.core.scan_overlay.ScanOverlayParams`)."""
+@dataclass(frozen=True)
+class CorrectionParams:
+    """The thresholds :class:`CorrectionDetector` reads: the ``correction_*`` parameters of
+    the ``object_costmap`` node (:class:`~explore_seg.core.objects.ObjectCostmapNodeParams`)
+    and of ``target_selector``'s scan overlay
+    (:class:`~explore_seg.core.scan_overlay.ScanOverlayParams`), declared once here."""
 
-    correction_pose_jump_m: float
-    correction_pose_jump_rad: float
-    correction_max_speed_mps: float
-    correction_max_turn_rps: float
-    correction_pose_max_gap_s: float
-    correction_map_moved_fraction: float
-    correction_map_min_cells: int
-    correction_map_tolerance_m: float
-    correction_merge_s: float
+    correction_pose_jump_m: float = field(default=0.1, metadata=param_meta(
+        "a SLAM correction (a loop closure) is found when two consecutive map-frame robot "
+        "poses lie further apart than the robot drives in the time between them "
+        "(correction_max_speed_mps) by at least this (0 = not from the position)", "m",
+        range=(0.0, math.inf)))
+    correction_pose_jump_rad: float = field(default=0.15, metadata=param_meta(
+        "... or turned more than correction_max_turn_rps allows by at least this (0 = not "
+        "from the heading)", "rad", range=(0.0, math.inf)))
+    correction_max_speed_mps: float = field(default=0.5, metadata=param_meta(
+        "fastest the robot drives (the pose jump test's allowance; a TurtleBot3: 0.26)",
+        "m/s", range=(0.0, math.inf)))
+    correction_max_turn_rps: float = field(default=3.0, metadata=param_meta(
+        "fastest the robot turns (a TurtleBot3: 2.84)", "rad/s", range=(0.0, math.inf)))
+    correction_pose_max_gap_s: float = field(default=1.0, metadata=param_meta(
+        "poses further apart in time are not compared (after a gap any jump is explained)",
+        "s", range=(0.0, math.inf)))
+    correction_map_moved_fraction: float = field(default=0.02, metadata=param_meta(
+        "... or when at least this share of the previous map's occupied cells has no "
+        "occupied cell within correction_map_tolerance_m in the new map (a re-render moved "
+        "the walls; a map that only grew keeps them; 0 = not from the map)",
+        range=(0.0, 1.0)))
+    correction_map_min_cells: int = field(default=100, metadata=param_meta(
+        "... and at least this many of them (drift between map updates moves a few walls "
+        "by a cell or two)", range=(1, 2**31 - 1)))
+    correction_map_tolerance_m: float = field(default=0.1, metadata=param_meta(
+        "an occupied cell of the previous map with an occupied cell of the new map within "
+        "this has not moved", "m", range=(0.0, math.inf)))
+    correction_merge_s: float = field(default=6.0, metadata=param_meta(
+        "a correction found within this of the previous one is the same (a loop closure "
+        "shows in the pose at once and in the map at the next map update)", "s",
+        range=(0.0, math.inf)))
+
+    def __post_init__(self) -> None:
+        self.check_corrections()
+
+    def check_corrections(self) -> None:
+        """Raise ValueError on a threshold out of its range (subclasses call it from their
+        own ``__post_init__``)."""
+        for name in ("correction_pose_jump_m", "correction_pose_jump_rad",
+                     "correction_max_speed_mps", "correction_max_turn_rps",
+                     "correction_pose_max_gap_s", "correction_map_tolerance_m",
+                     "correction_merge_s"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be finite and >= 0, got {v}")
+        if not 0.0 <= self.correction_map_moved_fraction <= 1.0:
+            raise ValueError(f"correction_map_moved_fraction must be in [0, 1], got "
+                             f"{self.correction_map_moved_fraction}")
+        if self.correction_map_min_cells < 1:
+            raise ValueError(f"correction_map_min_cells must be >= 1, got "
+                             f"{self.correction_map_min_cells}")
 
 
 @dataclass(frozen=True)
@@ -73,7 +117,7 @@ class Correction:
 
 
 def pose_jump(prev: tuple[int, Pose2D], cur: tuple[int, Pose2D],
-              s: CorrectionSettings) -> str | None:
+              s: CorrectionParams) -> str | None:
     """What makes ``cur`` a jump from ``prev`` (both ``(stamp ns, map-frame pose)``), or
     None when driving explains it, the two are too far apart in time, or out of order.
 
@@ -134,7 +178,7 @@ class CorrectionDetector:
     ``settings`` may be replaced (:attr:`settings`) when the node's parameters change.
     """
 
-    def __init__(self, settings: CorrectionSettings) -> None:
+    def __init__(self, settings: CorrectionParams) -> None:
         self.settings = settings
         self._lock = threading.Lock()
         self._last_pose: tuple[int, Pose2D] | None = None

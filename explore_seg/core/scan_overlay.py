@@ -49,6 +49,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from explore_seg.core.corrections import CorrectionParams
 from explore_seg.core.fields import param_meta
 from explore_seg.core.grid import OCCUPIED, UNKNOWN, GridMap, beam_samples, range_returns
 
@@ -65,9 +66,10 @@ _SAMPLES_PER_CELL = 2.0
 
 
 @dataclass(frozen=True)
-class ScanOverlayParams:
+class ScanOverlayParams(CorrectionParams):
     """Parameters of :class:`ScanOverlay` (ROS parameters ``scan_overlay.*`` of
-    ``target_selector``)."""
+    ``target_selector``); the ``correction_*`` thresholds find the SLAM corrections at
+    which the overlay forgets the scans taken before them."""
 
     enabled: bool = field(default=True, metadata=param_meta(
         "decide on the map with its unknown cells filled in by the scans of the last keep_s "
@@ -88,37 +90,6 @@ class ScanOverlayParams:
     max_pose_age_s: float = field(default=0.2, metadata=param_meta(
         "a scan is used only with a robot pose stamped within this of it", "s",
         range=(0.0, math.inf)))
-    # SLAM corrections (explore_seg.core.corrections): the object_costmap node's
-    # correction_* parameters, with its defaults
-    correction_pose_jump_m: float = field(default=0.1, metadata=param_meta(
-        "a SLAM correction (a loop closure) makes the overlay forget the scans taken before "
-        "it; one is found when two consecutive map-frame robot poses lie further apart than "
-        "the robot drives in the time between them (correction_max_speed_mps) by at least "
-        "this (0 = not from the position)", "m", range=(0.0, math.inf)))
-    correction_pose_jump_rad: float = field(default=0.15, metadata=param_meta(
-        "... or turned more than correction_max_turn_rps allows by at least this (0 = not "
-        "from the heading)", "rad", range=(0.0, math.inf)))
-    correction_max_speed_mps: float = field(default=0.5, metadata=param_meta(
-        "fastest the robot drives (a TurtleBot3: 0.26)", "m/s", range=(0.0, math.inf)))
-    correction_max_turn_rps: float = field(default=3.0, metadata=param_meta(
-        "fastest the robot turns (a TurtleBot3: 2.84)", "rad/s", range=(0.0, math.inf)))
-    correction_pose_max_gap_s: float = field(default=1.0, metadata=param_meta(
-        "poses further apart in time are not compared", "s", range=(0.0, math.inf)))
-    correction_map_moved_fraction: float = field(default=0.02, metadata=param_meta(
-        "... or when at least this share of the previous map's occupied cells has no "
-        "occupied cell within correction_map_tolerance_m in the new map (a re-render moved "
-        "the walls; a map that only grew keeps them; 0 = not from the map)",
-        range=(0.0, 1.0)))
-    correction_map_min_cells: int = field(default=100, metadata=param_meta(
-        "... and at least this many of them", range=(1, 2**31 - 1)))
-    correction_map_tolerance_m: float = field(default=0.1, metadata=param_meta(
-        "an occupied cell of the previous map with an occupied cell of the new map within "
-        "this has not moved", "m", range=(0.0, math.inf)))
-    correction_merge_s: float = field(default=6.0, metadata=param_meta(
-        "a correction found within this of the previous one is the same (a loop closure "
-        "shows in the pose at once and in the map at the next map update)", "s",
-        range=(0.0, math.inf)))
-
     def __post_init__(self) -> None:
         for name in ("keep_s", "window_m", "max_pose_age_s"):
             v = getattr(self, name)
@@ -128,19 +99,7 @@ class ScanOverlayParams:
             v = getattr(self, name)
             if not math.isfinite(v):
                 raise ValueError(f"{name} must be finite, got {v}")
-        for name in ("correction_pose_jump_m", "correction_pose_jump_rad",
-                     "correction_max_speed_mps", "correction_max_turn_rps",
-                     "correction_pose_max_gap_s", "correction_map_tolerance_m",
-                     "correction_merge_s"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be finite and >= 0, got {v}")
-        if not 0.0 <= self.correction_map_moved_fraction <= 1.0:
-            raise ValueError(f"correction_map_moved_fraction must be in [0, 1], got "
-                             f"{self.correction_map_moved_fraction}")
-        if self.correction_map_min_cells < 1:
-            raise ValueError(f"correction_map_min_cells must be >= 1, got "
-                             f"{self.correction_map_min_cells}")
+        self.check_corrections()
 
 
 @dataclass(frozen=True)

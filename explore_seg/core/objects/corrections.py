@@ -2,8 +2,8 @@
 :mod:`explore_seg.core.corrections` (the object layer and the scan overlay share them)."""
 
 from explore_seg.core.corrections import (OCCUPIED_THRESHOLD, Correction, CorrectionDetector,
-                                          CorrectionSettings, Pose2D, moved_cells,
+                                          CorrectionParams, Pose2D, moved_cells,
                                           occupied_xy, pose_jump)
 
-__all__ = ["OCCUPIED_THRESHOLD", "Correction", "CorrectionDetector", "CorrectionSettings",
+__all__ = ["OCCUPIED_THRESHOLD", "Correction", "CorrectionDetector", "CorrectionParams",
            "Pose2D", "moved_cells", "occupied_xy", "pose_jump"]

@@ -8,6 +8,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Sequence
 
+from explore_seg.core.corrections import CorrectionParams
 from explore_seg.core.fields import param_meta
 from explore_seg.core.pose_fusion import POSE_SOURCE_DOC, POSE_SOURCES
 
@@ -393,7 +394,7 @@ class ObjectParams:
 
 
 @dataclass(frozen=True)
-class ObjectCostmapNodeParams(ObjectParams):
+class ObjectCostmapNodeParams(ObjectParams, CorrectionParams):
     """Parameters of the ``object_costmap`` node: the pipeline's plus the node's own (rate,
     input pairing, pose source, frames, camera and lidar mounts, oracle class table).
 
@@ -440,38 +441,6 @@ class ObjectCostmapNodeParams(ObjectParams):
         "Lidar position in base_link, y", "m"))
     lidar_yaw_rad: float = field(default=0.0, metadata=param_meta(
         "Lidar yaw in base_link", "rad"))
-    correction_pose_jump_m: float = field(default=0.1, metadata=param_meta(
-        "SLAM corrections (loop closures) drop the boxes and depth voxels placed since the "
-        "previous one (boxes_ / depth_forget_on_correction). A correction: two consecutive "
-        "map-frame robot poses further apart than the robot drives in the time between "
-        "them (correction_max_speed_mps) by at least this (0 = not from the position)",
-        "m", range=(0.0, math.inf)))
-    correction_pose_jump_rad: float = field(default=0.15, metadata=param_meta(
-        "... or turned more than correction_max_turn_rps allows by at least this "
-        "(0 = not from the heading)", "rad", range=(0.0, math.inf)))
-    correction_max_speed_mps: float = field(default=0.5, metadata=param_meta(
-        "Fastest the robot drives (the pose jump test's allowance; a TurtleBot3: 0.26)",
-        "m/s", range=(0.0, math.inf)))
-    correction_max_turn_rps: float = field(default=3.0, metadata=param_meta(
-        "Fastest the robot turns (a TurtleBot3: 2.84)", "rad/s", range=(0.0, math.inf)))
-    correction_pose_max_gap_s: float = field(default=1.0, metadata=param_meta(
-        "Poses further apart in time are not compared (after a gap any jump is "
-        "explained)", "s", range=(0.0, math.inf)))
-    correction_map_moved_fraction: float = field(default=0.02, metadata=param_meta(
-        "A correction: at least this share of the previous map's occupied cells has no "
-        "occupied cell within correction_map_tolerance_m in the new map (a re-render moved "
-        "the walls; a map that only grew keeps them; 0 = not from the map)",
-        range=(0.0, 1.0)))
-    correction_map_min_cells: int = field(default=100, metadata=param_meta(
-        "... and at least this many of them (drift between map updates moves a few walls "
-        "by a cell or two)", range=(1, 2**31 - 1)))
-    correction_map_tolerance_m: float = field(default=0.1, metadata=param_meta(
-        "An occupied cell of the previous map with an occupied cell of the new map within "
-        "this has not moved", "m", range=(0.0, math.inf)))
-    correction_merge_s: float = field(default=6.0, metadata=param_meta(
-        "A correction found within this of the previous one is the same (a loop closure "
-        "shows in the pose at once and in the map at the next map update)", "s",
-        range=(0.0, math.inf)))
     oracle_sim_class_ids: tuple[str, ...] = field(default=(
         "none:0", "wall:1", "chair:2", "table:3", "desk:4", "cabinet:5", "sofa:6", "other:7"),
         metadata=param_meta("Oracle detector only: the simulator's semantic class table "
@@ -481,10 +450,8 @@ class ObjectCostmapNodeParams(ObjectParams):
         super().__post_init__()
         if not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise ValueError(f"rate_hz must be finite and > 0, got {self.rate_hz}")
-        for name in ("sync_tolerance_s", "pose_tolerance_s", "correction_pose_jump_m",
-                     "correction_pose_jump_rad", "correction_max_speed_mps",
-                     "correction_max_turn_rps", "correction_pose_max_gap_s",
-                     "correction_map_tolerance_m", "correction_merge_s"):
+        self.check_corrections()
+        for name in ("sync_tolerance_s", "pose_tolerance_s"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {v}")
@@ -494,12 +461,6 @@ class ObjectCostmapNodeParams(ObjectParams):
             v = getattr(self, name)
             if not math.isfinite(v):
                 raise ValueError(f"{name} must be finite, got {v}")
-        if not 0.0 <= self.correction_map_moved_fraction <= 1.0:
-            raise ValueError("correction_map_moved_fraction must be in [0, 1], got "
-                             f"{self.correction_map_moved_fraction}")
-        if self.correction_map_min_cells < 1:
-            raise ValueError("correction_map_min_cells must be >= 1, got "
-                             f"{self.correction_map_min_cells}")
         if self.pose_topic_type not in POSE_SOURCES:
             raise ValueError(
                 f"pose_topic_type must be one of {POSE_SOURCES}, got {self.pose_topic_type!r}")
