@@ -44,7 +44,7 @@ from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 
 from explore_seg import convert
-from explore_seg.core.corrections import Correction, CorrectionDetector
+from explore_seg.core.corrections import CorrectionDetector
 from explore_seg.core.explorer import Explorer, ExplorerStep
 from explore_seg.core.frontiers import Frontier, FrontierParams
 from explore_seg.core.grid import GridMap, resample_array
@@ -208,14 +208,15 @@ class TargetSelectorNode(Node):
         self._corrections.settings = new
         self._explorer.set_params(overlay=new)
 
-    def _map_corrected(self, c: Correction | None) -> None:
-        """A SLAM correction found in the inputs: the overlay forgets the scans taken before
-        it (they were laid at uncorrected poses)."""
-        if c is None:
-            return
-        self._explorer.map_corrected(c.stamp_ns * 1e-9)
-        self.get_logger().info(f"SLAM correction at {c.stamp_ns * 1e-9:.3f} s ({c.source}: "
-                               f"{c.detail}): the scan overlay forgets the scans before it")
+    def _map_corrected(self) -> None:
+        """The SLAM corrections the detector found (and queued) since the last call: the
+        overlay forgets the scans taken before each (they were laid at uncorrected
+        poses)."""
+        for c in self._corrections.take():
+            self._explorer.map_corrected(c.stamp_ns * 1e-9)
+            self.get_logger().info(f"SLAM correction at {c.stamp_ns * 1e-9:.3f} s "
+                                   f"({c.source}: {c.detail}): the scan overlay forgets the "
+                                   "scans before it")
 
     # -------------------------------------------------------------- callbacks
     def _on_map(self, msg: OccupancyGrid) -> None:
@@ -226,7 +227,8 @@ class TargetSelectorNode(Node):
             return
         self._labels_dirty = True
         if self._op.params.enabled:
-            self._map_corrected(self._corrections.observe_map(self._grid))
+            self._corrections.observe_map(self._grid)
+            self._map_corrected()
 
     def _on_layer(self, msg: OccupancyGrid) -> None:
         try:
@@ -249,7 +251,8 @@ class TargetSelectorNode(Node):
         self._pose_time_ns = self.get_clock().now().nanoseconds
         self._scans.note_pose(t_ns, pose)
         if self._op.params.enabled:
-            self._map_corrected(self._corrections.observe_pose(t_ns, pose))
+            self._corrections.observe_pose(t_ns, pose)
+            self._map_corrected()
 
     # --------------------------------------------------------------- services
     def _srv_start(self, request: Trigger.Request, response: Trigger.Response
