@@ -183,3 +183,65 @@ def test_a_doorway_closed_by_an_object_layer_box_gets_an_approach():
     assert ex._det.passable[look.goal.rc] and 0 < r - row <= 4   # room A's side, at the box
     _, _, keeps, _ = _scene(text, approach_keeps_objects=True)
     assert keeps.step(0.0, g, pose, layer).action is Action.DONE
+
+
+# DOORWAY with its doorway walled up: walls mapped again at a pose that drifted by a
+# door's width close the doorway the robot came in through (no speckle: a solid wall).
+WALLED = DOORWAY.replace("####...*...####", "###############")
+
+
+def _walk_in(ex, g_open, pose):
+    """The robot drives from room B (below) through the doorway to R, one decision every
+    0.1 m on the open map; returns the decision time after the walk."""
+    door = DOORWAY.strip("\n").split("\n").index("####...*...####")
+    g, marks = grid_from_ascii(DOORWAY.replace("*", "."), resolution_m=0.1)
+    door_r = g.height - 1 - door
+    dx, _ = g.cell_to_world(door_r, 7)
+    x0, y0 = dx, g.cell_to_world(door_r - 3, 7)[1]
+    t = 0.0
+    pts = [(x0, y0 + 0.1 * k) for k in range(int(round((pose[1] - y0) / 0.1)) + 1)]
+    pts += [(x0 + (pose[0] - x0) * k / 10, pose[1]) for k in range(1, 11)]
+    for x, y in pts:
+        ex.step(t, g_open, (x, y, 0.0))
+        t += 0.1
+    ex.reset(clear_blacklist=False)           # its goal gone (a resume), its path kept
+    return t
+
+
+def test_a_doorway_the_robot_drove_through_gets_an_approach_however_the_map_closed_it():
+    """Drift doubled the doorway's walls in the map after the robot drove through it:
+    the robot's own path is passable on the relaxed map, so the frontier beyond gets an
+    approach (its cPoint: the navigator decides) instead of DONE."""
+    open_map, _ = grid_from_ascii(DOORWAY.replace("*", "."), resolution_m=0.1)
+    g, pose, ex, _ = _scene(WALLED)
+    t = _walk_in(ex, open_map, pose)
+    out = ex.step(t, g, pose)
+    assert out.action in (Action.NEW_GOAL, Action.KEEP), out.reason
+    assert out.goal is not None and out.goal.rc == ex._frontiers[0].point_rc
+    assert np.isfinite(out.dist_m).any()
+
+
+def test_without_the_trail_or_after_a_correction_the_walled_doorway_ends_exploration():
+    open_map, _ = grid_from_ascii(DOORWAY.replace("*", "."), resolution_m=0.1)
+    g, pose, ex, _ = _scene(WALLED, approach_trail_radius_m=0.0)
+    t = _walk_in(ex, open_map, pose)
+    assert ex.step(t, g, pose).action is Action.DONE
+    # the path was recorded at uncorrected poses: a correction forgets it
+    g, pose, ex, _ = _scene(WALLED)
+    t = _walk_in(ex, open_map, pose)
+    ex.map_corrected(t)
+    assert ex.step(t, g, pose).action is Action.DONE
+    # a (re)start forgets it too
+    g, pose, ex, _ = _scene(WALLED)
+    t = _walk_in(ex, open_map, pose)
+    ex.reset(clear_blacklist=True)
+    assert ex.step(t, g, pose).action is Action.DONE
+
+
+def test_a_robot_that_never_drove_through_the_wall_gets_no_approach_through_it():
+    """The trail opens only where the robot was: standing in room A of the walled map,
+    it has no way out."""
+    g, pose, ex, _ = _scene(WALLED)
+    for k in range(5):
+        ex.step(0.1 * k, g, (pose[0] + 0.1 * k, pose[1], 0.0))
+    assert ex.step(1.0, g, pose).action is Action.DONE

@@ -60,6 +60,7 @@ from explore_seg.core.selection.blockage import RelaxedMap, approaches
 from explore_seg.core.selection.lookout import Reach, lookouts
 from explore_seg.core.selection.router import TourPlan
 from explore_seg.core.selection.strategies import Planner, Strategy, get_strategy
+from explore_seg.core.swept import SweptPath
 
 #: Keys of :attr:`ExplorerStep.warnings` (the caller throttles its log per key).
 WARN_LAYER_FRAME = "layer_frame"
@@ -195,6 +196,8 @@ class Explorer:
         self._fcache = FrontierCache()
         self._layer_warning = ""
         self._reported_blacklisted = 0
+        # The robot's map-frame positions since the last correction (approach goals).
+        self._trail = SweptPath()
 
     # ------------------------------------------------------------------ state
     @property
@@ -265,14 +268,17 @@ class Explorer:
         return self._strategy
 
     def reset(self, clear_blacklist: bool = False) -> None:
-        """Forget the goal and DONE (and the blacklist when asked), as on a (re)start; the
-        ``routed`` tour forgets its kept gains and path lengths."""
+        """Forget the goal and DONE (and the blacklist and the robot's path when asked),
+        as on a (re)start; the ``routed`` tour forgets its kept gains and path
+        lengths."""
         self.manager.reset(clear_blacklist=clear_blacklist)
         self._fcache.reset()
         if self._overlay is not None:
             self._overlay.reset()
         if self._planner is not None:
             self._planner.reset()
+        if clear_blacklist:
+            self._trail = SweptPath()
 
     def report_navigation(self, outcome: NavOutcome,
                           goal: Goal | tuple[float, float] | None = None) -> bool:
@@ -302,8 +308,9 @@ class Explorer:
         """The clock jumped (sim reset, ``/clock`` leap): the current goal's progress and
         arrival timers restart at ``now_s`` instead of timing out (or never) on a stale
         reference; the ``routed`` tour forgets its kept path lengths and gains (a sim
-        reset comes with a new map)."""
+        reset comes with a new map), and so does the robot's path of approach goals."""
         self.manager.restart_timers(now_s)
+        self._trail = SweptPath()
         if self._overlay is not None:
             self._overlay.reset()
         if self._planner is not None:
@@ -368,6 +375,7 @@ class Explorer:
         stamped = grid
         detected, grid = self._detected(grid, layer)
         x, y, yaw = (float(v) for v in pose)
+        self._trail.add(x, y)
         if self._strategy.candidates == "rrt":
             self._detect_rrt(grid, (x, y))
             detected = True
@@ -429,9 +437,11 @@ class Explorer:
     def map_corrected(self, stamp_s: float | None = None) -> None:
         """A SLAM correction (a loop closure that re-rendered the map) at ``stamp_s`` (None:
         unknown): the overlay forgets the scans taken before it, laid at uncorrected poses
-        (:meth:`ScanOverlay.forget_before`)."""
+        (:meth:`ScanOverlay.forget_before`), and the robot's path of approach goals starts
+        anew (its positions were uncorrected too)."""
         if self._overlay is not None:
             self._overlay.forget_before(stamp_s)
+        self._trail = SweptPath()
 
     def _detected(self, grid: GridMap, layer: GridMap | None) -> tuple[bool, GridMap]:
         """Detect on ``grid`` unless the products are of an equal map and layer; returns
@@ -503,6 +513,9 @@ class Explorer:
                                                                 sp.approach_radius_m)),
                                  sp.speckle_max_cells,
                                  self._det.extra_obstacles if sp.approach_keeps_objects
+                                 else None,
+                                 self._trail.mask(grid, sp.approach_trail_radius_m)
+                                 if sp.approach_trail_radius_m > 0 and len(self._trail)
                                  else None)
             out, d_out = approaches(grid, frontiers, dist, reach, relaxed, excluded, through)
             ex_out = manager.excluded(out)

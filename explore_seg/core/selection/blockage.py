@@ -10,6 +10,11 @@ surely from close by, where a heading error moves a hit least.
 
 Drift narrows doorways too: a wall mapped twice a few centimetres apart, ragged edges
 joined to the wall (no speckle), leave a passage narrower than the robot in the map.
+Larger drift closes them: walls mapped again at a pose that drifted by a door's width
+shut the doorway the robot came in through. Where the robot's centre was, it could be:
+its own path (``RelaxedMap.trail``) is passable on the relaxed map, so the frontiers
+beyond such a doorway get an approach and the navigator, which plans on its own map and
+live scans, decides whether to pass.
 
 When a decision has no selectable frontier, :func:`approaches` judges reachability once
 more on a relaxed map: without speckle (occupied 8-connected pieces of at most
@@ -125,6 +130,9 @@ class RelaxedMap:
     max_cells: int
     #: Obstacles besides the map (the object layer), kept; shape (H, W).
     extra_obstacles: npt.NDArray[np.bool_] | None = None
+    #: Cells passable whatever the map says: the robot's own path (where its centre
+    #: was); shape (H, W).
+    trail: npt.NDArray[np.bool_] | None = None
 
 
 def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray[np.float64],
@@ -167,6 +175,8 @@ def approaches(grid: GridMap, frontiers: Sequence[Frontier], dist_m: npt.NDArray
     clean = traversable_mask(despeckled(grid, relaxed.params, relaxed.max_cells),
                              relaxed.extra_obstacles, relaxed.params)
     clean |= reach.passable
+    if relaxed.trail is not None:
+        clean |= relaxed.trail
     field = distance_field(clean, reach.start_rc, grid.resolution_m)
     paths: dict[int, npt.NDArray[np.int64]] = {}
     for i in todo:

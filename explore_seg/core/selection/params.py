@@ -143,6 +143,12 @@ class GoalParams:
         "drops them, so a box that closes a passage (depth points of a wall mapped at a "
         "drifted pose, a real table) gets an approach too: the robot drives up to it and "
         "looks, and the navigator, which keeps the layer, decides whether to pass"))
+    approach_trail_radius_m: float = non_negative(
+        "the relaxed map of approach goals also takes the cells within this of the robot's "
+        "own path (its map-frame positions at the decisions since the last map correction) "
+        "as passable: a doorway the robot drove through gets an approach however drift "
+        "doubled its walls in the map, and the navigator decides whether to pass; 0 = the "
+        "map alone", "m", default=0.1)
     retry_change_m2: float = non_negative(
         "a blacklisted goal is dropped from the blacklist (its frontier a candidate again) "
         "once the map's occupied plus unknown cells within flicker_radius_m of it changed "
@@ -168,7 +174,8 @@ class GoalParams:
                                   "goal_reached_tolerance_m", "frontier_match_radius_m",
                                   "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
                                   "flicker_radius_m", "retry_reveal_m2", "approach_radius_m",
-                                  "retry_change_m2", "retry_reveal_radius_m"))
+                                  "retry_change_m2", "retry_reveal_radius_m",
+                                  "approach_trail_radius_m"))
         if not (math.isfinite(self.progress_timeout_s) and self.progress_timeout_s > 0):
             raise ValueError(f"progress_timeout_s must be finite and > 0, "
                              f"got {self.progress_timeout_s}")
