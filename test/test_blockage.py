@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from explore_seg.core.explorer import Explorer
-from explore_seg.core.grid import grid_from_ascii
+from explore_seg.core.grid import GridMap, grid_from_ascii
 from explore_seg.core.selection import Action, NavOutcome
 from explore_seg.core.selection.blockage import speckle_cells
 from selection_cases import split_params
@@ -245,3 +245,59 @@ def test_a_robot_that_never_drove_through_the_wall_gets_no_approach_through_it()
     for k in range(5):
         ex.step(0.1 * k, g, (pose[0] + 0.1 * k, pose[1], 0.0))
     assert ex.step(1.0, g, pose).action is Action.DONE
+
+
+def _shut_doorway_maps():
+    """Room A (the robot's, below), a 0.2 m wall with a 1 m doorway, room B (0.5 m deep)
+    and unknown space beyond it; the second map has the doorway shut by a wall that
+    drift mapped into it. 0.05 m cells, rows grow upward."""
+    data = np.zeros((120, 100), np.int8)
+    data[0, :] = data[:, 0] = data[:, 99] = 100
+    data[60:64, :] = 100
+    data[74:, 1:99] = -1
+    opened = data.copy()
+    opened[60:64, 40:60] = 0
+    return (GridMap(opened, 0.05, (0.0, 0.0)), GridMap(data, 0.05, (0.0, 0.0)))
+
+
+def _routed(**kw):
+    params = dict(strategy="routed", robot_radius_m=0.2, min_group_size_cells=1,
+                  path_block_cells=1, blacklist_retries=0, done_confirmations=1,
+                  turn_looks=0, viewpoint_radius_m=1.5)
+    params.update(kw)
+    return Explorer(*split_params(**params))
+
+
+def _walk_up(ex, g, x, rows):
+    for k, r in enumerate(rows):
+        ex.step(0.1 * k, g, (x, (r + 0.5) * 0.05, 0.0))
+    ex.reset(clear_blacklist=False)
+
+
+def test_routed_a_group_seen_only_from_beyond_a_shut_doorway_counts_as_unreachable():
+    """Room B's frontier is seen from room B alone (unreachable on the shut map); from
+    room A a viewpoint sees nothing through the wall. The group keeps its own cPoint with
+    no path (so the explorer seeks a way to it) instead of a zero-view viewpoint in room A
+    that drops it from the tour."""
+    _, shut = _shut_doorway_maps()
+    pose = (2.5, 1.0, 0.0)
+    out = _routed().step(0.0, shut, pose)
+    assert len(out.frontiers) >= 1 and np.isinf(out.dist_m).all()
+    assert all(f.point_rc[0] >= 64 for f in out.frontiers)          # room B: its cPoints
+    old = _routed(blocked_views_unreachable=False).step(0.0, shut, pose)
+    assert np.isfinite(old.dist_m).any()
+    assert all(f.point_rc[0] < 60 for f, d in zip(old.frontiers, old.dist_m)
+               if np.isfinite(d))                                 # viewpoints in room A
+    assert old.action is Action.DONE
+
+
+def test_routed_the_robot_goes_back_through_the_shut_doorway_it_came_in_by():
+    opened, shut = _shut_doorway_maps()
+    ex = _routed()
+    _walk_up(ex, opened, 2.5, range(69, 19, -2))
+    out = ex.step(10.0, shut, (2.5, 1.0, 0.0))
+    assert out.action is Action.NEW_GOAL, out.reason
+    assert out.goal.rc[0] >= 64                                   # beyond the doorway
+    old = _routed(blocked_views_unreachable=False)
+    _walk_up(old, opened, 2.5, range(69, 19, -2))
+    assert old.step(10.0, shut, (2.5, 1.0, 0.0)).action is Action.DONE

@@ -330,6 +330,12 @@ class RoutedParams:
         "at one goal area (within flicker_radius_m of its first goal) after which the "
         "area's goals are blacklisted. Raising it lets a small leftover be re-chosen more "
         "often; 0 = no limit", range=(0, INT_MAX)))
+    blocked_views_unreachable: bool = field(default=True, metadata=param_meta(
+        "routed: a group that no reachable viewpoint candidate sees (less than "
+        "min_gain_m2) while an unreachable one does, and whose own cPoint has no path, "
+        "keeps its cPoint and counts as unreachable, so lookouts, approach goals and turn "
+        "looks seek a way to it before exploration ends (a doorway that map drift shut). "
+        "False: it drops out of the tour as a group with nothing to see"))
 
     def __post_init__(self) -> None:
         check_non_negative(self, ("viewpoint_radius_m", "frontier_split_m", "region_switch_m",

@@ -196,9 +196,11 @@ class Router:
             if not f.point_passable:
                 d[0] = np.inf
             k = pick_viewpoint(gain[a:b], d, p.viewpoint_gain_tolerance)
-            if k is None:
-                # No reachable candidate (reachable through unknown space at most): keep
-                # the cPoint, rated by the best view near the group.
+            if k is None or (p.blocked_views_unreachable
+                             and _seen_only_from_beyond(gain[a:b], d, k, p.min_gain_m2)):
+                # No reachable candidate (reachable through unknown space at most), or
+                # none that sees anything where unreachable ones do: keep the cPoint,
+                # rated by the best view near the group.
                 self.gain_m2[i] = float(gain[a:b].max())
                 out.append(f)
                 continue
@@ -344,6 +346,19 @@ class Router:
                 if own.length_m < best_len:
                     best_len, order = own.length_m, own.order
         return front, order, best_len
+
+
+def _seen_only_from_beyond(gain_m2: npt.NDArray[np.float64], dist_m: npt.NDArray[np.float64],
+                           k: int, min_gain_m2: float) -> bool:
+    """True when the picked reachable candidate ``k`` sees less than ``min_gain_m2`` while
+    an unreachable one sees at least that, and the cPoint (candidate 0) is unreachable:
+    the group lies behind a blockage (a doorway that drift shut in the map). A viewpoint
+    on the near side would see nothing, so the group would quietly drop out of the tour;
+    with its own unreachable cPoint it counts as unreachable, and the explorer looks for
+    a way to it (lookouts, approach goals, turn looks) before exploration ends."""
+    if gain_m2[k] >= min_gain_m2 or np.isfinite(dist_m[0]):
+        return False
+    return bool((~np.isfinite(dist_m) & (gain_m2 >= min_gain_m2)).any())
 
 
 __all__ = ["GainSource", "Router", "TourPlan"]
