@@ -15,6 +15,9 @@ Per decision (:class:`Router`, driven by :class:`~explore_seg.core.explorer.Expl
    the viewpoint, so the goal manager sends, keeps, judges and blacklists viewpoints exactly
    as it does cPoints.
    Gains are kept per coarse cell across map versions (:class:`~.viewpoints.GainCache`).
+   A group that only unreachable candidates see, and whose own cPoint has no path, keeps
+   its cPoint (``blocked_views_unreachable``): it lies behind a blockage, and counts as
+   unreachable rather than as a group with nothing to see.
 2. **Selectable groups.** A group is in the tour when its viewpoint is reachable, not
    blacklisted and sees at least ``min_gain_m2`` (exploration ends rather than chasing
    frontier specks that reveal nothing).
