@@ -36,7 +36,7 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.angles import wrap_angle
-from explore_seg.core.fields import param_meta
+from explore_seg.core.fields import check_non_negative, param_meta
 from explore_seg.core.grid import GridMap
 
 #: An OccupancyGrid cell at or above this value is occupied (slam_toolbox writes 100; the
@@ -91,13 +91,10 @@ class CorrectionParams:
     def check_corrections(self) -> None:
         """Raise ValueError on a threshold out of its range (subclasses call it from their
         own ``__post_init__``)."""
-        for name in ("correction_pose_jump_m", "correction_pose_jump_rad",
-                     "correction_max_speed_mps", "correction_max_turn_rps",
-                     "correction_pose_max_gap_s", "correction_map_tolerance_m",
-                     "correction_merge_s"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be finite and >= 0, got {v}")
+        check_non_negative(self, ("correction_pose_jump_m", "correction_pose_jump_rad",
+                                  "correction_max_speed_mps", "correction_max_turn_rps",
+                                  "correction_pose_max_gap_s", "correction_map_tolerance_m",
+                                  "correction_merge_s"))
         if not 0.0 <= self.correction_map_moved_fraction <= 1.0:
             raise ValueError(f"correction_map_moved_fraction must be in [0, 1], got "
                              f"{self.correction_map_moved_fraction}")

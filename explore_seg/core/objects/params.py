@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import Sequence
 
 from explore_seg.core.corrections import CorrectionParams
-from explore_seg.core.fields import param_meta
+from explore_seg.core.fields import check_non_negative, param_meta
 from explore_seg.core.pose_fusion import POSE_SOURCE_DOC, POSE_SOURCES
 
 #: Class name given to objects found from laser legs without a detection.
@@ -451,10 +451,7 @@ class ObjectCostmapNodeParams(ObjectParams, CorrectionParams):
         if not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise ValueError(f"rate_hz must be finite and > 0, got {self.rate_hz}")
         self.check_corrections()
-        for name in ("sync_tolerance_s", "pose_tolerance_s"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be finite and >= 0, got {v}")
+        check_non_negative(self, ("sync_tolerance_s", "pose_tolerance_s"))
         for name in ("camera_x_m", "camera_y_m", "camera_z_m", "camera_roll_rad",
                      "camera_pitch_rad", "camera_yaw_rad", "lidar_x_m", "lidar_y_m",
                      "lidar_yaw_rad"):
