@@ -174,3 +174,52 @@ def test_forget_since_drops_the_voxels_marked_after_a_correction():
     assert len(d) == old and d.version == version + 1
     assert d.mask(_grid())[_cells(_grid(), 1.3, 1.7, -0.1, 0.3)].any()
     assert not d.forget_since(5.0)
+
+
+#: A low box 2.8 m ahead: with every 12th pixel, each of its voxels holds one point a frame.
+FAR_BOX = box_parts((2.8, 0.1), (0.3, 0.3, 0.12))
+
+
+def _far_frame(boxes, **pose_kw):
+    pose = camera_pose(**PAPER_CAM, **pose_kw)
+    return DepthFrame(render_depth(boxes, pose), K, pose)
+
+
+def test_points_too_few_for_one_frame_add_up_over_the_window():
+    """A voxel with one point a frame is marked by the second frame within
+    depth_evidence_window_s, never with the window off, not when the window ended
+    first."""
+    frame = _far_frame([FAR_BOX])
+    params = ObjectParams(depth_pixel_stride=12, depth_evidence_window_s=3.0)
+    d = DepthObstacles(params)
+    assert not d.update(frame, 0.0) and len(d) == 0       # one point each: pending
+    assert d.update(frame, 1.0) and len(d) > 0            # two: marked
+    assert d.mask(_grid())[_cells(_grid(), 2.6, 3.0, -0.1, 0.3)].any()
+    off = DepthObstacles(dataclasses.replace(params, depth_evidence_window_s=0.0))
+    for t in (0.0, 1.0, 2.0):
+        off.update(frame, t)
+    assert len(off) == 0
+    late = DepthObstacles(params)
+    late.update(frame, 0.0)
+    late.update(frame, 3.5)                               # the first point has expired
+    assert len(late) == 0
+    assert late.update(frame, 4.0) and len(late) > 0      # 3.5 s and 4.0 s add up
+
+
+def test_a_pending_voxel_seen_through_starts_again():
+    """The box's single points are forgotten when a frame sees the floor behind where it
+    stood; its next single points do not complete them."""
+    params = ObjectParams(depth_pixel_stride=12, depth_evidence_window_s=10.0)
+    d = DepthObstacles(params)
+    d.update(_far_frame([FAR_BOX]), 0.0)
+    d.update(_far_frame([]), 1.0)                         # gone: seen through
+    assert not d.update(_far_frame([FAR_BOX]), 2.0) and len(d) == 0
+    assert d.update(_far_frame([FAR_BOX]), 3.0) and len(d) > 0
+
+
+def test_forget_since_drops_pending_points_after_a_correction():
+    params = ObjectParams(depth_pixel_stride=12, depth_evidence_window_s=10.0)
+    d = DepthObstacles(params)
+    d.update(_far_frame([FAR_BOX]), 10.0)
+    d.forget_since(5.0)                                   # the points of 10 s go
+    assert not d.update(_far_frame([FAR_BOX]), 11.0) and len(d) == 0

@@ -18,6 +18,13 @@ the map frame:
   wall of the 2D map (``drop_wall_points``), are binned into voxels of ``depth_voxel_m`` (x, y) by
   ``depth_voxel_height_m`` (z); a voxel with at least ``depth_min_points`` points in a
   frame gains one point of score (up to ``depth_max_score``);
+* **evidence over frames**: a voxel with fewer points in a frame is pending: its points
+  add up over the frames of ``depth_evidence_window_s`` (from its first point), and it is
+  marked in the frame that brings the sum to ``depth_min_points``. An object seen only at
+  long range or only along a thin strip (an overhang above a wall, seen over it from across
+  the room) gives one point per voxel per frame: it is marked before the robot is close,
+  when it may already be outside the camera's narrow field of view. A pending voxel the
+  camera sees through is dropped, as is one whose window ends first;
 * **clearing**: a stored voxel that lies in the camera's view, in front of the measured
   surface by more than ``depth_clear_margin_m`` at its pixel (the ray passed through it),
   loses one point; at zero it is forgotten. Voxels out of view (behind the robot, below
@@ -81,6 +88,11 @@ class DepthObstacles:
         self._score = np.zeros(0, np.int16)
         self._stamp = np.zeros(0, np.float64)
         self._columns = np.zeros(0, np.int64)    # sorted (ix, iy) keys of stored voxels
+        # pending voxels (fewer than depth_min_points so far): sorted keys, points, the
+        # stamp of their first point
+        self._pend_keys = np.zeros(0, np.int64)
+        self._pend_count = np.zeros(0, np.int32)
+        self._pend_stamp = np.zeros(0, np.float64)
         #: Changes whenever the set of obstacle columns changes.
         self.version = 0
 
@@ -143,8 +155,8 @@ class DepthObstacles:
         ix = np.floor(pts[:, 0] / v).astype(np.int64)
         iy = np.floor(pts[:, 1] / v).astype(np.int64)
         iz = np.floor((pts[:, 2] - p.depth_min_height_m) / vz).astype(np.int64)
-        new, counts = np.unique(_pack(ix, iy, iz), return_counts=True)
-        new = new[counts >= p.depth_min_points]
+        seen, counts = np.unique(_pack(ix, iy, iz), return_counts=True)
+        new = self._with_pending(frame, seen, counts, stamp_s)
         keys, score, stamp = self._keys, self._score.astype(np.int32), self._stamp
         # clearing: stored voxels the camera sees through (not marked in this frame)
         if keys.size:
@@ -174,10 +186,54 @@ class DepthObstacles:
             keep[np.flatnonzero(keep)[old]] = False
         return self._store(keys[keep], score[keep].astype(np.int16), stamp[keep])
 
+    def _with_pending(self, frame: DepthFrame, seen: npt.NDArray[np.int64],
+                      counts: npt.NDArray[np.int64], stamp_s: float
+                      ) -> npt.NDArray[np.int64]:
+        """The voxels this frame marks (sorted keys): those with ``depth_min_points`` of its
+        points (``seen``, ``counts``: every voxel with a point), and the pending voxels whose
+        points reach that sum with this frame's. Updates the pending store: adds this
+        frame's other voxels, drops the ones marked, seen through, or past the window."""
+        p = self.params
+        strong = counts >= p.depth_min_points
+        if p.depth_evidence_window_s <= 0 or p.depth_min_points <= 1:
+            return seen[strong]
+        keys, count, first = self._pend_keys, self._pend_count, self._pend_stamp
+        keep = first >= stamp_s - p.depth_evidence_window_s
+        if keys.size:
+            keep &= ~(self._seen_through(frame, keys) & ~np.isin(keys, seen))
+            keep &= ~np.isin(keys, seen[strong])
+        keys, count, first = keys[keep], count[keep], first[keep]
+        weak, weak_n = seen[~strong], counts[~strong].astype(np.int32)
+        if keys.size and weak.size:
+            idx = np.minimum(np.searchsorted(keys, weak), keys.size - 1)
+            found = keys[idx] == weak
+        else:
+            idx, found = np.zeros(weak.size, np.int64), np.zeros(weak.size, bool)
+        count = count.copy()
+        np.add.at(count, idx[found], weak_n[found])
+        keys = np.concatenate([keys, weak[~found]])
+        count = np.concatenate([count, weak_n[~found]])
+        first = np.concatenate([first, np.full(int((~found).sum()), float(stamp_s))])
+        order = np.argsort(keys, kind="stable")
+        keys, count, first = keys[order], count[order], first[order]
+        done = count >= p.depth_min_points
+        pending = ~done
+        n_pending = int(pending.sum())
+        if n_pending > p.depth_max_voxels:       # bounded: the oldest go first
+            idx_p = np.flatnonzero(pending)
+            pending[idx_p[np.argsort(first[idx_p], kind="stable")
+                          [:n_pending - p.depth_max_voxels]]] = False
+        self._pend_keys, self._pend_count, self._pend_stamp = (
+            keys[pending], count[pending], first[pending])
+        return np.union1d(seen[strong], keys[done])
+
     def forget_since(self, stamp_s: float) -> bool:
         """Forget the voxels last marked at or after ``stamp_s`` (after a SLAM correction
         moved the poses they were placed at: they are re-observed where the corrected
         map has them); True when the obstacle columns changed."""
+        pend = self._pend_stamp < stamp_s
+        self._pend_keys, self._pend_count, self._pend_stamp = (
+            self._pend_keys[pend], self._pend_count[pend], self._pend_stamp[pend])
         keep = self._stamp < stamp_s
         if keep.all():
             return False

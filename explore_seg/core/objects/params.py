@@ -253,6 +253,11 @@ class ObjectParams:
     depth_min_points: int = field(default=2, metadata=param_meta(
         "A voxel is marked by a frame with at least this many of its points in it",
         range=(1, 2**31 - 1)))
+    depth_evidence_window_s: float = field(default=3.0, metadata=param_meta(
+        "A voxel with fewer than depth_min_points points in a frame is marked when its "
+        "points over the frames of this window reach depth_min_points (an object seen "
+        "only from afar or along a thin strip); 0 = each frame alone", "s",
+        range=(0.0, math.inf)))
     depth_max_score: int = field(default=3, metadata=param_meta(
         "Marks a voxel can collect (each frame that sees through it takes one away; at "
         "zero it is cleared)", range=(1, 32767)))
@@ -308,7 +313,7 @@ class ObjectParams:
         non_negative = ("voxel_size_m", "miss_depth_margin_m", "leg_min_width_m",
                         "unknown_radius_m", "post_max_width_m", "post_overhang_m", "post_band_m",
                         "depth_min_height_m", "depth_clear_margin_m", "depth_decay_s",
-                        "depth_lidar_height_m", "depth_lidar_band_m")
+                        "depth_lidar_height_m", "depth_lidar_band_m", "depth_evidence_window_s")
         for name in non_negative:
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
