@@ -228,9 +228,10 @@ class DepthObstacles:
         return np.union1d(seen[strong], keys[done])
 
     def forget_since(self, stamp_s: float) -> bool:
-        """Forget the voxels last marked at or after ``stamp_s`` (after a SLAM correction
-        moved the poses they were placed at: they are re-observed where the corrected
-        map has them); True when the obstacle columns changed."""
+        """Forget the voxels last marked, and the pending points first seen, at or after
+        ``stamp_s`` (after a SLAM correction moved the poses they were placed at: they are
+        re-observed where the corrected map has them); True when the obstacle columns
+        changed."""
         pend = self._pend_stamp < stamp_s
         self._pend_keys, self._pend_count, self._pend_stamp = (
             self._pend_keys[pend], self._pend_count[pend], self._pend_stamp[pend])
