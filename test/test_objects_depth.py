@@ -236,3 +236,11 @@ def test_depth_noise_of_a_stereo_camera_on_an_empty_floor_marks_nothing_over_fra
         noisy = clean + rng.normal(0.0, 1.0, clean.shape) * 0.005 * clean ** 2
         d.update(DepthFrame(noisy, K, pose), 0.5 * k)
         assert len(d) == 0
+
+
+def test_pending_points_of_an_old_time_line_do_not_add_up_after_a_clock_jump_back():
+    params = ObjectParams(depth_pixel_stride=12, depth_evidence_window_s=3.0)
+    d = DepthObstacles(params)
+    d.update(_far_frame([FAR_BOX]), 100.0)
+    assert not d.update(_far_frame([FAR_BOX]), 1.0) and len(d) == 0   # clock reset
+    assert d.update(_far_frame([FAR_BOX]), 2.0) and len(d) > 0        # the new line's own

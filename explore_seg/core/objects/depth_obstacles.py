@@ -198,7 +198,9 @@ class DepthObstacles:
         if p.depth_evidence_window_s <= 0 or p.depth_min_points <= 1:
             return seen[strong]
         keys, count, first = self._pend_keys, self._pend_count, self._pend_stamp
-        keep = first >= stamp_s - p.depth_evidence_window_s
+        # past the window, or first seen after this frame: the clock jumped back and
+        # they belong to the old time line
+        keep = (first >= stamp_s - p.depth_evidence_window_s) & (first <= stamp_s)
         if keys.size:
             keep &= ~(self._seen_through(frame, keys) & ~np.isin(keys, seen))
             keep &= ~np.isin(keys, seen[strong])
