@@ -204,20 +204,14 @@ class DepthObstacles:
         if keys.size:
             keep &= ~(self._seen_through(frame, keys) & ~np.isin(keys, seen))
             keep &= ~np.isin(keys, seen[strong])
-        keys, count, first = keys[keep], count[keep], first[keep]
-        weak, weak_n = seen[~strong], counts[~strong].astype(np.int32)
-        if keys.size and weak.size:
-            idx = np.minimum(np.searchsorted(keys, weak), keys.size - 1)
-            found = keys[idx] == weak
-        else:
-            idx, found = np.zeros(weak.size, np.int64), np.zeros(weak.size, bool)
-        count = count.copy()
-        np.add.at(count, idx[found], weak_n[found])
-        keys = np.concatenate([keys, weak[~found]])
-        count = np.concatenate([count, weak_n[~found]])
-        first = np.concatenate([first, np.full(int((~found).sum()), float(stamp_s))])
-        order = np.argsort(keys, kind="stable")
-        keys, count, first = keys[order], count[order], first[order]
+        # this frame's other voxels join: points summed, the earliest first stamp kept
+        weak = ~strong
+        stamps = np.concatenate([first[keep], np.full(int(weak.sum()), float(stamp_s))])
+        points = np.concatenate([count[keep], counts[weak]])
+        keys, inv = np.unique(np.concatenate([keys[keep], seen[weak]]), return_inverse=True)
+        count = np.bincount(inv, points, minlength=keys.size).astype(np.int32)
+        first = np.full(keys.size, math.inf)
+        np.minimum.at(first, inv, stamps)
         done = count >= p.depth_min_points
         pending = ~done
         n_pending = int(pending.sum())

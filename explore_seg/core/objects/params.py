@@ -310,14 +310,11 @@ class ObjectParams:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {v}")
-        non_negative = ("voxel_size_m", "miss_depth_margin_m", "leg_min_width_m",
-                        "unknown_radius_m", "post_max_width_m", "post_overhang_m", "post_band_m",
-                        "depth_min_height_m", "depth_clear_margin_m", "depth_decay_s",
-                        "depth_lidar_height_m", "depth_lidar_band_m", "depth_evidence_window_s")
-        for name in non_negative:
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be finite and >= 0, got {v}")
+        check_non_negative(self, (
+            "voxel_size_m", "miss_depth_margin_m", "leg_min_width_m", "unknown_radius_m",
+            "post_max_width_m", "post_overhang_m", "post_band_m", "depth_min_height_m",
+            "depth_clear_margin_m", "depth_decay_s", "depth_lidar_height_m",
+            "depth_lidar_band_m", "depth_evidence_window_s"))
         for name in ("floor_height_m", "unknown_min_height_m"):
             v = getattr(self, name)
             if not math.isfinite(v):
