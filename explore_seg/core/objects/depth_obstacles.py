@@ -93,6 +93,10 @@ class DepthObstacles:
         self._pend_keys = np.zeros(0, np.int64)
         self._pend_count = np.zeros(0, np.int32)
         self._pend_stamp = np.zeros(0, np.float64)
+        # columns (``key >> _Z_BITS``) that held a point at the lidar's height in a frame of
+        # the evidence window: sorted keys, the stamp of their last such frame
+        self._lidar_cols = np.zeros(0, np.int64)
+        self._lidar_stamp = np.zeros(0, np.float64)
         #: Changes whenever the set of obstacle columns changes.
         self.version = 0
 
@@ -107,6 +111,12 @@ class DepthObstacles:
     def band_points(self, frame: DepthFrame, walls: WallMask | None = None
                     ) -> npt.NDArray[np.float64]:
         """Map-frame depth points in the height band (the ones that mark), shape (N, 3)."""
+        return self._band_and_lidar(frame, walls)[0]
+
+    def _band_and_lidar(self, frame: DepthFrame, walls: WallMask | None
+                        ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]:
+        """:meth:`band_points` and the frame's columns with a point at the lidar's height
+        (sorted ``key >> _Z_BITS`` keys; empty when ``depth_lidar_band_m`` is 0)."""
         p = self.params
         s = p.depth_pixel_stride
         d = frame.depth_m[::s, ::s]
@@ -120,13 +130,15 @@ class DepthObstacles:
         lidar = (np.abs(pts[:, 2] - p.depth_lidar_height_m) <= p.depth_lidar_band_m
                  if p.depth_lidar_band_m > 0 else None)
         band = (pts[:, 2] > p.depth_min_height_m) & (pts[:, 2] < p.depth_max_height_m)
+        lidar_cols = np.zeros(0, np.int64)
         if lidar is not None and lidar.any():
             cols = self._column_keys(pts)
-            band &= ~np.isin(cols, _with_neighbours(np.unique(cols[lidar])))
+            lidar_cols = np.unique(cols[lidar])
+            band &= ~np.isin(cols, _with_neighbours(lidar_cols))
         pts = pts[band]
         if walls is not None and p.drop_wall_points and len(pts):
             pts = pts[~walls.on(pts[:, :2])]
-        return pts
+        return pts, lidar_cols
 
     def _column_keys(self, pts: npt.NDArray[np.float64]) -> npt.NDArray[np.int64]:
         """The (ix, iy) voxel column key of each point (the stored voxels' ``key >> z
@@ -150,13 +162,16 @@ class DepthObstacles:
             Depth points on the 2D map's walls do not mark (the map has them).
         """
         p = self.params
-        pts = self.band_points(frame, walls)
+        pts, lidar_cols = self._band_and_lidar(frame, walls)
+        lidar_near = self._lidar_near(lidar_cols, stamp_s)
+        if lidar_near.size and len(pts):
+            pts = pts[~np.isin(self._column_keys(pts), lidar_near)]
         v, vz = p.depth_voxel_m, p.depth_voxel_height_m
         ix = np.floor(pts[:, 0] / v).astype(np.int64)
         iy = np.floor(pts[:, 1] / v).astype(np.int64)
         iz = np.floor((pts[:, 2] - p.depth_min_height_m) / vz).astype(np.int64)
         seen, counts = np.unique(_pack(ix, iy, iz), return_counts=True)
-        new = self._with_pending(frame, seen, counts, stamp_s)
+        new = self._with_pending(frame, seen, counts, stamp_s, lidar_near)
         keys, score, stamp = self._keys, self._score.astype(np.int32), self._stamp
         # clearing: stored voxels the camera sees through (not marked in this frame)
         if keys.size:
@@ -187,12 +202,13 @@ class DepthObstacles:
         return self._store(keys[keep], score[keep].astype(np.int16), stamp[keep])
 
     def _with_pending(self, frame: DepthFrame, seen: npt.NDArray[np.int64],
-                      counts: npt.NDArray[np.int64], stamp_s: float
-                      ) -> npt.NDArray[np.int64]:
+                      counts: npt.NDArray[np.int64], stamp_s: float,
+                      lidar_near: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
         """The voxels this frame marks (sorted keys): those with ``depth_min_points`` of its
         points (``seen``, ``counts``: every voxel with a point), and the pending voxels whose
         points reach that sum with this frame's. Updates the pending store: adds this
-        frame's other voxels, drops the ones marked, seen through, or past the window."""
+        frame's other voxels, drops the ones marked, seen through, past the window, or in
+        a column of ``lidar_near`` (:meth:`_lidar_near`)."""
         p = self.params
         strong = counts >= p.depth_min_points
         if p.depth_evidence_window_s <= 0 or p.depth_min_points <= 1:
@@ -204,6 +220,8 @@ class DepthObstacles:
         if keys.size:
             keep &= ~(self._seen_through(frame, keys) & ~np.isin(keys, seen))
             keep &= ~np.isin(keys, seen[strong])
+            keep &= ~np.isin(keys >> _Z_BITS, lidar_near)
+            keep &= ~np.isin(keys >> _Z_BITS, lidar_near)
         # this frame's other voxels join: points summed, the earliest first stamp kept
         weak = ~strong
         stamps = np.concatenate([first[keep], np.full(int(weak.sum()), float(stamp_s))])
@@ -231,10 +249,40 @@ class DepthObstacles:
         pend = self._pend_stamp < stamp_s
         self._pend_keys, self._pend_count, self._pend_stamp = (
             self._pend_keys[pend], self._pend_count[pend], self._pend_stamp[pend])
+        lid = self._lidar_stamp < stamp_s
+        self._lidar_cols, self._lidar_stamp = self._lidar_cols[lid], self._lidar_stamp[lid]
         keep = self._stamp < stamp_s
         if keep.all():
             return False
         return self._store(self._keys[keep], self._score[keep], self._stamp[keep])
+
+    def _lidar_near(self, lidar_cols: npt.NDArray[np.int64], stamp_s: float
+                    ) -> npt.NDArray[np.int64]:
+        """Columns with, or next to one with, a point at the lidar's height in an earlier
+        frame of the evidence window (sorted keys; :meth:`band_points` drops this frame's
+        own). Updates the store with this frame's ``lidar_cols`` (columns of frames past the
+        window, or stamped after this one, are dropped; at most ``depth_max_voxels``, the
+        oldest dropped first). Empty when ``depth_evidence_window_s`` is 0.
+
+        What the lidar saw a moment ago still stands there: the camera loses the
+        lidar-height part of a wall or leg in some frames (below its view from close by,
+        between the sampled rows from afar), while the SLAM pose the points are placed at
+        drifts from frame to frame."""
+        p = self.params
+        if p.depth_evidence_window_s <= 0:
+            return np.zeros(0, np.int64)
+        keep = ((self._lidar_stamp >= stamp_s - p.depth_evidence_window_s)
+                & (self._lidar_stamp <= stamp_s) & ~np.isin(self._lidar_cols, lidar_cols))
+        near = _with_neighbours(self._lidar_cols[keep])
+        cols = np.concatenate([self._lidar_cols[keep], lidar_cols])
+        stamps = np.concatenate([self._lidar_stamp[keep],
+                                 np.full(lidar_cols.size, float(stamp_s))])
+        if cols.size > p.depth_max_voxels:
+            newest = np.argsort(stamps, kind="stable")[cols.size - p.depth_max_voxels:]
+            cols, stamps = cols[newest], stamps[newest]
+        order = np.argsort(cols, kind="stable")
+        self._lidar_cols, self._lidar_stamp = cols[order], stamps[order]
+        return near
 
     def _store(self, keys: npt.NDArray[np.int64], score: npt.NDArray[np.int16],
                stamp: npt.NDArray[np.float64]) -> bool:
