@@ -260,9 +260,11 @@ class DepthObstacles:
                     ) -> npt.NDArray[np.int64]:
         """Columns with, or next to one with, a point at the lidar's height in an earlier
         frame of the evidence window (sorted keys; :meth:`band_points` drops this frame's
-        own). Updates the store with this frame's ``lidar_cols`` (columns of frames past the
-        window, or stamped after this one, are dropped; at most ``depth_max_voxels``, the
-        oldest dropped first). Empty when ``depth_evidence_window_s`` is 0.
+        own; a frame stamped up to the window after this one counts too: frames may come
+        out of order). Updates the store with this frame's ``lidar_cols`` (columns of frames
+        more than the window before or after this one are dropped, so a clock jump leaves
+        none of the old time line; at most ``depth_max_voxels``, the oldest dropped
+        first). Empty when ``depth_evidence_window_s`` is 0.
 
         What the lidar saw a moment ago still stands there: the camera loses the
         lidar-height part of a wall or leg in some frames (below its view from close by,
@@ -271,9 +273,9 @@ class DepthObstacles:
         p = self.params
         if p.depth_evidence_window_s <= 0:
             return np.zeros(0, np.int64)
-        keep = ((self._lidar_stamp >= stamp_s - p.depth_evidence_window_s)
-                & (self._lidar_stamp <= stamp_s) & ~np.isin(self._lidar_cols, lidar_cols))
+        keep = np.abs(self._lidar_stamp - stamp_s) <= p.depth_evidence_window_s
         near = _with_neighbours(self._lidar_cols[keep])
+        keep &= ~np.isin(self._lidar_cols, lidar_cols)
         cols = np.concatenate([self._lidar_cols[keep], lidar_cols])
         stamps = np.concatenate([self._lidar_stamp[keep],
                                  np.full(lidar_cols.size, float(stamp_s))])
