@@ -244,3 +244,34 @@ def test_pending_points_of_an_old_time_line_do_not_add_up_after_a_clock_jump_bac
     d.update(_far_frame([FAR_BOX]), 100.0)
     assert not d.update(_far_frame([FAR_BOX]), 1.0) and len(d) == 0   # clock reset
     assert d.update(_far_frame([FAR_BOX]), 2.0) and len(d) > 0        # the new line's own
+
+
+def test_what_the_lidar_saw_within_the_window_does_not_mark_from_close_by():
+    """A wall seen from 1.5 m shows its scan-plane row, so it does not mark; from 0.9 m
+    that row lies below the camera's view. Within depth_evidence_window_s of the far
+    frame its columns still do not mark (the lidar saw what stands there); with the
+    window off, or once it has passed, the near frame marks the wall's face. The far
+    frame may also come after the near one (frames out of order)."""
+    wall = [box_parts((1.55, 0.0), (0.1, 1.0, 1.0))]
+    far, near = _far_frame(wall), _far_frame(wall, x=0.6)
+    lowest_m = PAPER_CAM["z"] - 0.9 * np.tan(PAPER_CAM["pitch"] + np.arctan(K.cy / K.fy))
+    assert lowest_m > ObjectParams().depth_lidar_height_m + 0.1    # the row is out of view
+    params = ObjectParams(depth_evidence_window_s=3.0)
+    d = DepthObstacles(params)
+    d.update(far, 0.0)
+    assert len(d) == 0
+    d.update(near, 2.0)
+    assert len(d) == 0
+    late = DepthObstacles(params)
+    late.update(far, 0.0)
+    assert late.update(near, 3.5) and len(late) > 0       # the far frame is past the window
+    off = DepthObstacles(dataclasses.replace(params, depth_evidence_window_s=0.0))
+    off.update(far, 0.0)
+    assert off.update(near, 2.0) and len(off) > 0
+    swapped = DepthObstacles(params)
+    swapped.update(far, 2.0)
+    swapped.update(near, 1.0)
+    assert len(swapped) == 0
+    jumped = DepthObstacles(params)                       # the clock jumped back 100 s
+    jumped.update(far, 100.0)
+    assert jumped.update(near, 1.0) and len(jumped) > 0

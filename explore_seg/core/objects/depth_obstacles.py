@@ -10,11 +10,14 @@ the map frame:
 * **marking**: the depth image is sampled every ``depth_pixel_stride``-th pixel up to
   ``depth_max_range_m``; points between ``depth_min_height_m`` (the floor margin) and
   ``depth_max_height_m`` (the robot's height), not in a voxel column that also holds a
-  point of the frame at the lidar's height (``depth_lidar_height_m`` within
-  ``depth_lidar_band_m``) or next to one (the lidar sees what stands there, so the 2D
-  map has it, and this holds however far the SLAM pose has drifted from the map's walls;
-  the neighbours because a pitched camera places a wall's points of one pixel column a
-  few centimetres apart sideways at different heights), not over a
+  point at the lidar's height (``depth_lidar_height_m`` within ``depth_lidar_band_m``)
+  in this frame or in a frame of the evidence window, or next to one (the lidar sees what
+  stands there, so the 2D map has it, and this holds however far the SLAM pose has
+  drifted from the map's walls; the window because the camera loses that row of a wall or
+  leg in some frames, below its view from close by or between the sampled rows from
+  afar, while the drifting pose moves the points from frame to frame; the neighbours
+  because a pitched camera places a wall's points of one pixel column a few centimetres
+  apart sideways at different heights), not over a
   wall of the 2D map (``drop_wall_points``), are binned into voxels of ``depth_voxel_m`` (x, y) by
   ``depth_voxel_height_m`` (z); a voxel with at least ``depth_min_points`` points in a
   frame gains one point of score (up to ``depth_max_score``);

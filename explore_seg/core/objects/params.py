@@ -256,7 +256,8 @@ class ObjectParams:
     depth_evidence_window_s: float = field(default=3.0, metadata=param_meta(
         "A voxel with fewer than depth_min_points points in a frame is marked when its "
         "points over the frames of this window reach depth_min_points (an object seen "
-        "only from afar or along a thin strip); 0 = each frame alone", "s",
+        "only from afar or along a thin strip); the lidar-height columns of "
+        "depth_lidar_band_m count over it too; 0 = each frame alone", "s",
         range=(0.0, math.inf)))
     depth_max_score: int = field(default=3, metadata=param_meta(
         "Marks a voxel can collect (each frame that sees through it takes one away; at "
@@ -269,10 +270,11 @@ class ObjectParams:
         "what it cuts; sim_bridge's and a TurtleBot3's LDS: about 0.17 m)", "m",
         range=(0.0, math.inf)))
     depth_lidar_band_m: float = field(default=0.02, metadata=param_meta(
-        "A voxel column holding a depth point of the frame within this of "
-        "depth_lidar_height_m does not mark: the lidar sees what stands there and the 2D "
-        "map has it, wherever the (drifting) map draws it; desk tops, chair seats and "
-        "objects lower than the scan plane still mark (0 = off)", "m",
+        "A voxel column holding a depth point within this of depth_lidar_height_m, in "
+        "the frame or in a frame of depth_evidence_window_s, does not mark: the lidar sees "
+        "what stands there and the 2D map has it, wherever the (drifting) map draws it; "
+        "desk tops, chair seats and objects lower than the scan plane still mark "
+        "(0 = off)", "m",
         range=(0.0, math.inf)))
     depth_forget_on_correction: bool = field(default=True, metadata=param_meta(
         "When a SLAM correction (a loop closure) re-renders the map, forget the voxels "
