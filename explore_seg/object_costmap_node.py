@@ -270,9 +270,11 @@ class ObjectCostmapNode(Node):
             if self._last_depth_ns is not None and self._last_depth_ns > horizon:
                 self._last_depth_ns = None
             self._corrections.time_went_back()
+            self._objects.time_went_back(t_ns)
             self._lag_mark = None
         self._warn(f"jump_{stream}", jump.describe() + (
-            "; frames, poses and stamps of the old time line dropped" if jump.backwards else ""))
+            "; frames, poses and stamps of the old time line dropped, objects and depth "
+            "voxels restamped to the new time" if jump.backwards else ""))
 
     def _on_info(self, msg: CameraInfo) -> None:
         try:

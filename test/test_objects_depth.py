@@ -12,7 +12,7 @@ from explore_seg.core.grid import GridMap
 from explore_seg.core.objects import (DepthFrame, DepthObstacles, ObjectMap, ObjectParams,
                                       object_from_detection, process_frame, wall_mask)
 from objects_scene import (K, PRIORS, Det, box_parts, camera_pose, desk_at_wall_map,
-                           project_box, render_depth, table_parts)
+                           make_obj, project_box, render_depth, table_parts)
 
 # the paper's robot: camera 0.894 m up, pitched 0.1 rad down
 PAPER_CAM = dict(z=0.894, pitch=0.1)
@@ -275,3 +275,28 @@ def test_what_the_lidar_saw_within_the_window_does_not_mark_from_close_by():
     jumped = DepthObstacles(params)                       # the clock jumped back 100 s
     jumped.update(far, 100.0)
     assert jumped.update(near, 1.0) and len(jumped) > 0
+
+
+def test_after_a_clock_jump_back_the_voxels_decay_from_the_new_time():
+    """Voxels marked at 1000 s, then the clock restarts at 10 s: they stay (lose no
+    state) and are forgotten depth_decay_s after the jump, not when the new clock
+    reaches 1000 s; so are a box's last-seen stamps."""
+    params = ObjectParams(depth_decay_s=30.0)
+    om = ObjectMap(params, PRIORS)
+    om.update([], _far_frame([LOW_BOX]), 1000 * 10**9)
+    d = om.depth
+    assert d is not None and len(d) > 0
+    away = _far_frame([], yaw=np.pi)                      # out of view: no clearing
+    stale = DepthObstacles(params)
+    stale.update(_far_frame([LOW_BOX]), 1000.0)
+    om.time_went_back(10 * 10**9)
+    d.update(away, 20.0)
+    stale.update(away, 20.0)
+    assert len(d) > 0 and len(stale) > 0                  # kept
+    d.update(away, 41.0)
+    stale.update(away, 41.0)
+    assert len(d) == 0                                    # 31 s after the jump
+    assert len(stale) > 0                                 # without it: until 970 s
+    om.update([make_obj(2.0, 0.0, "chair")], None, 1000 * 10**9)
+    om.time_went_back(10 * 10**9)
+    assert [t.last_seen_ns for t in om.tracked] == [10 * 10**9]

@@ -100,6 +100,28 @@ def test_a_sim_clock_reset_resets_stamps_poses_and_pending_frames(ros):
     assert node._pose_at(1 * S + S // 10)[0] == pytest.approx(2.0)
 
 
+def test_a_clock_jump_back_restamps_the_objects_and_depth_voxels(ros):
+    """Boxes and voxels of the old time line are kept and restamped to the new time, so
+    that decay and corrections judge them on it (before, voxels stamped 300 s stayed
+    until the new clock reached 300 s + depth_decay_s)."""
+    from objects_scene import make_obj
+
+    node = _costmap(ros)
+    objects = node._objects
+    objects.update([make_obj(2.0, 0.0, "chair")], None, 300 * S)
+    depth = objects.depth
+    assert depth is not None
+    depth._keys, depth._score, depth._stamp = (np.array([7], np.int64),
+                                               np.array([1], np.int16), np.array([300.0]))
+    for k in range(5):
+        node._pose_in._on_odom(_odom(300 * S + k * S // 10))
+    for k in range(3):                                   # the simulator restarts at 1 s
+        node._pose_in._on_odom(_odom(1 * S + k * S // 10, x=2.0))
+    assert [t.last_seen_ns for t in objects.tracked] == [1 * S]
+    assert depth._stamp.tolist() == [1.0] and len(depth) == 1
+    assert any("restamped" in m for k, m in node._warn.lines if k.startswith("jump_"))
+
+
 # ------------------------------------------------------------------ finding 2
 def test_odometry_on_another_time_base_is_reported_by_the_stall_watchdog(ros):
     node = _costmap(ros, **{"input.stall_periods": 2})

@@ -259,6 +259,18 @@ class DepthObstacles:
             return False
         return self._store(self._keys[keep], self._score[keep], self._stamp[keep])
 
+    def time_went_back(self, stamp_s: float) -> None:
+        """The clock jumped back to ``stamp_s``: the voxels marked later (on the old time
+        line) are kept, restamped to ``stamp_s`` so that ``depth_decay_s`` counts from the
+        jump; the pending points and lidar-height columns of the old time line are
+        dropped."""
+        self._stamp = np.minimum(self._stamp, float(stamp_s))
+        pend = self._pend_stamp <= stamp_s
+        self._pend_keys, self._pend_count, self._pend_stamp = (
+            self._pend_keys[pend], self._pend_count[pend], self._pend_stamp[pend])
+        lid = self._lidar_stamp <= stamp_s
+        self._lidar_cols, self._lidar_stamp = self._lidar_cols[lid], self._lidar_stamp[lid]
+
     def _lidar_near(self, lidar_cols: npt.NDArray[np.int64], stamp_s: float
                     ) -> npt.NDArray[np.int64]:
         """Columns with, or next to one with, a point at the lidar's height in an earlier

@@ -134,6 +134,16 @@ class ObjectMap:
                                                else stamp_ns * 1e-9)
         return changed
 
+    def time_went_back(self, stamp_ns: int) -> None:
+        """The clock jumped back to ``stamp_ns``: the boxes last seen and the depth voxels
+        last marked later (on the old time line) are kept, restamped to ``stamp_ns``, so
+        that a correction's :meth:`forget_since` and the voxels' decay judge them on the
+        new time line."""
+        for t in self._objects:
+            t.last_seen_ns = min(t.last_seen_ns, int(stamp_ns))
+        if self.depth is not None:
+            self.depth.time_went_back(stamp_ns * 1e-9)
+
     # ------------------------------------------------------------------ update
     def update(self, observations: Sequence[Object3D], frame: DepthFrame | None = None,
                stamp_ns: int = 0, robot_xy: Sequence[float] | None = None,
