@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import multiprocessing as mp
+import os
 import queue
 import signal
 import sys
@@ -123,8 +124,24 @@ def _worker_init() -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
+def _stop_handler_not_inherited() -> None:
+    """In a child just forked: SIGTERM back to its default (the child dies) when the
+    parent had :func:`catch_stop_signals`' handler. A Python-level handler runs only when
+    the child runs bytecode, so a worker stuck in C before :func:`_worker_init` (a lock
+    another thread of the parent held at the fork, such as stderr's) would survive the
+    pool's terminate, and its join would hang."""
+    if signal.getsignal(signal.SIGTERM) is _raise_interrupt:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+_AT_FORK_HOOK = [False]
+
+
 def worker_pool(jobs: int) -> Any:
     """``jobs`` forked worker processes (they inherit the loaded worlds and parameters)."""
+    if not _AT_FORK_HOOK[0]:
+        os.register_at_fork(after_in_child=_stop_handler_not_inherited)
+        _AT_FORK_HOOK[0] = True
     return mp.get_context("fork").Pool(jobs, initializer=_worker_init, maxtasksperchild=20)
 
 

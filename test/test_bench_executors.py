@@ -61,3 +61,38 @@ def test_unreachable_cluster_names_the_address_and_the_token(tmp_path, monkeypat
 def test_unknown_executor_is_refused():
     with pytest.raises(ValueError, match="executor must be one of"):
         executors.make_pool("dask", 1)
+
+
+def _record_sigterm(folder: str) -> None:
+    """Pool initializer of the test below: what SIGTERM does in the worker before
+    bench.tasks' own initializer runs."""
+    import os
+    import signal
+
+    Path(folder, str(os.getpid())).write_text(
+        "default" if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL else "handler")
+
+
+def test_workers_do_not_inherit_the_stop_handler(tmp_path, monkeypatch):
+    """With the main process's SIGTERM stop handler set, a forked worker takes SIGTERM's
+    default from the fork on: a worker stuck in C before its initializer (a lock another
+    thread held at the fork) dies at the pool's terminate instead of hanging its join
+    (seen as a 600 s timeout of test_bench_records.py under load)."""
+    import functools
+
+    from bench import tasks as bench_tasks
+
+    monkeypatch.setattr(bench_tasks, "_worker_init",
+                        functools.partial(_record_sigterm, str(tmp_path)))
+    old = bench_tasks.catch_stop_signals()
+    try:
+        pool = bench_tasks.worker_pool(2)
+        try:
+            assert pool.apply(int, ("7",)) == 7
+        finally:
+            pool.terminate()
+            pool.join()
+    finally:
+        bench_tasks.restore_signals(old)
+    seen = [p.read_text() for p in tmp_path.iterdir()]
+    assert seen and set(seen) == {"default"}
