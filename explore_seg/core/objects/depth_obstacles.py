@@ -224,7 +224,6 @@ class DepthObstacles:
             keep &= ~(self._seen_through(frame, keys) & ~np.isin(keys, seen))
             keep &= ~np.isin(keys, seen[strong])
             keep &= ~np.isin(keys >> _Z_BITS, lidar_near)
-            keep &= ~np.isin(keys >> _Z_BITS, lidar_near)
         # this frame's other voxels join: points summed, the earliest first stamp kept
         weak = ~strong
         stamps = np.concatenate([first[keep], np.full(int(weak.sum()), float(stamp_s))])
