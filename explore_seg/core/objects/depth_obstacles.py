@@ -113,13 +113,17 @@ class DepthObstacles:
     # ------------------------------------------------------------------ update
     def band_points(self, frame: DepthFrame, walls: WallMask | None = None
                     ) -> npt.NDArray[np.float64]:
-        """Map-frame depth points in the height band (the ones that mark), shape (N, 3)."""
-        return self._band_and_lidar(frame, walls)[0]
+        """Map-frame depth points in the height band that this frame alone lets mark (not
+        in or next to a column with a point at the lidar's height), shape (N, 3)."""
+        pts, cols, lidar_cols = self._band(frame, walls)
+        return pts[~np.isin(cols, _with_neighbours(lidar_cols))]
 
-    def _band_and_lidar(self, frame: DepthFrame, walls: WallMask | None
-                        ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]:
-        """:meth:`band_points` and the frame's columns with a point at the lidar's height
-        (sorted ``key >> _Z_BITS`` keys; empty when ``depth_lidar_band_m`` is 0)."""
+    def _band(self, frame: DepthFrame, walls: WallMask | None
+              ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+        """The frame's map-frame points in the height band and not on a wall of the 2D map,
+        shape (N, 3); their column keys (``key >> _Z_BITS``), shape (N,); and the sorted
+        columns holding a point at the lidar's height (empty when ``depth_lidar_band_m``
+        is 0)."""
         p = self.params
         s = p.depth_pixel_stride
         d = frame.depth_m[::s, ::s]
@@ -130,18 +134,14 @@ class DepthObstacles:
         k = frame.intrinsics
         pts = np.stack([(cols[ok] - k.cx) * z / k.fx, (rows[ok] - k.cy) * z / k.fy, z], axis=1)
         pts = apply_transform(frame.map_from_optical, pts)
-        lidar = (np.abs(pts[:, 2] - p.depth_lidar_height_m) <= p.depth_lidar_band_m
-                 if p.depth_lidar_band_m > 0 else None)
+        keys = self._column_keys(pts)
+        lidar_cols = (np.unique(keys[np.abs(pts[:, 2] - p.depth_lidar_height_m)
+                                     <= p.depth_lidar_band_m])
+                      if p.depth_lidar_band_m > 0 else np.zeros(0, np.int64))
         band = (pts[:, 2] > p.depth_min_height_m) & (pts[:, 2] < p.depth_max_height_m)
-        lidar_cols = np.zeros(0, np.int64)
-        if lidar is not None and lidar.any():
-            cols = self._column_keys(pts)
-            lidar_cols = np.unique(cols[lidar])
-            band &= ~np.isin(cols, _with_neighbours(lidar_cols))
-        pts = pts[band]
-        if walls is not None and p.drop_wall_points and len(pts):
-            pts = pts[~walls.on(pts[:, :2])]
-        return pts, lidar_cols
+        if walls is not None and p.drop_wall_points and band.any():
+            band[band] = ~walls.on(pts[band, :2])
+        return pts[band], keys[band], lidar_cols
 
     def _column_keys(self, pts: npt.NDArray[np.float64]) -> npt.NDArray[np.int64]:
         """The (ix, iy) voxel column key of each point (the stored voxels' ``key >> z
@@ -165,10 +165,9 @@ class DepthObstacles:
             Depth points on the 2D map's walls do not mark (the map has them).
         """
         p = self.params
-        pts, lidar_cols = self._band_and_lidar(frame, walls)
+        pts, cols, lidar_cols = self._band(frame, walls)
         lidar_near = self._lidar_near(lidar_cols, stamp_s)
-        if lidar_near.size and len(pts):
-            pts = pts[~np.isin(self._column_keys(pts), lidar_near)]
+        pts = pts[~np.isin(cols, lidar_near)]
         v, vz = p.depth_voxel_m, p.depth_voxel_height_m
         ix = np.floor(pts[:, 0] / v).astype(np.int64)
         iy = np.floor(pts[:, 1] / v).astype(np.int64)
@@ -211,7 +210,7 @@ class DepthObstacles:
         points (``seen``, ``counts``: every voxel with a point), and the pending voxels whose
         points reach that sum with this frame's. Updates the pending store: adds this
         frame's other voxels, drops the ones marked, seen through, past the window, or in
-        a column of ``lidar_near`` (:meth:`_lidar_near`)."""
+        a column of ``lidar_near`` (:meth:`_lidar_near`: the lidar saw something there)."""
         p = self.params
         strong = counts >= p.depth_min_points
         if p.depth_evidence_window_s <= 0 or p.depth_min_points <= 1:
@@ -272,13 +271,13 @@ class DepthObstacles:
 
     def _lidar_near(self, lidar_cols: npt.NDArray[np.int64], stamp_s: float
                     ) -> npt.NDArray[np.int64]:
-        """Columns with, or next to one with, a point at the lidar's height in an earlier
-        frame of the evidence window (sorted keys; :meth:`band_points` drops this frame's
-        own; a frame stamped up to the window after this one counts too: frames may come
-        out of order). Updates the store with this frame's ``lidar_cols`` (columns of frames
-        more than the window before or after this one are dropped, so a clock jump leaves
-        none of the old time line; at most ``depth_max_voxels``, the oldest dropped
-        first). Empty when ``depth_evidence_window_s`` is 0.
+        """Columns with, or next to one with, a point at the lidar's height in this frame
+        (``lidar_cols``) or in another frame of the evidence window (a frame stamped up to
+        the window after this one counts too: frames may come out of order); sorted keys.
+        Updates the store with ``lidar_cols`` (columns of frames more than the window
+        before or after this one are dropped, so a clock jump leaves none of the old time
+        line; at most ``depth_max_voxels``, the oldest dropped first). With
+        ``depth_evidence_window_s`` 0: this frame's alone.
 
         What the lidar saw a moment ago still stands there: the camera loses the
         lidar-height part of a wall or leg in some frames (below its view from close by,
@@ -286,13 +285,13 @@ class DepthObstacles:
         drifts from frame to frame."""
         p = self.params
         if p.depth_evidence_window_s <= 0:
-            return np.zeros(0, np.int64)
-        keep = np.abs(self._lidar_stamp - stamp_s) <= p.depth_evidence_window_s
-        near = _with_neighbours(self._lidar_cols[keep])
-        keep &= ~np.isin(self._lidar_cols, lidar_cols)
+            return _with_neighbours(lidar_cols)
+        keep = ((np.abs(self._lidar_stamp - stamp_s) <= p.depth_evidence_window_s)
+                & ~np.isin(self._lidar_cols, lidar_cols))
         cols = np.concatenate([self._lidar_cols[keep], lidar_cols])
         stamps = np.concatenate([self._lidar_stamp[keep],
                                  np.full(lidar_cols.size, float(stamp_s))])
+        near = _with_neighbours(cols)
         if cols.size > p.depth_max_voxels:
             newest = np.argsort(stamps, kind="stable")[cols.size - p.depth_max_voxels:]
             cols, stamps = cols[newest], stamps[newest]
