@@ -179,6 +179,20 @@ def test_all_frontiers_unreachable_is_done():
     assert acts == [Action.WAIT, Action.DONE]
 
 
+@pytest.mark.parametrize("n_frontiers,dist,excluded,reason", [
+    (0, [], None, "no frontier left"),
+    (2, [np.inf, np.inf], None, "no selectable frontier (2 left: 2 without a path)"),
+    (2, [1.0, np.inf], [True, False],
+     "no selectable frontier (2 left: 1 without a path, 1 blacklisted)"),
+])
+def test_done_reason_names_the_frontiers_left(n_frontiers, dist, excluded, reason):
+    g, fr = manager_world()
+    m = GoalManager(SelectionParams(strategy="nearest", done_confirmations=1, turn_looks=0))
+    known = StepInputs(excluded=None if excluded is None else np.asarray(excluded))
+    res = m.step(0.0, (1.0, 1.0), g, fr[:n_frontiers], dist, known)
+    assert res.action is Action.DONE and res.reason == reason
+
+
 def test_missing_distances_do_not_count_towards_done():
     g, _ = manager_world()
     m = GoalManager(SelectionParams(done_confirmations=1))

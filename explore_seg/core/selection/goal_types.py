@@ -115,5 +115,29 @@ def unknown_share(grid: GridMap, xy_m: npt.NDArray[np.float64] | None) -> float:
     return float(unknown.mean())
 
 
-__all__ = ["Action", "Goal", "NavOutcome", "StepInputs", "StepResult", "goal_frontier_index",
-           "goal_yaw", "unknown_share"]
+def frontiers_left(dist_m: npt.ArrayLike, excluded: npt.ArrayLike) -> str:
+    """What is left when no frontier is selectable, for the decision's reason: how many
+    frontiers have no path, are blacklisted, or have a path but the strategy rules them
+    out (infinite cost: too small, outside the ``routed`` tour).
+
+    >>> frontiers_left([], [])
+    'no frontier left'
+    >>> frontiers_left([np.inf, np.inf, 3.0, 2.0], [False, True, False, False])
+    'no selectable frontier (4 left: 1 without a path, 1 blacklisted, 2 ruled out by the strategy)'
+    """
+    dist = np.asarray(dist_m, dtype=np.float64).reshape(-1)
+    ex = np.asarray(excluded, dtype=bool).reshape(-1)
+    if dist.size == 0:
+        return "no frontier left"
+    if ex.shape != dist.shape:
+        ex = np.zeros(dist.shape, dtype=bool)
+    finite = np.isfinite(dist)
+    parts = [(int(np.count_nonzero(~finite & ~ex)), "without a path"),
+             (int(np.count_nonzero(ex)), "blacklisted"),
+             (int(np.count_nonzero(finite & ~ex)), "ruled out by the strategy")]
+    said = ", ".join(f"{n} {what}" for n, what in parts if n)
+    return f"no selectable frontier ({dist.size} left: {said})"
+
+
+__all__ = ["Action", "Goal", "NavOutcome", "StepInputs", "StepResult", "frontiers_left",
+           "goal_frontier_index", "goal_yaw", "unknown_share"]

@@ -18,8 +18,8 @@ from explore_seg.core.selection.areas import TURN_DONE_RAD, AreaCounts, turn_goa
 from explore_seg.core.selection.blacklist import Blacklist, RevealWatch
 from explore_seg.core.selection.costs import Selection, select_goal
 from explore_seg.core.selection.goal_types import (Action, Goal, NavOutcome, StepInputs,
-                                                   StepResult, goal_frontier_index, goal_yaw,
-                                                   unknown_share)
+                                                   StepResult, frontiers_left,
+                                                   goal_frontier_index, goal_yaw, unknown_share)
 from explore_seg.core.selection.params import SelectionParams
 from explore_seg.core.selection.strategy import get_strategy
 
@@ -369,7 +369,8 @@ class GoalManager:
             # frontiers left without a path, or blacklisted: worth a turn look
             self._unreached = bool(np.any(~np.isfinite(np.asarray(dist_m, dtype=np.float64))
                                           | excluded))
-            return self._no_candidate(now_s, robot_xy_m, grid, reason, sel)
+            return self._no_candidate(now_s, robot_xy_m, grid, reason, sel,
+                                      frontiers_left(dist_m, excluded))
         self._empty_ticks = 0
         # 3. keep or switch
         return self._keep_or_switch(now_s, robot_xy_m, grid, frontiers, sel, excluded, reason)
@@ -504,9 +505,11 @@ class GoalManager:
         return None, f"no progress for {self.params.progress_timeout_s:.0f} s: blacklisted"
 
     def _no_candidate(self, now_s: float, robot_xy_m: tuple[float, float], grid: GridMap,
-                      reason: str, sel: Selection) -> StepResult:
+                      reason: str, sel: Selection, left: str = "no frontier left"
+                      ) -> StepResult:
         """No selectable frontier: keep a goal whose cells are still unknown, wait for
-        ``done_confirmations`` ticks, return to start, retry the blacklist, then DONE."""
+        ``done_confirmations`` ticks, return to start, retry the blacklist, then DONE.
+        ``left`` (:func:`frontiers_left`) names what is left in the reasons."""
         p = self.params
         self._empty_ticks += 1
         if self.goal is not None and (self.goal.is_return or self.goal.is_turn):
@@ -519,14 +522,14 @@ class GoalManager:
                               "but the goal's cells are still unknown: keeping goal", sel)
         self.goal = None
         if self._empty_ticks < p.done_confirmations:
-            return StepResult(Action.WAIT, None, reason or "no reachable frontier", sel)
+            return StepResult(Action.WAIT, None, reason or left, sel)
         if (self._yaw is not None and self._unreached
                 and self._turns.count_near(robot_xy_m, p.flicker_radius_m) < p.turn_looks):
             self._turns.note(robot_xy_m, p.flicker_radius_m)
             self.goal = turn_goal(robot_xy_m, self._yaw, grid.world_to_cell(*robot_xy_m))
             self._start_progress(self.goal, robot_xy_m, now_s)
-            return StepResult(Action.NEW_GOAL, self.goal, "no reachable frontier: turning in "
-                              "place, so that the map gains a scan from here", sel)
+            return StepResult(Action.NEW_GOAL, self.goal, f"{left}: turning in place, so that "
+                              "the map gains a scan from here", sel)
         if p.return_to_start and self.start_xy_m is not None:
             d0 = math.hypot(robot_xy_m[0] - self.start_xy_m[0],
                             robot_xy_m[1] - self.start_xy_m[1])
@@ -536,7 +539,7 @@ class GoalManager:
                                  is_return=True)
                 self._start_progress(self.goal, robot_xy_m, now_s)
                 return StepResult(Action.NEW_GOAL, self.goal,
-                                  "no reachable frontier: returning to start", sel)
+                                  f"{left}: returning to start", sel)
         # the last retry revealed space near its goals: this one does not count
         free = (p.retry_reveal_m2 > 0 and len(self._bl) > 0
                 and self._reveal.revealed_m2(grid) >= p.retry_reveal_m2)
@@ -548,10 +551,10 @@ class GoalManager:
             self._reveal.start(grid, tuple(self._bl))
             self._bl.clear()
             self._empty_ticks = 0
-            return StepResult(Action.WAIT, None, "no reachable frontier: blacklist "
-                              "cleared, retrying its frontiers", sel)
+            return StepResult(Action.WAIT, None, f"{left}: blacklist cleared, retrying "
+                              "its frontiers", sel)
         self.done = True
-        return StepResult(Action.DONE, None, "no reachable frontier", sel)
+        return StepResult(Action.DONE, None, left, sel)
 
     def _keep_or_switch(self, now_s: float, robot_xy_m: tuple[float, float], grid: GridMap,
                         frontiers: Sequence[Frontier], sel: Selection,
