@@ -1,5 +1,5 @@
 """Furniture standing against walls: obstacle protrusions that are filled for the
-decomposition so that they do not cut rooms (issue #53).
+decomposition so that they do not cut rooms.
 
 The clutter fill of :mod:`.cleaning` handles free-standing furniture (holes of the
 cleaned free space). Furniture pushed against a wall is no hole: it is a thick bulge

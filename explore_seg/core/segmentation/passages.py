@@ -1,5 +1,5 @@
 """Passage merge: neighbouring regions that are two parts of one passage become one
-region (issue #53).
+region.
 
 DuDe cuts a corridor that turns a corner or runs round a block (a ring corridor, the
 free space round a table block) into several pieces, though each is one room. Such a

@@ -4,8 +4,8 @@ A tour needs the path length between every pair of viewpoints. One Dijkstra swee
 viewpoint over the whole map's path graph costs time in proportion to the explored area
 and the number of viewpoints (on a 2,000 m^2 office floor about 0.8 ms per viewpoint:
 70 ms for 90 viewpoints, every decision). Between two decisions most viewpoints stay
-where they were: the map changes near the robot only (on that floor 4 of 65 viewpoints
-were new per decision, mean over the first 400 s). So, as FUEL updates the connection
+where they were: the map changes near the robot only (on that floor about 4 of 65
+viewpoints are new at a decision). So, as FUEL updates the connection
 costs of changed frontier clusters only, :class:`PairPaths` keeps the lengths between
 viewpoints that stayed (same cell in world coordinates) and sweeps only from
 

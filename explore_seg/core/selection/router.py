@@ -52,8 +52,7 @@ Per decision (:class:`Router`, driven by :class:`~explore_seg.core.explorer.Expl
    ``handover_m`` counts as reached, so the next one is sent while the robot still drives.
    See docs/experiments.md#routed-handover.
 
-Ideas measured against this design and not kept (tour tail weights, heading costs, tours
-through unknown space, local horizons, gain decay, rate-based deferral) are listed under
+The measurements behind these rules, and the alternatives compared with them, are in
 docs/experiments.md#selection-routed.
 """
 
