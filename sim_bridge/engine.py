@@ -50,7 +50,7 @@ from sim_bridge.published_map import KeyframeMapper, MapPublication
 from sim_bridge.slam_error import LidarGeometry, SlamErrorModel
 from sim_bridge.world import World
 
-#: Re-exported: SimParams and Collider moved to sim_bridge.params / sim_bridge.collision.
+#: Re-exported: SimParams and Collider live in sim_bridge.params / sim_bridge.collision.
 __all__ = ["DEPTH_ENCODINGS", "CameraSample", "Collider", "ScanFrame", "ScanGeometry",
            "SimEngine", "SimParams", "engine_from_params"]
 

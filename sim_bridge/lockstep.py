@@ -124,7 +124,7 @@ class LockstepParams:
         "tell the decision core how the navigation stand-in ended each goal (succeeded: "
         "judge its frontier now; aborted/rejected: blacklist it now), as the "
         "target_selector does with Nav2's action status; false: goals end by distance and "
-        "progress_timeout_s only (how benchmark rows without feedback were made)"))
+        "progress_timeout_s only, as with the target_selector's nav_action ''"))
 
     def __post_init__(self) -> None:
         for name in ("max_sim_time_s", "sample_period_s", "camera_scale"):

@@ -8,9 +8,9 @@ while the robot stands still). slam_toolbox's map frame starts where the odom fr
 subscribed after the first SLAM pose take odometry as the map pose until the robot moves
 (``pose_fusion.odom_until_first_slam``). The simulator's map frame is the world's, so its
 odom frame starts at the robot's true start pose in it, not at (0, 0, 0): with an offset
-there a late subscriber's pose was the start pose's distance off, the robot stood outside
-its own map, no goal was sent and no SLAM pose ever came (the demo stalled at 5.3 % in 5
-of 7 starts on 2 cores). :class:`DriftingOdometry` integrates the true motion with a distance
+there a late subscriber's pose would be off by the start pose's distance, placing the robot
+outside its own map, where it gets no goal and so never moves to earn a SLAM pose.
+:class:`DriftingOdometry` integrates the true motion with a distance
 scale error and a gyro bias while moving; :class:`SlamPoses` decides which scans yield a
 pose. ``sim_bridge`` uses both when ``odom_frame`` is not ``map``.
 """

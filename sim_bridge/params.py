@@ -116,8 +116,7 @@ class SimParams:
         "map_update_interval: 5 s is the value of slam_toolbox's shipped "
         "mapper_params_online_async.yaml and of Nav2's bringup, what a TurtleBot3 user "
         "running the stock SLAM launch gets; navigation plans on every scan meanwhile (Nav2's "
-        "costmaps mark and clear from the scan topic); 0 = after every scan (the lock-step "
-        "runs before the rates were modelled; the node published at 1 s)", "s",
+        "costmaps mark and clear from the scan topic); 0 = after every scan", "s",
         range=(0.0, math.inf)))
     pose_noise_xy_m: float = field(default=0.0, metadata=param_meta(
         "std of the position error of the pose each scan is mapped at", "m",
@@ -220,8 +219,7 @@ class SimParams:
     nav_controller_rate_hz: float = field(default=NavParams.controller_rate_hz, metadata=param_meta(
         "the path follower computes a new velocity command this often, the command held in "
         "between (Nav2 controller_frequency, 20 Hz in Nav2's and TurtleBot3's params); "
-        "physics keeps physics_dt_s; 0 = every physics step (the runs before the rates were "
-        "modelled)", "Hz", range=(0.0, math.inf)))
+        "physics keeps physics_dt_s; 0 = every physics step", "Hz", range=(0.0, math.inf)))
     nav_plan_downsample: int = field(default=NavParams.plan_downsample, metadata=param_meta(
         "plan on cells this many times coarser than the map", range=(1, 8)))
     nav_arc_check_edges: bool = field(default=NavParams.arc_check_edges, metadata=param_meta(
