@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Benchmark the object costmap in the simulator: coverage of the furniture, false
-positives and per-frame cost (issue 7's acceptance figures on the 20 x 20 m houses).
+positives and per-frame cost (the object layer's acceptance figures on the 20 x 20 m houses).
 
 For each world the robot visits the viewpoints of ``test/test_object_layer_sim.py``
 (1.5-2.5 m from every chair / desk / table, collision-free, facing it; up to 3 per
@@ -10,7 +10,7 @@ layer is ``ObjectMap.rasterize`` on the ground-truth grid (0.05 m).
 
 Printed per world: per object (name, class, most pixels seen in one frame, footprint
 cells = floor projection of all its primitives, covered %), the min / mean coverage over
-the seen objects (>= SEEN_MIN_PX pixels), a PASS / FAIL line for issue 7's "every seen
+the seen objects (>= SEEN_MIN_PX pixels), a PASS / FAIL line for the target "every seen
 chair / desk >= 90 % covered", the false-positive cells (seen free floor
 farther than 0.3 m from any object that the layer covers), and p50 / p95 per frame of the
 oracle detection and of process_frame + ObjectMap.update. The column ``union`` is a

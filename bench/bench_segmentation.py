@@ -12,7 +12,7 @@ Prints (never asserts):
    so the origin moves by whole cells as with slam_toolbox; target p95 <= 25 ms. The
    final incremental labels are scored against the batch result and the rooms;
    The same two figures on a 20 x 20 m furnished office map
-   (``sim_bridge.worlds.furnished``), the issue's sizes;
+   (``sim_bridge.worlds.furnished``);
 3. recall / precision (IPA definition) on ``--houses`` generated 20 m houses, plain and
    cluttered; targets recall >= 90 %, precision >= 95 %;
 4. peak memory of one full and one incremental update of a big, mostly unknown map (a
@@ -188,7 +188,7 @@ def main(argv: list[str] | None = None) -> int:
               f"({len(np.unique(labels[labels > 0]))} regions; target <= 300 ms); process "
               f"CPU p50 {pct(cpu, 50):.0f} ms  p95 {pct(cpu, 95):.0f} ms")
 
-    # 1b./2b. the figures: a 20 x 20 m furnished office map at 0.05 m -----------
+    # 1b./2b. the same on a 20 x 20 m furnished office map at 0.05 m ------------------
     from sim_bridge.worlds.furnished import furnished_map
 
     fm = furnished_map(args.seed, "office")

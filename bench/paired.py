@@ -265,12 +265,12 @@ def against_report(rows: list[dict[str, Any]], arm: str, new: str,
     """Markdown: strategy ``new`` against every other strategy of the same arm, paired
     per seed: per world its median T95 and, per other strategy, the median per-seed T95
     ratio ``new`` / other with wins (< 0.99) / losses (> 1.01); whether ``new``'s median
-    T95 is within 5 % of the best other strategy's median (issue #20's per-world rule);
+    T95 is within 5 % of the best other strategy's median (the per-world target);
     then the median over all pairs per other strategy, and the same for the time to 99 %.
     A seed whose run of either never reached the mark counts in no ratio (its completion
     shows in the first table). With ``tours`` (world -> full-knowledge coverage tour, m)
     a last row gives each strategy's median over its runs of the path to 99 % divided by
-    its world's tour (issue #20's path rule), over the runs that reached 99 %."""
+    its world's tour (the path target), over the runs that reached 99 %."""
     mine = [r for r in rows if r["arm"] == arm]
     by = {(r["world"], r["strategy"], int(r["seed"])): r for r in mine}
     others = [s for s in dict.fromkeys(r["strategy"] for r in mine) if s != new]

@@ -9,10 +9,9 @@ per-run times; no tours, no detector timing, BENCHMARKS.md untouched), then writ
 ``explore_lite`` and subject / ``nearest`` of the subset, of the full run in ``--full``
 (default ``bench/results``, all its seeds) and of the full run on the subset's seeds only
 (equal to the subset's when nothing that affects decisions changed since the full run),
-and how far the subset's ratios were from the full run's (mean absolute difference, and in
+and how far the subset's ratios are from the full run's (mean absolute difference, and in
 how many worlds both say the same about the subject being faster). A full run without
-rows of the subject (``bench/results`` predates ``routed``) gives the subset's ratios only,
-and says so.
+rows of the subject gives the subset's ratios only, and says so.
 
 The worlds mix the generated cluttered house, the shipped houses and Explore-Bench rooms,
 corridors and loops; the maze and the large generated worlds are left out (one of their

@@ -1,7 +1,7 @@
 """Sweep of the paper cost weights (alpha, beta, gamma) in seeded lock-step runs.
 
-How the defaults of ``SelectionParams`` were chosen (the paper does not publish usable
-values): every configuration explores the same world from the same seeded starts, and
+The tool that chooses the defaults of ``SelectionParams`` (the paper does not publish
+usable values): every configuration explores the same world from the same seeded starts, and
 the script prints, per configuration, time to 95 % / 99 %, path length and how many runs
 stopped early, plus the per-seed difference to the first configuration (paired, so the
 start-to-start spread cancels). Use seeds disjoint from the benchmark's (``run_bench.py``
