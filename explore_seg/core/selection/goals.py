@@ -505,8 +505,7 @@ class GoalManager:
         return None, f"no progress for {self.params.progress_timeout_s:.0f} s: blacklisted"
 
     def _no_candidate(self, now_s: float, robot_xy_m: tuple[float, float], grid: GridMap,
-                      reason: str, sel: Selection, left: str = "no frontier left"
-                      ) -> StepResult:
+                      reason: str, sel: Selection, left: str) -> StepResult:
         """No selectable frontier: keep a goal whose cells are still unknown, wait for
         ``done_confirmations`` ticks, return to start, retry the blacklist, then DONE.
         ``left`` (:func:`frontiers_left`) names what is left in the reasons."""
