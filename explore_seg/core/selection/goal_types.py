@@ -125,12 +125,10 @@ def frontiers_left(dist_m: npt.ArrayLike, excluded: npt.ArrayLike) -> str:
     >>> frontiers_left([np.inf, np.inf, 3.0, 2.0], [False, True, False, False])
     'no selectable frontier (4 left: 1 without a path, 1 blacklisted, 2 ruled out by the strategy)'
     """
-    dist = np.asarray(dist_m, dtype=np.float64).reshape(-1)
-    ex = np.asarray(excluded, dtype=bool).reshape(-1)
+    dist = np.asarray(dist_m, dtype=np.float64)
+    ex = np.asarray(excluded, dtype=bool)
     if dist.size == 0:
         return "no frontier left"
-    if ex.shape != dist.shape:
-        ex = np.zeros(dist.shape, dtype=bool)
     finite = np.isfinite(dist)
     parts = [(int(np.count_nonzero(~finite & ~ex)), "without a path"),
              (int(np.count_nonzero(ex)), "blacklisted"),
