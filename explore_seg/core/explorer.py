@@ -58,6 +58,7 @@ from explore_seg.core.selection import (Action, Goal, GoalManager, NavOutcome, P
                                         Selection, SelectionParams, StepInputs)
 from explore_seg.core.selection.blockage import RelaxedMap, approaches
 from explore_seg.core.selection.lookout import Reach, lookouts
+from explore_seg.core.selection.revisit import Revisits
 from explore_seg.core.selection.router import TourPlan
 from explore_seg.core.selection.strategies import Planner, Strategy, get_strategy
 from explore_seg.core.swept import SweptPath
@@ -198,6 +199,7 @@ class Explorer:
         self._reported_blacklisted = 0
         # The robot's map-frame positions since the last correction (approach goals).
         self._trail = SweptPath()
+        self._revisits = Revisits()   # its whole path, for revisits after corrections
 
     # ------------------------------------------------------------------ state
     @property
@@ -279,6 +281,7 @@ class Explorer:
             self._planner.reset()
         if clear_blacklist:
             self._trail = SweptPath()
+            self._revisits.reset()
 
     def report_navigation(self, outcome: NavOutcome,
                           goal: Goal | tuple[float, float] | None = None) -> bool:
@@ -311,6 +314,7 @@ class Explorer:
         reset comes with a new map), and so does the robot's path of approach goals."""
         self.manager.restart_timers(now_s)
         self._trail = SweptPath()
+        self._revisits.reset()
         if self._overlay is not None:
             self._overlay.reset()
         if self._planner is not None:
@@ -376,6 +380,7 @@ class Explorer:
         detected, grid = self._detected(grid, layer)
         x, y, yaw = (float(v) for v in pose)
         self._trail.add(x, y)
+        self._revisits.add(x, y)
         if self._strategy.candidates == "rrt":
             self._detect_rrt(grid, (x, y))
             detected = True
@@ -405,6 +410,8 @@ class Explorer:
             assert start is not None
             frontiers, dist, excluded = self._unreachable_goals(grid, frontiers, dist, excluded,
                                                                 start, robot_rc)
+        elif dist is not None and len(dist):
+            self._revisits.progress()
         if planner is not None and dist is not None:
             tour = planner.tour_costs(grid, frontiers, dist, excluded, self._graph, robot_rc,
                                      labels, manager.goal_frontier(grid, frontiers))
@@ -437,11 +444,12 @@ class Explorer:
     def map_corrected(self, stamp_s: float | None = None) -> None:
         """A SLAM correction (a loop closure that re-rendered the map) at ``stamp_s`` (None:
         unknown): the overlay forgets the scans taken before it, laid at uncorrected poses
-        (:meth:`ScanOverlay.forget_before`), and the robot's path of approach goals starts
-        anew (its positions were uncorrected too)."""
+        (:meth:`ScanOverlay.forget_before`), the robot's path of approach goals starts
+        anew (its positions were uncorrected too), and revisits are on (revisit.py)."""
         if self._overlay is not None:
             self._overlay.forget_before(stamp_s)
         self._trail = SweptPath()
+        self._revisits.corrected()
 
     def _detected(self, grid: GridMap, layer: GridMap | None) -> tuple[bool, GridMap]:
         """Detect on ``grid`` unless the products are of an equal map and layer; returns
@@ -493,8 +501,10 @@ class Explorer:
                                       npt.NDArray[np.bool_]]:
         """No selectable frontier: look at the unreachable ones from a lookout
         (lookout.py); when no lookout is selectable either, drive up to a passage that
-        only map speckle closes and look at it (blockage.py). Returns the frontiers, their
-        path lengths and blacklist mask."""
+        only map speckle closes and look at it (blockage.py); when none of those is
+        selectable and the map was corrected, drive back to an old place of the robot's
+        path for a loop closure (revisit.py). Returns the frontiers, their path lengths
+        and blacklist mask."""
         sp, manager = self._selection_params, self.manager
         assert self._det is not None and self._graph is not None
         hop = math.hypot(start[0] - robot_rc[0], start[1] - robot_rc[1]) * grid.resolution_m
@@ -518,6 +528,13 @@ class Explorer:
                                  if sp.approach_trail_radius_m > 0 and len(self._trail)
                                  else None)
             out, d_out = approaches(grid, frontiers, dist, reach, relaxed, excluded, through)
+            ex_out = manager.excluded(out)
+        revisit = (self._revisits.goals(grid, frontiers, dist, reach, excluded,
+                                        manager.blacklist, sp, manager.aborted_near)
+                   if self._revisits.active(sp) and not self._any_selectable(out, d_out, ex_out)
+                   else None)
+        if revisit is not None:
+            out, d_out = revisit
             ex_out = manager.excluded(out)
         return out, d_out, ex_out
 

@@ -168,6 +168,25 @@ class GoalParams:
         "so a robot that stands still adds none, and the scans of a turn clear map noise "
         "(speckle, ragged wall ends) that closes a passage next to it; 0 = no turns",
         range=(0, INT_MAX)))
+    revisit_goals: int = field(default=3, metadata=param_meta(
+        "after the SLAM corrected the map at least once (a loop closure re-rendered it), "
+        "when frontiers without a path remain and none, nor a lookout or approach, is "
+        "selectable, drive back to this many places of the robot's own path before "
+        "exploration ends: a SLAM closes loops where the robot returns to places it mapped "
+        "long ago, and a closure re-aligns walls that drift mapped across a passage; "
+        "counted anew once a frontier is selectable; 0 = no revisits", range=(0, INT_MAX)))
+    revisit_min_travel_m: float = non_negative(
+        "a revisited place was recorded at least this much travel ago (slam_toolbox "
+        "searches for loop closures among scans outside its running buffer, "
+        "scan_buffer_maximum_scan_distance 10 m)", "m", default=10.0)
+    revisit_max_path_m: float = non_negative(
+        "the oldest place within this path length of the robot is revisited (the older, "
+        "the more its drift differs from now and the more a closure corrects); none that "
+        "close: the nearest", "m", default=20.0)
+    revisit_spacing_m: float = non_negative(
+        "the places revisited in one spell lie at least this far apart (slam_toolbox's "
+        "loop_search_maximum_distance, 3 m: a closer place offers the same loop "
+        "candidates)", "m", default=3.0)
 
     def __post_init__(self) -> None:
         check_non_negative(self, ("hysteresis_margin", "progress_min_m",
@@ -175,7 +194,8 @@ class GoalParams:
                                   "blacklist_radius_m", "arrival_wait_s", "goal_change_min_m",
                                   "flicker_radius_m", "retry_reveal_m2", "approach_radius_m",
                                   "retry_change_m2", "retry_reveal_radius_m",
-                                  "approach_trail_radius_m"))
+                                  "approach_trail_radius_m", "revisit_min_travel_m",
+                                  "revisit_max_path_m", "revisit_spacing_m"))
         if not (math.isfinite(self.progress_timeout_s) and self.progress_timeout_s > 0):
             raise ValueError(f"progress_timeout_s must be finite and > 0, "
                              f"got {self.progress_timeout_s}")
@@ -192,7 +212,7 @@ class GoalParams:
             raise ValueError(f"done_confirmations must be >= 1, got {self.done_confirmations}")
         if self.speckle_max_cells < 0:
             raise ValueError(f"speckle_max_cells must be >= 0, got {self.speckle_max_cells}")
-        for name in ("turn_looks", "change_retries"):
+        for name in ("turn_looks", "change_retries", "revisit_goals"):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
 
