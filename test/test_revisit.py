@@ -70,21 +70,38 @@ def test_after_a_correction_the_walled_in_robot_revisits_old_places_then_ends():
     t = _there_and_back(ex, g)
     pose = (3.0, 0.75, 0.0)
     ex.map_corrected(t)
-    first = ex.step(t, g, pose)
+    # instead of DONE: the revisit starts, and is the goal at the next decision
+    wait = ex.step(t, g, pose)
+    assert wait.action is Action.WAIT and "loop closure" in wait.reason, wait.reason
+    first = ex.step(t + 1.0, g, pose)
     assert first.action is Action.NEW_GOAL, first.reason
     # the oldest place >= 10 m of travel back within 20 m of path: where it started
     assert math.hypot(first.goal.xy_m[0] - 0.5, first.goal.xy_m[1] - 0.75) < 0.15
     assert ex._det.passable[first.goal.rc]
-    # the navigator gives up on it: blacklisted (the map has a path), the next revisit
-    # lies 3 m or more from the first, among places 10 m or more of travel back
+    # the navigator gives up on it: it is over; the next revisit lies 3 m or more from
+    # the first, among places 10 m or more of travel back
     assert ex.report_navigation(NavOutcome.ABORTED, first.goal)
-    second = ex.step(t + 1.0, g, pose)
+    assert ex.step(t + 2.0, g, pose).action is Action.WAIT
+    second = ex.step(t + 3.0, g, pose)
     assert second.action is Action.NEW_GOAL, second.reason
-    assert second.goal.xy_m[0] >= 3.5 - 0.15 and second.goal.xy_m[0] <= 4.0 + 0.15
+    assert 3.5 - 0.15 <= second.goal.xy_m[0] <= 4.0 + 0.15
     assert ex.report_navigation(NavOutcome.ABORTED, second.goal)
     # revisit_goals (2) spent: exploration ends as before
-    actions = [ex.step(t + 2.0 + k, g, pose).action for k in range(3)]
-    assert Action.DONE in actions and Action.NEW_GOAL not in actions
+    actions = [ex.step(t + 4.0 + k, g, pose).action for k in range(3)]
+    assert actions[0] is Action.DONE and Action.NEW_GOAL not in actions
+
+
+def test_a_revisit_comes_after_the_turn_looks_and_the_blacklist_retry():
+    """The goal manager's sequence first: waits, turn looks, then the revisit."""
+    g = _walled_map()
+    ex = _explorer(done_confirmations=2, turn_looks=1)
+    t = _there_and_back(ex, g)
+    ex.map_corrected(t)
+    pose = (3.0, 0.75, 0.0)
+    steps = [ex.step(t + k, g, pose) for k in range(3)]
+    assert [s.action for s in steps[:2]] == [Action.WAIT, Action.NEW_GOAL]
+    assert steps[1].goal.is_turn                    # the turn look first
+    assert "loop closure" not in steps[0].reason
 
 
 def test_without_a_correction_no_revisit():
@@ -131,7 +148,13 @@ def _room():
 
 
 def _goal(r, g, reach, f, p, blacklist=()):
-    res = r.goals(g, [f], np.array([np.inf]), reach, np.array([False]), blacklist, p)
+    """The revisit under way; when none, the next one is started (as at DONE)."""
+    args = (g, [f], np.array([np.inf]), reach, np.array([False]), blacklist, p)
+    res = r.goals(*args)
+    if res is None:
+        r.arm()
+        r.add(*r._last) if r._last else None      # a new decision at the same place
+        res = r.goals(*args)
     return None if res is None else (res[0][0].point_xy_m, float(res[1][0]))
 
 
@@ -185,7 +208,8 @@ def test_the_revisit_is_kept_until_blacklisted_then_the_next_then_none():
     assert _goal(r, g, reach, f, p, blacklist=[first, second]) is None
     assert r.targets == (first, second)
     r.progress()                                            # a frontier was selectable
-    assert _goal(r, g, reach, f, p, blacklist=[first, second]) is not None
+    third, _ = _goal(r, g, reach, f, p, blacklist=[first, second])
+    assert third not in (first, second)                     # not at a blacklisted goal
 
 
 def test_places_off_the_passable_cells_are_skipped():
@@ -198,6 +222,10 @@ def test_places_off_the_passable_cells_are_skipped():
     xy, _ = _goal(r, g, reach, f, SelectionParams(revisit_min_travel_m=5.0))
     assert xy == (2.0, 1.0)
     # a blacklisted frontier is left alone; so is one with a path
-    res = r.goals(g, [f, f], np.array([np.inf, 2.0]), reach, np.array([True, False]), (),
-                  SelectionParams(revisit_min_travel_m=5.0))
-    assert res is None
+    r2 = Revisits()
+    for x in np.arange(2.0, 9.01, 0.5):
+        r2.add(float(x), 1.0)
+    r2.corrected()
+    args = (g, [f, f], np.array([np.inf, 2.0]), reach, np.array([True, False]), (),
+            SelectionParams(revisit_min_travel_m=5.0))
+    assert r2.goals(*args) is None and not r2.arm()

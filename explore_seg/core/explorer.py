@@ -200,6 +200,7 @@ class Explorer:
         # The robot's map-frame positions since the last correction (approach goals).
         self._trail = SweptPath()
         self._revisits = Revisits()   # its whole path, for revisits after corrections
+        self.manager.before_done = self._revisits.arm
 
     # ------------------------------------------------------------------ state
     @property

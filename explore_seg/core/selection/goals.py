@@ -7,7 +7,7 @@ decision core (:mod:`explore_seg.core.explorer`) drives it once per decision.
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -43,14 +43,15 @@ class GoalManager:
        are excluded. When no reachable frontier is detected but the current goal's
        frontier cells are still unknown (a thin frontier seen at a grazing angle comes and
        goes), the goal is kept. When no reachable frontier remains for
-       ``done_confirmations`` consecutive ticks: the blacklist is cleared and its
-       frontiers retried (``blacklist_retries`` times, not counting a retry after which
+       ``done_confirmations`` consecutive ticks: the blacklist is cleared and its frontiers
+       retried (``blacklist_retries`` times, not counting a retry after which
        ``retry_reveal_m2`` more of the map became known), then DONE (or first a
-       return-to-start goal). A goal the navigator aborted is judged at the next
-       decision with distances (:meth:`judge_aborted`): blacklisted when the explorer
-       still has a path to its frontier (the navigator disagrees: retrying would repeat
-       the abort), otherwise left to wait for a path (a doorway that map noise closed
-       opens again when the robot looks at it), at most ``abort_retries`` times per area.
+       return-to-start goal, or what :attr:`before_done` starts). A goal the navigator
+       aborted is judged at the next decision with distances (:meth:`judge_aborted`):
+       blacklisted when the explorer still has a path to its frontier (the navigator
+       disagrees: retrying would repeat the abort), otherwise left to wait for a path (a
+       doorway that map noise closed opens when the robot looks at it), at most
+       ``abort_retries`` times per area.
        Before the blacklist retry (and DONE), while frontiers without a path or
        blacklisted remain, the robot turns in place by half a turn (:func:`.areas.turn_goal`,
        ``turn_looks`` per area): a keyframe map gains a scan from where it stands. A goal
@@ -74,6 +75,9 @@ class GoalManager:
         # revealed, aborts without a path on the map, turn looks, retries on a map change.
         self._vanished, self._revealed = AreaCounts(), AreaCounts()
         self._aborted_areas, self._turns, self._changed = AreaCounts(), AreaCounts(), AreaCounts()
+        #: Asked instead of DONE: True when it started something that may open a way (the
+        #: decision waits); the explorer's revisits (revisit.py).
+        self.before_done: Callable[[], bool] | None = None
         self.reset()
 
     def reset(self, clear_blacklist: bool = False) -> None:
@@ -98,11 +102,9 @@ class GoalManager:
         self._start_yaw = 0.0
         if clear_blacklist:
             self._bl.clear()
-            self._vanished.clear()
-            self._revealed.clear()
-            self._aborted_areas.clear()
-            self._turns.clear()
-            self._changed.clear()
+            for areas in (self._vanished, self._revealed, self._aborted_areas, self._turns,
+                          self._changed):
+                areas.clear()
 
     @property
     def blacklist_added(self) -> int:
@@ -111,8 +113,7 @@ class GoalManager:
 
     def restart_timers(self, now_s: float) -> None:
         """Restart the progress and arrival timers at ``now_s`` (after a clock jump)."""
-        self._last_progress_s = now_s
-        self._arrived_s = None
+        self._last_progress_s, self._arrived_s = now_s, None
 
     def set_params(self, params: SelectionParams) -> None:
         """Apply new parameters (the blacklist keeps its newest entries)."""
@@ -222,11 +223,7 @@ class GoalManager:
         goal, self._aborted = self._aborted, None
         if goal is None:
             return ""
-        current, self.goal = self.goal, goal
-        try:
-            i = self._matching(grid, frontiers)
-        finally:
-            self.goal = current
+        i = goal_frontier_index(goal, grid, frontiers, self.params.frontier_match_radius_m)
         d = np.asarray(dist_m, dtype=np.float64)
         if i is not None and i < len(d) and np.isfinite(d[i]):
             self.add_to_blacklist(goal.xy_m)
@@ -241,8 +238,7 @@ class GoalManager:
 
     def set_start(self, xy_m: tuple[float, float], yaw_rad: float) -> None:
         """Remember the pose to return to (first pose, unless set again)."""
-        self.start_xy_m = (float(xy_m[0]), float(xy_m[1]))
-        self._start_yaw = float(yaw_rad)
+        self.start_xy_m, self._start_yaw = (float(xy_m[0]), float(xy_m[1])), float(yaw_rad)
 
     def _note_area(self, areas: AreaCounts, xy_m: tuple[float, float], limit: int) -> bool:
         """Count an event at ``xy_m`` in its area (within ``flicker_radius_m`` of the
@@ -552,6 +548,10 @@ class GoalManager:
             self._empty_ticks = 0
             return StepResult(Action.WAIT, None, f"{left}: blacklist cleared, retrying "
                               "its frontiers", sel)
+        if self.before_done is not None and self.before_done():
+            self._empty_ticks = 0
+            return StepResult(Action.WAIT, None, f"{left}: driving back to an old place of "
+                              "the robot's path for a loop closure", sel)
         self.done = True
         return StepResult(Action.DONE, None, left, sel)
 

@@ -169,12 +169,13 @@ class GoalParams:
         "(speckle, ragged wall ends) that closes a passage next to it; 0 = no turns",
         range=(0, INT_MAX)))
     revisit_goals: int = field(default=3, metadata=param_meta(
-        "after the SLAM corrected the map at least once (a loop closure re-rendered it), "
-        "when frontiers without a path remain and none, nor a lookout or approach, is "
-        "selectable, drive back to this many places of the robot's own path before "
-        "exploration ends: a SLAM closes loops where the robot returns to places it mapped "
-        "long ago, and a closure re-aligns walls that drift mapped across a passage; "
-        "counted anew once a frontier is selectable; 0 = no revisits", range=(0, INT_MAX)))
+        "when exploration would end (after the waits, turn looks and blacklist retries) "
+        "with frontiers without a path left, on a map the SLAM corrected at least once (a "
+        "loop closure re-rendered it), drive back to this many places of the robot's own "
+        "path first, one at a time: a SLAM closes loops where the robot returns to places "
+        "it mapped long before, and a closure re-aligns walls that drift mapped across a "
+        "passage; counted anew once a frontier is selectable; 0 = no revisits",
+        range=(0, INT_MAX)))
     revisit_min_travel_m: float = non_negative(
         "a revisited place was recorded at least this much travel ago (slam_toolbox "
         "searches for loop closures among scans outside its running buffer, "

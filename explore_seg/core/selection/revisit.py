@@ -10,20 +10,23 @@ long enough ago: slam_toolbox searches for loop candidates within
 ``loop_search_maximum_distance`` (3 m) among scans outside its running buffer
 (``scan_buffer_maximum_scan_distance``, 10 m of travel).
 
-When a decision has no selectable frontier, lookout or approach, the map has been
-corrected at least once (the SLAM closes loops, so its map drifts), and frontiers without
-a path remain, :class:`Revisits` gives those frontiers a **revisit**: a place on the
-robot's path recorded at least ``revisit_min_travel_m`` of travel ago that the robot
-reaches on the map now. Among the places within ``revisit_max_path_m`` of path the oldest
-wins (the older the place, the more the drift there differs from now, the more a closure
-corrects); with none that close, the nearest. The frontiers are returned with their
-cPoint moved there, so the goal manager sends, judges (arrival, then "frontier still
-there?") and blacklists the revisit as any other goal. A revisit stays the goal until it
-is blacklisted (arrived, no progress) or the navigator aborted it; the next one lies at least
-``revisit_spacing_m`` from the earlier ones. After ``revisit_goals`` revisits without a
-selectable frontier exploration ends as before; a selectable frontier starts the count
-anew. A map from a SLAM that has not corrected it, or from the true poses, gets no
-revisits: a closure could not move its walls.
+When exploration would end (the goal manager's DONE, after its waits, turn looks and
+blacklist retries: :attr:`~explore_seg.core.selection.goals.GoalManager.before_done`)
+while frontiers without a path remain, and the map has been corrected at least once (the
+SLAM closes loops, so its map drifts), :class:`Revisits` starts a **revisit**: a place
+on the robot's path recorded at least ``revisit_min_travel_m`` of travel ago that the
+robot reaches on the map now. Among the places within ``revisit_max_path_m`` of path the
+oldest wins (the older the place, the more the drift there differs from now, the more a
+closure corrects); with none that close, the nearest. At the next decisions the frontiers
+without a path are returned with their cPoint moved there (:meth:`Revisits.goals`), so the
+goal manager sends, judges (arrival, then "frontier still there?") and blacklists the
+revisit as any other goal. Once it is over (blacklisted, or the navigator aborted it) the
+goal manager's sequence runs again from there (waits, turn looks at the revisited place),
+and the next revisit lies at least ``revisit_spacing_m`` from the earlier ones. After
+``revisit_goals`` revisits without a selectable frontier exploration ends as before; a
+selectable frontier starts the count anew. A map from a SLAM that has not corrected it,
+or from the true poses, gets no revisits: a closure could not move its walls, and runs on
+such maps are the same with revisits on or off.
 
 Examples
 --------
@@ -48,7 +51,13 @@ Examples
 >>> p = SelectionParams(revisit_min_travel_m=10.0, revisit_max_path_m=20.0)
 >>> r.goals(g, [f], np.array([np.inf]), reach, np.array([False]), (), p) is None
 True
+>>> r.arm()                                       # no correction yet: nothing to start
+False
 >>> r.corrected()                                 # a loop closure re-rendered the map
+>>> r.goals(g, [f], np.array([np.inf]), reach, np.array([False]), (), p) is None
+True
+>>> r.arm()                                       # instead of DONE
+True
 >>> out, d = r.goals(g, [f], np.array([np.inf]), reach, np.array([False]), (), p)
 >>> out[0].point_xy_m, round(float(d[0]), 2)     # the oldest place within 20 m of path
 ((1.0, 1.0), 8.0)
@@ -101,7 +110,10 @@ class Revisits:
         self._last: tuple[float, float] | None = None
         self._travel_m = 0.0
         self._corrections = 0
-        self._targets: list[tuple[float, float]] = []
+        self._targets: list[tuple[float, float]] = []   # the revisits of this spell
+        self._armed = False     # the last target is the revisit under way
+        # the next revisit found at this decision: (cell, place, path length)
+        self._pending: tuple[tuple[int, int], tuple[float, float], float] | None = None
 
     def __len__(self) -> int:
         return len(self._places)
@@ -117,7 +129,9 @@ class Revisits:
         return tuple(self._targets)
 
     def add(self, x_m: float, y_m: float) -> None:
-        """Record a robot position (map frame); non-finite positions are ignored."""
+        """Record a robot position (map frame) at a new decision; non-finite positions are
+        ignored."""
+        self._pending = None
         if not (math.isfinite(x_m) and math.isfinite(y_m)):
             return
         if self._last is not None:
@@ -143,9 +157,19 @@ class Revisits:
         """Revisits are on: ``revisit_goals`` > 0 and the map was corrected."""
         return params.revisit_goals > 0 and self._corrections > 0
 
+    def arm(self) -> bool:
+        """Exploration would end (the goal manager's ``before_done``): start the revisit
+        that :meth:`goals` found at this decision; False when there is none."""
+        if self._pending is None:
+            return False
+        self._targets.append(self._pending[1])
+        self._armed, self._pending = True, None
+        return True
+
     def progress(self) -> None:
         """A frontier is selectable: the next stuck spell counts its revisits anew."""
         self._targets.clear()
+        self._armed, self._pending = False, None
 
     def reset(self) -> None:
         """Forget the path, the travel, the corrections and the revisits (a new session)."""
@@ -153,7 +177,7 @@ class Revisits:
         self._last = None
         self._travel_m = 0.0
         self._corrections = 0
-        self._targets.clear()
+        self.progress()
 
     def goals(self, grid: GridMap, frontiers: Sequence[Frontier],
               dist_m: npt.NDArray[np.float64], reach: Reach,
@@ -162,8 +186,8 @@ class Revisits:
               aborted: Callable[[tuple[float, float]], bool] | None = None
               ) -> tuple[list[Frontier], npt.NDArray[np.float64]] | None:
         """The frontiers without a path (and not ``excluded``) with their cPoint at the
-        revisit (module docstring), the others unchanged; None when no revisit is due or
-        none is reachable.
+        revisit under way (module docstring), the others unchanged; None when none is
+        under way (then the next revisit, if any, is found for :meth:`arm`).
 
         Parameters
         ----------
@@ -196,8 +220,11 @@ class Revisits:
         todo = [i for i in range(len(out)) if not np.isfinite(d_out[i]) and not excluded[i]]
         if not self.active(params) or not todo:
             return None
-        target = self._target(grid, reach, blacklist, params, aborted)
+        target = self._current(grid, reach, blacklist, params, aborted)
         if target is None:
+            self._armed = False
+            if len(self._targets) < params.revisit_goals:
+                self._pending = self._next(grid, reach, blacklist, params)
             return None
         rc, xy, d = target
         for i in todo:
@@ -205,26 +232,30 @@ class Revisits:
             d_out[i] = d
         return out, d_out
 
-    def _target(self, grid: GridMap, reach: Reach, blacklist: Sequence[tuple[float, float]],
-                params: SelectionParams,
-                aborted: Callable[[tuple[float, float]], bool] | None
-                ) -> tuple[tuple[int, int], tuple[float, float], float] | None:
-        """The current revisit while it is not over, else the next one (None: no more)."""
-        def over(xy: tuple[float, float]) -> bool:
-            return (any(math.hypot(xy[0] - bx, xy[1] - by) <= params.blacklist_radius_m
-                        for bx, by in blacklist)
-                    or (aborted is not None and aborted(xy)))
-
-        if self._targets and not over(self._targets[-1]):
-            found = self._reachable(grid, reach, np.asarray([self._targets[-1]]))
-            if found is not None:
-                return found[0][0], self._targets[-1], float(found[1][0])
-        if len(self._targets) >= params.revisit_goals:
+    def _current(self, grid: GridMap, reach: Reach, blacklist: Sequence[tuple[float, float]],
+                 params: SelectionParams,
+                 aborted: Callable[[tuple[float, float]], bool] | None
+                 ) -> tuple[tuple[int, int], tuple[float, float], float] | None:
+        """The revisit under way while it is not over (blacklisted, aborted, no path)."""
+        if not self._armed or not self._targets:
             return None
+        xy = self._targets[-1]
+        if _blacklisted(xy, blacklist, params) or (aborted is not None and aborted(xy)):
+            return None
+        found = self._reachable(grid, reach, np.asarray([xy]))
+        return (None if found is None
+                else ((int(found[0][0, 0]), int(found[0][0, 1])), xy, float(found[1][0])))
+
+    def _next(self, grid: GridMap, reach: Reach, blacklist: Sequence[tuple[float, float]],
+              params: SelectionParams
+              ) -> tuple[tuple[int, int], tuple[float, float], float] | None:
+        """The next revisit (module docstring; not near a blacklisted goal); None when no
+        place qualifies."""
         old = [(x, y) for x, y, t in self._places
                if self._travel_m - t >= params.revisit_min_travel_m
                and all(math.hypot(x - tx, y - ty) >= params.revisit_spacing_m
-                       for tx, ty in self._targets)]
+                       for tx, ty in self._targets)
+               and not _blacklisted((x, y), blacklist, params)]
         if not old:
             return None
         found = self._reachable(grid, reach, np.asarray(old))
@@ -234,9 +265,7 @@ class Revisits:
         # ``old`` is oldest first: the oldest within the path budget, else the nearest
         near = np.flatnonzero(d <= params.revisit_max_path_m)
         k = int(near[0]) if len(near) else int(np.argmin(d))
-        xy = old[int(keep[k])]
-        self._targets.append(xy)
-        return (int(cells[k, 0]), int(cells[k, 1])), xy, float(d[k])
+        return (int(cells[k, 0]), int(cells[k, 1])), old[int(keep[k])], float(d[k])
 
     @staticmethod
     def _reachable(grid: GridMap, reach: Reach, xy: npt.NDArray[np.float64]
@@ -257,6 +286,13 @@ class Revisits:
         if not ok.any():
             return None
         return rc[idx[ok]], d[ok], idx[ok]
+
+
+def _blacklisted(xy: tuple[float, float], blacklist: Sequence[tuple[float, float]],
+                 params: SelectionParams) -> bool:
+    """True within ``blacklist_radius_m`` of a blacklisted goal."""
+    return any(math.hypot(xy[0] - bx, xy[1] - by) <= params.blacklist_radius_m
+               for bx, by in blacklist)
 
 
 __all__ = ["MAX_STEP_M", "Revisits"]
