@@ -74,7 +74,7 @@ def test_after_a_correction_the_walled_in_robot_revisits_old_places_then_ends():
     wait = ex.step(t, g, pose)
     assert wait.action is Action.WAIT and "loop closure" in wait.reason, wait.reason
     first = ex.step(t + 1.0, g, pose)
-    assert first.action is Action.NEW_GOAL, first.reason
+    assert first.action is Action.NEW_GOAL and "a revisit" in first.reason, first.reason
     # the oldest place >= 10 m of travel back within 20 m of path: where it started
     assert math.hypot(first.goal.xy_m[0] - 0.5, first.goal.xy_m[1] - 0.75) < 0.15
     assert ex._det.passable[first.goal.rc]

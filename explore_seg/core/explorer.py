@@ -427,7 +427,9 @@ class Explorer:
                     and res.selection is not None
                     and _frontier_alive(grid, frontiers, res.selection.costs, old_goal.xy_m,
                                         self._selection_params.frontier_match_radius_m))
-        return ExplorerStep(res.action, res.goal, res.reason, res.selection, frontiers, dist,
+        reason = (f"{res.reason}: a revisit of the robot's path, for a loop closure"
+                  if res.action is Action.NEW_GOAL and self._revisits.under_way else res.reason)
+        return ExplorerStep(res.action, res.goal, reason, res.selection, frontiers, dist,
                             robot_rc, detected, blacklisted, switched, tuple(warnings),
                             t1 - t0, time.perf_counter() - t1, tour,
                             planner.viewpoint_s + planner.tour_s if planner is not None else 0.0)

@@ -124,6 +124,11 @@ class Revisits:
         return self._travel_m
 
     @property
+    def under_way(self) -> bool:
+        """A revisit was started (:meth:`arm`) and is not over yet."""
+        return self._armed
+
+    @property
     def targets(self) -> tuple[tuple[float, float], ...]:
         """The revisits of the current stuck spell, oldest first."""
         return tuple(self._targets)
