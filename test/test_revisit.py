@@ -147,6 +147,18 @@ def _room():
     return g, Reach(BlockGraph(passable, 0.05, 1), (20, 180), passable), f
 
 
+def _out_and_back():
+    """Revisits of a robot that drove from x = 1 to 9 m and back at y = 1 m (16 m), on a
+    corrected map."""
+    r = Revisits()
+    for x in np.arange(1.0, 9.01, 0.5):
+        r.add(float(x), 1.0)
+    for x in np.arange(8.5, 0.99, -0.5):
+        r.add(float(x), 1.0)
+    r.corrected()
+    return r
+
+
 def _goal(r, g, reach, f, p, blacklist=()):
     """The revisit under way; when none, the next one is started (as at DONE)."""
     args = (g, [f], np.array([np.inf]), reach, np.array([False]), blacklist, p)
@@ -178,12 +190,7 @@ def test_places_stay_bounded():
 
 def test_the_nearest_place_when_none_lies_within_the_path_budget():
     g, reach, f = _room()
-    r = Revisits()
-    for x in np.arange(1.0, 9.01, 0.5):
-        r.add(float(x), 1.0)
-    for x in np.arange(8.5, 0.99, -0.5):
-        r.add(float(x), 1.0)
-    r.corrected()
+    r = _out_and_back()
     # 16 m of travel; places >= 10 m back: x = 1.0 .. 7.0 on the way out; the robot's
     # start cell at x = 9
     xy, d = _goal(r, g, reach, f, SelectionParams(revisit_min_travel_m=10.0,
@@ -193,12 +200,7 @@ def test_the_nearest_place_when_none_lies_within_the_path_budget():
 
 def test_the_revisit_is_kept_until_blacklisted_then_the_next_then_none():
     g, reach, f = _room()
-    r = Revisits()
-    for x in np.arange(1.0, 9.01, 0.5):
-        r.add(float(x), 1.0)
-    for x in np.arange(8.5, 0.99, -0.5):
-        r.add(float(x), 1.0)
-    r.corrected()
+    r = _out_and_back()
     p = SelectionParams(revisit_goals=2, revisit_min_travel_m=5.0, revisit_spacing_m=3.0)
     first, _ = _goal(r, g, reach, f, p)
     assert first == (1.0, 1.0)
