@@ -448,7 +448,7 @@ class Explorer:
         """A SLAM correction (a loop closure that re-rendered the map) at ``stamp_s`` (None:
         unknown): the overlay forgets the scans taken before it, laid at uncorrected poses
         (:meth:`ScanOverlay.forget_before`), the robot's path of approach goals starts
-        anew (its positions were uncorrected too), and revisits are on (revisit.py)."""
+        anew (its positions were uncorrected too), and revisits may start (revisit.py)."""
         if self._overlay is not None:
             self._overlay.forget_before(stamp_s)
         self._trail = SweptPath()
@@ -505,9 +505,9 @@ class Explorer:
         """No selectable frontier: look at the unreachable ones from a lookout
         (lookout.py); when no lookout is selectable either, drive up to a passage that
         only map speckle closes and look at it (blockage.py); when none of those is
-        selectable and the map was corrected, drive back to an old place of the robot's
-        path for a loop closure (revisit.py). Returns the frontiers, their path lengths
-        and blacklist mask."""
+        selectable, drive to the revisit under way (an old place of the robot's path, for
+        a loop closure, started where exploration would end: revisit.py). Returns the
+        frontiers, their path lengths and blacklist mask."""
         sp, manager = self._selection_params, self.manager
         assert self._det is not None and self._graph is not None
         hop = math.hypot(start[0] - robot_rc[0], start[1] - robot_rc[1]) * grid.resolution_m
