@@ -186,6 +186,8 @@ def test_places_stay_bounded():
         r.add(0.1 * k, 0.0)
     assert len(r) < 100 and r.spacing_m > 0.1
     assert r.travel_m == pytest.approx(199.9)
+    r.reset()
+    assert len(r) == 0 and r.spacing_m == 0.1 and r.travel_m == 0.0
 
 
 def test_the_nearest_place_when_none_lies_within_the_path_budget():

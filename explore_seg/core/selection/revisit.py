@@ -104,7 +104,7 @@ class Revisits:
             raise ValueError(f"spacing_m must be finite and > 0, got {spacing_m}")
         if max_points < 2:
             raise ValueError(f"max_points must be >= 2, got {max_points}")
-        self.spacing_m = float(spacing_m)
+        self.spacing_m = self._spacing0_m = float(spacing_m)
         self.max_points = int(max_points)
         self._places: list[tuple[float, float, float]] = []   # x, y, travel at the place
         self._last: tuple[float, float] | None = None
@@ -179,6 +179,7 @@ class Revisits:
     def reset(self) -> None:
         """Forget the path, the travel, the corrections and the revisits (a new session)."""
         self._places.clear()
+        self.spacing_m = self._spacing0_m
         self._last = None
         self._travel_m = 0.0
         self._corrections = 0
