@@ -57,6 +57,22 @@ def near_counts(grid: GridMap, xy_m: tuple[float, float], radius_m: float,
     return occupied, unknown
 
 
+def near_any(points_xy_m: npt.ArrayLike, others_xy_m: npt.ArrayLike, radius_m: float
+             ) -> npt.NDArray[np.bool_]:
+    """For each point (shape (N, 2)): does one of ``others`` (shape (M, 2)) lie within
+    ``radius_m``?
+
+    >>> near_any([[0.0, 0.0], [2.0, 0.0]], [[0.3, 0.4]], 0.5).tolist()
+    [True, False]
+    """
+    pts = np.asarray(points_xy_m, dtype=np.float64).reshape(-1, 2)
+    others = np.asarray(others_xy_m, dtype=np.float64).reshape(-1, 2)
+    if not len(pts) or not len(others):
+        return np.zeros(len(pts), dtype=bool)
+    d2 = ((pts[:, None, :] - others[None, :, :]) ** 2).sum(axis=2)
+    return (d2 <= radius_m ** 2).any(axis=1)
+
+
 class Blacklist:
     """Blacklisted goal points (newest ``maxlen``), with the map's content near each."""
 
@@ -101,12 +117,7 @@ class Blacklist:
     def excluded(self, points_xy_m: npt.NDArray[np.float64], radius_m: float
                  ) -> npt.NDArray[np.bool_]:
         """For each point (shape (N, 2)): is a blacklisted point within ``radius_m``?"""
-        pts = np.asarray(points_xy_m, dtype=np.float64).reshape(-1, 2)
-        if not self._pts or not len(pts):
-            return np.zeros(len(pts), dtype=bool)
-        bl = np.asarray(self._pts)
-        d2 = ((pts[:, None, :] - bl[None, :, :]) ** 2).sum(axis=2)
-        return (d2 <= radius_m ** 2).any(axis=1)
+        return near_any(points_xy_m, list(self._pts), radius_m)
 
     def changed(self, grid: GridMap, radius_m: float, occupied_threshold: int,
                 min_cells: int) -> list[tuple[float, float]]:
@@ -180,4 +191,4 @@ class RevealWatch:
         return (self._unknown - self._unknown_near(grid)) * grid.resolution_m ** 2
 
 
-__all__ = ["Blacklist", "RevealWatch", "near_counts"]
+__all__ = ["Blacklist", "RevealWatch", "near_any", "near_counts"]

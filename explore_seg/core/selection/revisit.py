@@ -74,6 +74,7 @@ import numpy.typing as npt
 
 from explore_seg.core.frontiers import Frontier
 from explore_seg.core.grid import GridMap
+from explore_seg.core.selection.blacklist import near_any
 from explore_seg.core.selection.lookout import Reach
 from explore_seg.core.selection.params import SelectionParams
 
@@ -246,7 +247,8 @@ class Revisits:
         if not self._armed or not self._targets:
             return None
         xy = self._targets[-1]
-        if _blacklisted(xy, blacklist, params) or (aborted is not None and aborted(xy)):
+        if (near_any([xy], blacklist, params.blacklist_radius_m)[0]
+                or (aborted is not None and aborted(xy))):
             return None
         found = self._reachable(grid, reach, np.asarray([xy]))
         return (None if found is None
@@ -257,21 +259,23 @@ class Revisits:
               ) -> tuple[tuple[int, int], tuple[float, float], float] | None:
         """The next revisit (module docstring; not near a blacklisted goal); None when no
         place qualifies."""
-        old = [(x, y) for x, y, t in self._places
-               if self._travel_m - t >= params.revisit_min_travel_m
-               and all(math.hypot(x - tx, y - ty) >= params.revisit_spacing_m
-                       for tx, ty in self._targets)
-               and not _blacklisted((x, y), blacklist, params)]
-        if not old:
+        places = np.asarray(self._places, dtype=np.float64).reshape(-1, 3)
+        old = places[self._travel_m - places[:, 2] >= params.revisit_min_travel_m, :2]
+        # at least revisit_spacing_m from every earlier revisit (closer ones are out)
+        closer = float(np.nextafter(params.revisit_spacing_m, 0.0))
+        old = old[~near_any(old, self._targets, closer)
+                  & ~near_any(old, blacklist, params.blacklist_radius_m)]
+        if not len(old):
             return None
-        found = self._reachable(grid, reach, np.asarray(old))
+        found = self._reachable(grid, reach, old)
         if found is None:
             return None
         cells, d, keep = found
         # ``old`` is oldest first: the oldest within the path budget, else the nearest
         near = np.flatnonzero(d <= params.revisit_max_path_m)
         k = int(near[0]) if len(near) else int(np.argmin(d))
-        return (int(cells[k, 0]), int(cells[k, 1])), old[int(keep[k])], float(d[k])
+        xy = old[int(keep[k])]
+        return (int(cells[k, 0]), int(cells[k, 1])), (float(xy[0]), float(xy[1])), float(d[k])
 
     @staticmethod
     def _reachable(grid: GridMap, reach: Reach, xy: npt.NDArray[np.float64]
@@ -279,8 +283,7 @@ class Revisits:
                               npt.NDArray[np.int64]] | None:
         """The places of ``xy`` on passable cells with a path: their cells, path lengths
         and indices into ``xy``; None when there is none."""
-        rc = np.asarray([grid.world_to_cell(float(x), float(y)) for x, y in xy],
-                        dtype=np.int64).reshape(-1, 2)
+        rc = np.column_stack(grid.world_to_cells(xy[:, 0], xy[:, 1]))
         h, w = reach.passable.shape
         inside = (rc[:, 0] >= 0) & (rc[:, 0] < h) & (rc[:, 1] >= 0) & (rc[:, 1] < w)
         idx = np.flatnonzero(inside)
@@ -292,13 +295,6 @@ class Revisits:
         if not ok.any():
             return None
         return rc[idx[ok]], d[ok], idx[ok]
-
-
-def _blacklisted(xy: tuple[float, float], blacklist: Sequence[tuple[float, float]],
-                 params: SelectionParams) -> bool:
-    """True within ``blacklist_radius_m`` of a blacklisted goal."""
-    return any(math.hypot(xy[0] - bx, xy[1] - by) <= params.blacklist_radius_m
-               for bx, by in blacklist)
 
 
 __all__ = ["MAX_STEP_M", "Revisits"]
