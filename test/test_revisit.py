@@ -165,7 +165,6 @@ def _goal(r, g, reach, f, p, blacklist=()):
     res = r.goals(*args)
     if res is None:
         r.arm()
-        r.add(*r._last) if r._last else None      # a new decision at the same place
         res = r.goals(*args)
     return None if res is None else (res[0][0].point_xy_m, float(res[1][0]))
 
