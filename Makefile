@@ -18,7 +18,7 @@ help:
 	@echo "make bench  - the full matrix: every strategy x 20 worlds x $(RUNS) runs (10 in maze, office_floor) -> $(BENCH_OUT)/, BENCHMARKS.md; again: continues (--resume)"
 	@echo "make bench SHARD=K/N - the K-th of N slices of the matrix (one per machine) -> $(BENCH_OUT)/"
 	@echo "make bench-report - BENCHMARKS.md again from $(BENCH_OUT)/ (one code version; BENCH_ARGS=--allow-mixed to mark mixed ones)"
-	@echo "make bench-quick - a representative subset (~10 min on 2 cores) -> $(QUICK_OUT)/QUICK.md, ratios vs bench/results"
+	@echo "make bench-quick - a representative subset (~10 min on 2 cores) -> $(QUICK_OUT)/QUICK.md, ratios vs bench/results/matrix"
 	@echo "make build  - colcon build of the package into build/ install/"
 	@echo "make setup  - only the idempotent set-up (venv, apt packages, detector weights)"
 	@echo "make train-predictor - train the floor-plan predictor on generated plans (seed PREDICTOR_SEED, 1 CPU thread) -> explore_seg/core/prediction/weights/"

@@ -7,7 +7,7 @@ by default the explorer's default strategy, ``routed``), ``nearest`` and ``explo
 per-run times; no tours, no detector timing, BENCHMARKS.md untouched), then writes
 ``QUICK.md`` beside its results: per world the time-to-95 % ratios subject /
 ``explore_lite`` and subject / ``nearest`` of the subset, of the full run in ``--full``
-(default ``bench/results``, all its seeds) and of the full run on the subset's seeds only
+(default ``bench/results/matrix``, the one-version matrix, all its seeds) and of the full run on the subset's seeds only
 (equal to the subset's when nothing that affects decisions changed since the full run),
 and how far the subset's ratios are from the full run's (mean absolute difference, and in
 how many worlds both say the same about the subject being faster). A full run without
@@ -19,7 +19,7 @@ corridors and loops; the maze and the large generated worlds are left out (one o
 
 Usage::
 
-    .venv/bin/python bench/quick.py [--out out/bench-quick] [--full bench/results]
+    .venv/bin/python bench/quick.py [--out out/bench-quick] [--full bench/results/matrix]
         [--subject paper] [--list] [run_bench.py options, e.g. --resume or --jobs 2]
 
 ``--list`` (``make bench-quick BENCH_ARGS=--list``) prints the subset's worlds with the
@@ -118,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run the subset (see the module docstring), write QUICK.md; run_bench's exit status."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default="out/bench-quick")
-    ap.add_argument("--full", default=str(ROOT / "bench" / "results"),
+    ap.add_argument("--full", default=str(ROOT / "bench" / "results" / "matrix"),
                     help="output folder of the full run to compare with (its runs.csv)")
     ap.add_argument("--subject", default=DEFAULT_SUBJECT,
                     help="the strategy judged against the baselines (default: the "

@@ -43,6 +43,7 @@ from bench import noise_table, records, same_results, store  # noqa: E402
 from bench.figures import plot_coverage, plot_time_to  # noqa: E402
 from bench.records import TIMING_ROWS, as_float, by_world_strategy  # noqa: E402
 from bench.store import read_csv, slug  # noqa: E402
+from bench.worlds import FULL_RUNS, WORLD_RUNS, default_worlds  # noqa: E402
 from sim_bridge.strategy_specs import MATRIX_STRATEGIES  # noqa: E402
 
 #: The strategy the ratios are against: the explorer's default.
@@ -481,6 +482,16 @@ def _noise_profile(profile: str, folder: Path, certs: list[dict[str, Any]],
     return profile, runs, ", ".join(sorted(set(codes)))
 
 
+def experiments_dir(out: Path) -> Path:
+    """The experiment reports' folder of a bench folder: its own ``experiments/``, else
+    its parent's (``bench/results/experiments`` for ``bench/results/matrix``), else its
+    own (absent)."""
+    for d in (out / EXPERIMENTS, out.parent / EXPERIMENTS):
+        if d.is_dir():
+            return d
+    return out / EXPERIMENTS
+
+
 def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[str],
                  meta: dict[str, Any], certs: list[dict[str, Any]],
                  command: str | None,
@@ -488,7 +499,8 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
                  ) -> list[str]:
     """The lines of BENCHMARKS.md (see :func:`write_all`)."""
     rel = Path(os.path.relpath(out, md.parent))
-    exp_rel = Path(os.path.relpath(out / EXPERIMENTS, md.parent)).as_posix()
+    exp_dir = experiments_dir(out)
+    exp_rel = Path(os.path.relpath(exp_dir, md.parent)).as_posix()
     docs = Path(os.path.relpath(ROOT / "docs", md.parent)).as_posix()
     cmd = command or meta.get("command", "bench/run_bench.py")
     tours_rows = read_csv(out / "tours.csv")
@@ -539,6 +551,7 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
           + (f", {sum(cpu):.0f} CPU s in the runs" + (f" ({len(runs) - len(cpu)} runs "
              "recorded without a CPU figure)" if len(cpu) < len(runs) else "")
              if cpu else "") + ".", ""]
+    L += full_matrix_lines(runs)
     L += parts_lines(parts)
     L += setup_lines(meta, runs)
     missing = [s for s in MATRIX_STRATEGIES if s not in strategies]
@@ -611,11 +624,11 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
                      f"{row.get('goals', '-')} | {row.get('objects', '-')} | "
                      f"{row.get('object_frames', '-')} |")
         L.append("")
-    earlier = sorted((out / EXPERIMENTS).glob("benchmarks_*.md"))
+    earlier = sorted(exp_dir.glob("benchmarks_*.md"))
     L += ["## Experiments", "",
           "Paired comparisons of settings (`bench/paired.py`) and other experiment reports "
           + (f"are files in [{exp_rel}/]({exp_rel}/), each with its command and code version; "
-             if (out / EXPERIMENTS).is_dir() else "are not in this folder; ")
+             if exp_dir.is_dir() else "are not in this folder; ")
           + f"what each decided: [docs/experiments.md]({docs}/experiments.md). They are not "
           "part of the tables above."
           + ("" if not earlier else " Earlier benchmark reports: " + ", ".join(
@@ -624,6 +637,38 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
           "and this report read), `runs.csv`, `tours.csv`, `meta.json`, the figures"
           + (f"; certificates in `{CERT_DIR}/`" if certs else "") + "."]
     return L
+
+
+def full_matrix_lines(runs: list[dict[str, Any]]) -> list[str]:
+    """What the full matrix (``make bench``: every strategy of ``MATRIX_STRATEGIES`` x
+    :func:`bench.worlds.default_worlds` x ``FULL_RUNS`` seeds from 0, ``WORLD_RUNS`` in the
+    long worlds) holds that ``runs`` do not: one paragraph naming the worlds without runs
+    and, per group of worlds, the seeds some strategy has not run; [] when nothing is
+    missing."""
+    have = {(r["world"], r["strategy"], int(r["seed"])) for r in runs}
+    full = {(w, st, k) for w in default_worlds() for st in MATRIX_STRATEGIES
+            for k in range(min(FULL_RUNS, WORLD_RUNS.get(w, FULL_RUNS)))}
+    lacking = full - have
+    if not lacking:
+        return []
+    worlds = {w for w, _, _ in have}
+    absent = [w for w in default_worlds() if w not in worlds]
+    by_seeds: dict[str, list[str]] = {}
+    for w in default_worlds():
+        if w in worlds:
+            seeds = sorted({k for lw, _, k in lacking if lw == w})
+            if seeds:
+                by_seeds.setdefault(store.seed_ranges(seeds), []).append(w)
+    what = ([f"worlds without runs: {', '.join(f'`{w}`' for w in absent)}"] if absent else [])
+    what += [f"seeds {seeds} in {len(ws)} world{'s' if len(ws) > 1 else ''}"
+             + (f" ({', '.join(f'`{w}`' for w in ws)})" if len(ws) <= 3 else "")
+             for seeds, ws in by_seeds.items()]
+    n_full = len(full)
+    return [f"**Part of the full matrix: {len(full & have)} of its {n_full} runs** "
+            f"({len(MATRIX_STRATEGIES)} strategies × {len(default_worlds())} worlds × "
+            f"{FULL_RUNS} seeds, "
+            + ", ".join(f"{n} in `{w}`" for w, n in WORLD_RUNS.items())
+            + "; `--resume` on this folder continues it). Not run yet: " + "; ".join(what) + ".", ""]
 
 
 def parts_lines(parts: list[dict[str, Any]]) -> list[str]:

@@ -77,9 +77,9 @@ from bench.progress import Progress, hms  # noqa: E402
 from bench.rows import runs_csv_rows  # noqa: E402
 from bench.tasks import catch_stop_signals, explorer_params, fix_explorer_params, \
     restore_signals, run_drainable, stop_signals_deferred, tour_task  # noqa: E402
-from bench.worlds import MAX_SIM_TIME_S, MIN_SIM_TIME_S, PAPER_CAMERA_MOUNT, \
-    TIME_PER_AREA_S, default_worlds, load, sim_params_for, sim_time_limit, \
-    world_path  # noqa: E402
+from bench.worlds import FULL_RUNS, MAX_SIM_TIME_S, MIN_SIM_TIME_S, \
+    PAPER_CAMERA_MOUNT, TIME_PER_AREA_S, WORLD_RUNS, default_worlds, load, sim_params_for, \
+    sim_time_limit, world_path  # noqa: E402
 from sim_bridge.engine import SimParams  # noqa: E402
 from sim_bridge.lockstep import STRATEGIES, LockstepParams, load_explorer_params, \
     run_exploration  # noqa: E402
@@ -97,7 +97,7 @@ __all__ = ["PAPER_CAMERA_MOUNT", "Progress", "compare_with_ros", "default_worlds
 def _parse(argv: list[str] | None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--runs", type=int, default=20, help="seeded runs per world x strategy")
+    ap.add_argument("--runs", type=int, default=FULL_RUNS, help="seeded runs per world x strategy")
     ap.add_argument("--world-runs", default=",".join(f"{w}={n}" for w, n in WORLD_RUNS.items()),
                     metavar="WORLD=N,...",
                     help="at most N runs in these worlds (the long ones; default: "
@@ -159,7 +159,11 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     ap.add_argument("--resume", action="store_true",
                     help="keep the runs and tours already in --out that this command asks "
                          "for (same world, strategy, seed) and run only the missing ones; "
-                         "runs of other worlds/strategies/seeds are dropped")
+                         "when --out also holds runs the command does not ask for, it stops "
+                         "and names them (see --prune)")
+    ap.add_argument("--prune", action="store_true",
+                    help="with --resume: drop the runs in --out that this command does not "
+                         "ask for (a copy stays in runs.jsonl.bak*) instead of stopping")
     ap.add_argument("--redo", default="",
                     help="with --resume: comma-separated STRATEGY or WORLD:STRATEGY whose "
                          "kept runs are run again (after a change that affects them; the "
@@ -185,6 +189,8 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
         ap.error("--merge needs --resume")
     if a.no_runs and not a.resume:
         ap.error("--no-runs needs --resume")
+    if a.prune and (not a.resume or a.no_runs):
+        ap.error("--prune needs --resume (and runs: not with --no-runs)")
     if a.no_runs and a.redo:
         ap.error("--no-runs runs nothing: no --redo")
     if a.nav_margin is not None:
@@ -223,11 +229,6 @@ def _parse(argv: list[str] | None) -> argparse.Namespace:
     if a.redo_keys and not a.resume:
         ap.error("--redo needs --resume")
     return a
-
-
-#: Runs per world x strategy of the long generated worlds in the full matrix (the others
-#: get ``--runs``): a maze or office floor run takes 10-40 min of CPU.
-WORLD_RUNS = {"maze": 10, "office_floor": 10}
 
 
 def parse_world_runs(text: str) -> dict[str, int]:
@@ -380,6 +381,15 @@ def main(argv: list[str] | None = None) -> int:
         if old_codes != {meta["code"]}:
             print(f"[bench] --resume: warning: earlier parts ran on code {sorted(map(str, old_codes))}, "
                   f"this one on {meta['code']} (listed in the report)", file=sys.stderr)
+    if a.resume and not a.no_runs and not a.prune:
+        unasked = store.unasked_runs(
+            out, matrix_tasks(specs, strategies, a.runs, a.seed0, a.world_runs, a.shard_kn))
+        if unasked:
+            print(f"[bench] --resume: {out} holds {unasked}, which this command does not "
+                  "ask for: add them to --worlds / --strategies / --runs, run into another "
+                  "--out and --merge, or pass --prune to drop them (a copy stays in "
+                  "runs.jsonl.bak*)", file=sys.stderr)
+            return 2
     interrupted: int = 0          # the signal that stopped the runs, 0 = none
     counter = [0]                 # runs run so far
     failed: list[str] = []        # runs that raised: "world/strategy/seed: error"

@@ -13,6 +13,7 @@ import json
 import shutil
 import subprocess
 import sys
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -168,6 +169,34 @@ def write_meta(out: Path, meta: dict[str, Any], old_meta: dict[str, Any],
     meta["parts"] = parts
     meta["wall_s"] = round(sum(float(p.get("wall_s") or 0.0) for p in parts), 1)
     (out / "meta.json").write_text(json.dumps(meta, indent=1))
+
+
+def unasked_runs(out: Path, keys: list[tuple]) -> str:
+    """The runs of ``out`` whose (world, strategy, seed) is not among ``keys``, in words
+    ("12 runs (nearest x 10, paper x 2) in 3 worlds, seeds 10-13"); '' when there are
+    none."""
+    wanted = {k[:3] for k in keys}
+    left = [d for d in records.read(out) if (d["world"], d["strategy"], d["seed"]) not in wanted]
+    if not left:
+        return ""
+    per = Counter(d["strategy"] for d in left)
+    seeds = sorted({int(d["seed"]) for d in left})
+    worlds = {d["world"] for d in left}
+    return (f"{len(left)} run{'s' if len(left) > 1 else ''} ("
+            + ", ".join(f"{st} x {n}" for st, n in per.most_common()) + f") in {len(worlds)} "
+            f"world{'s' if len(worlds) > 1 else ''}, seed{'s' if len(seeds) > 1 else ''} "
+            + seed_ranges(seeds))
+
+
+def seed_ranges(seeds: list[int]) -> str:
+    """Seeds as ranges: [0, 1, 2, 5] -> '0-2, 5'."""
+    spans: list[list[int]] = []
+    for k in sorted(seeds):
+        if spans and k == spans[-1][1] + 1:
+            spans[-1][1] = k
+        else:
+            spans.append([k, k])
+    return ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in spans)
 
 
 def resume(out: Path, tasks: list[tuple], redo_keys: list[tuple[str | None, str]]

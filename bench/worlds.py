@@ -24,6 +24,11 @@ GENERATED_WORLDS = ("house", "maze", "house_cluttered", "office_floor")
 TIME_PER_AREA_S = 5.0
 MIN_SIM_TIME_S = 600.0
 MAX_SIM_TIME_S = 7200.0
+#: Seeded runs per world x strategy of the full matrix (``run_bench.py --runs``'s default).
+FULL_RUNS = 20
+#: Runs per world x strategy of the long generated worlds in the full matrix (the others
+#: get ``--runs``): a maze or office floor run takes 10-40 min of CPU.
+WORLD_RUNS = {"maze": 10, "office_floor": 10}
 
 
 def default_worlds() -> list[str]:

@@ -7,7 +7,7 @@
 # BENCH_RESUME=1 adds --resume (what `make bench` does: running it again continues the
 # matrix where it stopped). The last line printed is the matrix's wall time and CPU seconds.
 # `scripts/run_bench.sh --quick [OUT] [extra options...]` runs bench/quick.py instead (the
-# subset of `make bench-quick`, compared with bench/results).
+# subset of `make bench-quick`, compared with bench/results/matrix).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 QUICK=0

@@ -164,14 +164,24 @@ def test_a_failing_run_is_reported_and_the_others_go_on(tmp_path, monkeypatch):
         out / "B.md").read_text()
 
 
-def test_resume_refuses_other_settings_and_keeps_a_copy_of_dropped_runs(first, tmp_path):
+def test_resume_refuses_other_settings_and_unasked_runs(first, tmp_path, capsys):
     out, _ = first
     res = _copy_results(out, tmp_path / "res2")
     args = [x if x != "20" else "25" for x in ARGS]          # another --max-sim-time
     assert run_bench.main(args + ["--runs", "1", "--out", str(res), "--md", "", "--resume"]) == 2
-    # same settings, another strategy: the nearest run is dropped from the report, kept aside
-    assert run_bench.main([x if x != "nearest" else "explore_lite" for x in ARGS]
-                          + ["--runs", "1", "--out", str(res), "--md", "", "--resume"]) == 0
+    # same settings, another strategy: refused, naming the run it would drop
+    other = [x if x != "nearest" else "explore_lite" for x in ARGS]
+    before = (res / "runs.jsonl").read_text()
+    capsys.readouterr()
+    assert run_bench.main(other + ["--runs", "1", "--out", str(res), "--md", "", "--resume"]) == 2
+    assert "holds 1 run (nearest x 1) in 1 world, seed 0, which this command does not ask" \
+        in capsys.readouterr().err
+    assert (res / "runs.jsonl").read_text() == before and not (res / "runs.jsonl.bak").exists()
+    with pytest.raises(SystemExit):
+        run_bench.main(other + ["--runs", "1", "--out", str(res), "--prune"])  # needs --resume
+    # with --prune: the nearest run is dropped from the report, kept aside
+    assert run_bench.main(other + ["--runs", "1", "--out", str(res), "--md", "", "--resume",
+                                   "--prune"]) == 0
     assert [r["strategy"] for r in _runs(res)] == ["explore_lite"]
     assert "nearest" in (res / "runs.jsonl.bak").read_text()
 

@@ -242,6 +242,31 @@ def test_full_matrix_report_fits_in_400_lines(tmp_path, codes):
     assert sum(1 for ln in lines if ln.startswith("### ")) == 20
     assert sum(1 for ln in lines if ln.startswith("| nearest |")) == 20 + 1   # + summary
     assert "no runs in these results" not in md.read_text()
+    assert "Part of the full matrix" not in md.read_text()
+
+
+def test_a_partial_matrix_names_the_worlds_and_seeds_it_lacks(tmp_path):
+    full = _full_matrix()
+    part = [r for r in full if r["world"] not in ("maze", "office_floor") and r["seed"] < 15
+            and not (r["world"] == "eb/loop" and r["strategy"] == "nearest" and r["seed"] == 3)]
+    line = report.full_matrix_lines(part)[0]
+    assert line.startswith(f"**Part of the full matrix: {len(part)} of its {len(full)} runs**")
+    assert "worlds without runs: `maze`, `office_floor`" in line
+    assert "seeds 15-19 in 17 worlds" in line
+    assert "seeds 3, 15-19 in 1 world (`eb/loop`)" in line
+    out = _folder(tmp_path / "part", part)
+    assert line in report.write_all(out, tmp_path / "B.md", command="x").read_text()
+    assert report.full_matrix_lines(full) == []
+
+
+def test_a_matrix_folder_links_the_experiment_reports_beside_it(tmp_path):
+    results = tmp_path / "results"
+    (results / "experiments").mkdir(parents=True)
+    (results / "experiments" / "benchmarks_old.md").write_text("old\n")
+    out = _folder(results / "matrix", [_rec("w", "routed", 0, A)])
+    text = report.write_all(out, tmp_path / "B.md", command="x").read_text()
+    assert "are files in [results/experiments/](results/experiments/)" in text
+    assert "[benchmarks_old](results/experiments/benchmarks_old.md)" in text
 
 
 def test_benchmarks_md_in_the_repository_fits_in_400_lines():
