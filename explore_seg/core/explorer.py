@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
@@ -56,12 +56,10 @@ from explore_seg.core.rrt import RrtFrontierDetector, RrtParams
 from explore_seg.core.scan_overlay import ScanOverlay, ScanOverlayParams
 from explore_seg.core.selection import (Action, Goal, GoalManager, NavOutcome, PathGraphs,
                                         Selection, SelectionParams, StepInputs)
-from explore_seg.core.selection.blockage import RelaxedMap, approaches
-from explore_seg.core.selection.lookout import Reach, lookouts
-from explore_seg.core.selection.revisit import Revisits
+from explore_seg.core.selection.fallbacks import Fallbacks
+from explore_seg.core.selection.lookout import Reach
 from explore_seg.core.selection.router import TourPlan
 from explore_seg.core.selection.strategies import Planner, Strategy, get_strategy
-from explore_seg.core.swept import SweptPath
 
 #: Keys of :attr:`ExplorerStep.warnings` (the caller throttles its log per key).
 WARN_LAYER_FRAME = "layer_frame"
@@ -197,10 +195,9 @@ class Explorer:
         self._fcache = FrontierCache()
         self._layer_warning = ""
         self._reported_blacklisted = 0
-        # The robot's map-frame positions since the last correction (approach goals).
-        self._trail = SweptPath()
-        self._revisits = Revisits()   # its whole path, for revisits after corrections
-        self.manager.before_done = self._revisits.arm
+        # goals when no frontier is selectable
+        self._fallbacks = Fallbacks(self.manager, self._any_selectable)
+        self.manager.before_done = self._fallbacks.revisits.arm
 
     # ------------------------------------------------------------------ state
     @property
@@ -281,8 +278,7 @@ class Explorer:
         if self._planner is not None:
             self._planner.reset()
         if clear_blacklist:
-            self._trail = SweptPath()
-            self._revisits.reset()
+            self._fallbacks.reset()
 
     def report_navigation(self, outcome: NavOutcome,
                           goal: Goal | tuple[float, float] | None = None) -> bool:
@@ -314,8 +310,7 @@ class Explorer:
         reference; the ``routed`` tour forgets its kept path lengths and gains (a sim
         reset comes with a new map), and so does the robot's path of approach goals."""
         self.manager.restart_timers(now_s)
-        self._trail = SweptPath()
-        self._revisits.reset()
+        self._fallbacks.reset()
         if self._overlay is not None:
             self._overlay.reset()
         if self._planner is not None:
@@ -380,8 +375,7 @@ class Explorer:
         stamped = grid
         detected, grid = self._detected(grid, layer)
         x, y, yaw = (float(v) for v in pose)
-        self._trail.add(x, y)
-        self._revisits.add(x, y)
+        self._fallbacks.add(x, y)
         if self._strategy.candidates == "rrt":
             self._detect_rrt(grid, (x, y))
             detected = True
@@ -412,7 +406,7 @@ class Explorer:
             frontiers, dist, excluded = self._unreachable_goals(grid, frontiers, dist, excluded,
                                                                 start, robot_rc)
         elif dist is not None and len(dist):
-            self._revisits.progress()
+            self._fallbacks.revisits.progress()
         if planner is not None and dist is not None:
             tour = planner.tour_costs(grid, frontiers, dist, excluded, self._graph, robot_rc,
                                      labels, manager.goal_frontier(grid, frontiers))
@@ -428,7 +422,8 @@ class Explorer:
                     and _frontier_alive(grid, frontiers, res.selection.costs, old_goal.xy_m,
                                         self._selection_params.frontier_match_radius_m))
         reason = (f"{res.reason}: a revisit of the robot's path, for a loop closure"
-                  if res.action is Action.NEW_GOAL and self._revisits.under_way else res.reason)
+                  if res.action is Action.NEW_GOAL and self._fallbacks.revisits.under_way
+                  else res.reason)
         return ExplorerStep(res.action, res.goal, reason, res.selection, frontiers, dist,
                             robot_rc, detected, blacklisted, switched, tuple(warnings),
                             t1 - t0, time.perf_counter() - t1, tour,
@@ -451,8 +446,7 @@ class Explorer:
         anew (its positions were uncorrected too), and revisits may start (revisit.py)."""
         if self._overlay is not None:
             self._overlay.forget_before(stamp_s)
-        self._trail = SweptPath()
-        self._revisits.corrected()
+        self._fallbacks.corrected()
 
     def _detected(self, grid: GridMap, layer: GridMap | None) -> tuple[bool, GridMap]:
         """Detect on ``grid`` unless the products are of an equal map and layer; returns
@@ -502,44 +496,16 @@ class Explorer:
                            start: tuple[int, int], robot_rc: tuple[int, int]
                            ) -> tuple[list[Frontier], npt.NDArray[np.float64],
                                       npt.NDArray[np.bool_]]:
-        """No selectable frontier: look at the unreachable ones from a lookout
-        (lookout.py); when no lookout is selectable either, drive up to a passage that
-        only map speckle closes and look at it (blockage.py); when none of those is
-        selectable, drive to the revisit under way (an old place of the robot's path, for
-        a loop closure, started where exploration would end: revisit.py). Returns the
-        frontiers, their path lengths and blacklist mask."""
-        sp, manager = self._selection_params, self.manager
+        """No selectable frontier: the fallback goals (lookouts, approaches, the revisit
+        under way: :class:`~explore_seg.core.selection.fallbacks.Fallbacks`) from the
+        robot's start cell. Returns the frontiers, their path lengths and blacklist
+        mask."""
         assert self._det is not None and self._graph is not None
         hop = math.hypot(start[0] - robot_rc[0], start[1] - robot_rc[1]) * grid.resolution_m
         reach = Reach(self._graph.graph, start, self._det.passable, hop)
-        out, d_out, ex_out = frontiers, dist, excluded
-        if sp.lookout_goals:
-            out, d_out = lookouts(grid, frontiers, dist, reach, sp,
-                                  self._frontier_params.occupied_threshold, excluded)
-            ex_out = manager.excluded(out)
-        if sp.speckle_max_cells > 0 and not self._any_selectable(out, d_out, ex_out):
-            # The navigator tries a frontier first; after it aborted there, a look.
-            through = np.asarray([not manager.aborted_near(f.point_xy_m) for f in frontiers],
-                                 dtype=bool)
-            fp = self._frontier_params
-            relaxed = RelaxedMap(replace(fp, robot_radius_m=min(fp.robot_radius_m,
-                                                                sp.approach_radius_m)),
-                                 sp.speckle_max_cells,
-                                 self._det.extra_obstacles if sp.approach_keeps_objects
-                                 else None,
-                                 self._trail.mask(grid, sp.approach_trail_radius_m)
-                                 if sp.approach_trail_radius_m > 0 and len(self._trail)
-                                 else None)
-            out, d_out = approaches(grid, frontiers, dist, reach, relaxed, excluded, through)
-            ex_out = manager.excluded(out)
-        revisit = (self._revisits.goals(grid, frontiers, dist, reach, excluded,
-                                        manager.blacklist, sp, manager.aborted_near)
-                   if self._revisits.active(sp) and not self._any_selectable(out, d_out, ex_out)
-                   else None)
-        if revisit is not None:
-            out, d_out = revisit
-            ex_out = manager.excluded(out)
-        return out, d_out, ex_out
+        return self._fallbacks.goals(grid, frontiers, dist, excluded, reach,
+                                     self._selection_params, self._frontier_params,
+                                     self._det.extra_obstacles)
 
     def _start_cell(self, grid: GridMap, robot_rc: tuple[int, int], xy: tuple[float, float],
                     warnings: list[tuple[str, str]]) -> tuple[int, int] | None:

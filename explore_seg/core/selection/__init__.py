@@ -11,6 +11,9 @@ One concern per module:
 * :mod:`.goals`: :class:`GoalManager` (keep, switch, blacklist, done);
 * :mod:`.lookout`: lookout goals, when no frontier has a path (look at an unreachable one
   from a reachable spot in line of sight before exploration ends);
+* :mod:`.fallbacks`: the goals when no frontier is selectable, in turn: lookouts
+  (:mod:`.lookout`), approaches to a passage only speckle closes (:mod:`.blockage`),
+  revisits of the robot's path for a loop closure (:mod:`.revisit`);
 * the ``routed`` strategy: :mod:`.viewpoints` (ray-cast view gain, one viewpoint per
   group), :mod:`.tour` (open tour: greedy, 2-opt, Or-opt), :mod:`.router` (viewpoints +
   tour costs per decision, :class:`~.router.Router`).
