@@ -28,6 +28,7 @@ import argparse
 import json
 import math
 import os
+import shlex
 import sys
 from collections import Counter
 from pathlib import Path
@@ -482,6 +483,41 @@ def _noise_profile(profile: str, folder: Path, certs: list[dict[str, Any]],
     return profile, runs, ", ".join(sorted(set(codes)))
 
 
+#: run_bench.py options of one part, left out of the command that reruns a matrix: with
+#: their argument, and flags.
+_PART_OPTIONS = ("--merge", "--redo")
+_PART_FLAGS = ("--no-runs", "--prune")
+
+
+def rerun_command(command: str, out: Path) -> str:
+    """The command that reruns or continues the matrix of ``out``: ``command`` (a part's)
+    with ``--out`` the folder (relative to the repository when inside it) and without the
+    options of one part (``--merge DIR``, ``--redo X``, ``--no-runs``, ``--prune``)."""
+    try:
+        args = shlex.split(command)
+    except ValueError:
+        return command
+    folder = out.resolve()
+    folder_s = (folder.relative_to(ROOT).as_posix() if folder.is_relative_to(ROOT)
+                else str(out))
+    res: list[str] = []
+    i = 0
+    while i < len(args):
+        a = args[i]
+        name = a.split("=", 1)[0]
+        if name in _PART_OPTIONS or name in _PART_FLAGS:
+            i += 2 if a in _PART_OPTIONS else 1
+            continue
+        if name == "--out":
+            res.append("--out")
+            res.append(folder_s)
+            i += 2 if a == "--out" else 1
+            continue
+        res.append(a)
+        i += 1
+    return " ".join(shlex.quote(a) for a in res)
+
+
 def experiments_dir(out: Path) -> Path:
     """The experiment reports' folder of a bench folder: its own ``experiments/``, else
     its parent's (``bench/results/experiments`` for ``bench/results/matrix``), else its
@@ -502,7 +538,7 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
     exp_dir = experiments_dir(out)
     exp_rel = Path(os.path.relpath(exp_dir, md.parent)).as_posix()
     docs = Path(os.path.relpath(ROOT / "docs", md.parent)).as_posix()
-    cmd = command or meta.get("command", "bench/run_bench.py")
+    cmd = rerun_command(command or meta.get("command", "bench/run_bench.py"), out)
     tours_rows = read_csv(out / "tours.csv")
     tours = {r["world"]: float(r["tour_m"]) for r in tours_rows}
     area = {r["world"]: r.get("explorable_area_m2") for r in tours_rows}
@@ -538,7 +574,8 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
             first = next((p.get("started") for p in parts if p.get("code") == c), "-")
             L.append(f"| {lab} | `{c}` | {count[c]} | {first} |")
         L.append("")
-    L += ["Command (the last part; every part's command, commit and wall time are in "
+    L += ["Command (reruns the matrix, or continues it; every part's own command, commit and "
+          "wall time are in "
           f"[meta.json]({(rel / 'meta.json').as_posix()})):", "", "```sh",
           f".venv/bin/python {cmd}", "```", ""]
     wall = meta.get("wall_s")
@@ -573,8 +610,9 @@ def report_lines(out: Path, md: Path, runs: list[dict[str, Any]], codes: list[st
              "counts with its end time, a lower bound of its T95; n = seeds both ran when "
              "fewer than the runs); " if DEFAULT_STRATEGY in strategies else "")
           + "*path / tour* = median path "
-          "to 99 % over the world's full-knowledge coverage tour ([tours.csv]"
-          f"({(rel / 'tours.csv').as_posix()}); in brackets the runs that reached 99 % when "
+          "to 99 % over the world's full-knowledge coverage tour ("
+          + (f"[tours.csv]({(rel / 'tours.csv').as_posix()})" if tours_rows
+             else "none computed here: `-`") + "; in brackets the runs that reached 99 % when "
           "not all did). Setup: lock-step runs of the explorer's core on the simulator, "
           "seeded starts, the robot a 0.22 m disk ([docs/benchmarking.md]"
           f"({docs}/benchmarking.md#method)).", ""]

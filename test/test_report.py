@@ -269,6 +269,20 @@ def test_a_matrix_folder_links_the_experiment_reports_beside_it(tmp_path):
     assert "[benchmarks_old](results/experiments/benchmarks_old.md)" in text
 
 
+def test_the_command_shown_reruns_the_matrix_without_the_options_of_one_part(tmp_path):
+    cmd = ("bench/run_bench.py --out /elsewhere/matrix --worlds a,b --runs 15 --md '' "
+           "--resume --merge out/part --no-runs --redo=paper --prune --jobs 2")
+    inside = ROOT / "bench" / "results" / "matrix"
+    assert report.rerun_command(cmd, inside) == (
+        "bench/run_bench.py --out bench/results/matrix --worlds a,b --runs 15 --md '' "
+        "--resume --jobs 2")
+    assert report.rerun_command("bench/run_bench.py --out=x --runs 2", tmp_path / "m") == \
+        f"bench/run_bench.py --out {tmp_path / 'm'} --runs 2"
+    out = _folder(tmp_path / "m", [_rec("w", "routed", 0, A)])
+    text = report.write_all(out, tmp_path / "B.md", command=cmd).read_text()
+    assert f"bench/run_bench.py --out {out} --worlds a,b" in text and "--merge" not in text
+
+
 def test_benchmarks_md_in_the_repository_fits_in_400_lines():
     assert len((ROOT / "BENCHMARKS.md").read_text().splitlines()) <= 400
 
