@@ -191,6 +191,17 @@ def test_explorer_decides_on_what_the_scans_saw():
     assert cells[:, 1].max() >= 7
 
 
+def test_a_step_on_the_overlaid_map_says_it_detected():
+    """Frontiers found on the map with the scans laid over it are this step's detection
+    (the node publishes them, the benchmark times them); the same map again is not."""
+    ex, grid, pose = _explorer(overlay=True)
+    assert ex.step(0.0, grid, pose).detected
+    _look_into_the_room(ex, grid, 1.0)
+    after = ex.step(1.0, grid, pose)
+    assert after.detected and after.detect_s > 0
+    assert not ex.step(2.0, grid, pose).detected
+
+
 _POCKET = '''
 ##########
 #R.......#

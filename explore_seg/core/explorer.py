@@ -369,11 +369,13 @@ class Explorer:
         t0 = time.perf_counter()
         # the map near blacklisted goals changed: their frontiers are candidates again
         self.manager.retry_changed(grid, self._frontier_params.occupied_threshold)
+        key = self._key
         grid = self._seen_map(grid, layer, pose)
         # The goal manager gets the map as given (its stamp tells a newer map); everything
         # map-derived gets the map the products were made from (identity caches hit).
         stamped = grid
         detected, grid = self._detected(grid, layer)
+        detected = detected or self._key is not key     # or on the overlaid map, above
         x, y, yaw = (float(v) for v in pose)
         self._fallbacks.add(x, y)
         if self._strategy.candidates == "rrt":
