@@ -15,12 +15,18 @@ robot. :class:`SlamErrorModel` reproduces that mechanism:
   Each keyframe is mapped at ``D o sensor pose o jitter`` (per-scan jitter: the scan
   matcher's residual), so walls come out a few centimetres thick and doubled where the
   drift changed between two visits.
+* **Pose graph**: the keyframes are its nodes; consecutive keyframes are joined by the
+  drifted estimate's relative pose (odometry + scan matching), with the standard
+  deviations the drift accumulated between them.
 * **Loop closures**: when a new keyframe lies within ``loop_radius_m`` of a keyframe taken
   at least ``loop_min_travel_m`` of travel earlier (and that much travel after the last
-  closure), the current drift is reset to that keyframe's, and the correction is spread
-  over the keyframes since the last closure in proportion to the distance travelled (what
-  a pose-graph optimisation does with one loop constraint). The map is then re-rendered
-  from the corrected keyframe poses, unless no keyframe moved by half a cell.
+  closure), an edge joins the two with their true relative pose (the scan match), with
+  the per-keyframe jitter as its standard deviation, and the whole graph is re-solved by
+  least squares (:func:`sim_bridge.pose_graph.optimise`, keyframe 0 fixed), as
+  slam_toolbox's optimiser does at a closure: the correction spreads over the loop, and
+  keyframes mapped before earlier closures move too where a loop passes through them. The
+  current drift becomes the new keyframe's. The map is then re-rendered from the
+  corrected keyframe poses, unless no keyframe moved by half a cell.
 
 Navigation and collisions stay in the true world; the explorer gets the map and the SLAM
 pose. Nothing here draws from the simulator's sensor noise generator, so sensor noise is
@@ -40,10 +46,14 @@ from explore_seg.core.fields import check_non_negative, param_meta
 from explore_seg.core.grid import GridMap
 from explore_seg.core.pose_fusion import Pose2D, compose, inverse
 from sim_bridge.mapping import MappingParams, ScanMapper
+from sim_bridge.pose_graph import Edges, optimise
 
 #: Below this true displacement between two scans (m, rad) the robot counts as standing
 #: still: no drift accumulates.
 _STILL_M, _STILL_RAD = 1e-6, 1e-6
+#: Smallest standard deviations of a pose-graph edge (m, rad): with zero drift or jitter
+#: the optimisation still has finite weights.
+_MIN_SIGMA_M, _MIN_SIGMA_RAD = 1e-4, 1e-5
 
 
 def is_keyframe(last: Pose2D | None, pose: Pose2D, min_travel_m: float,
@@ -185,15 +195,18 @@ class SlamErrorModel:
         self._drift: Pose2D = (0.0, 0.0, 0.0)
         self._last_true: Pose2D | None = None
         self._path_m = 0.0
+        self._turn_rad = 0.0
         # Keyframes: true base pose, true sensor pose, drift and jitter at capture, ranges,
-        # travel at capture.
+        # travel and turning at capture.
         self._kf_base: list[Pose2D] = []
         self._kf_sensor: list[Pose2D] = []
         self._kf_drift: list[Pose2D] = []
         self._kf_jitter: list[Pose2D] = []
         self._kf_ranges: list[npt.NDArray[np.float32]] = []
         self._kf_path: list[float] = []
-        self._last_closure_kf = 0
+        self._kf_turn: list[float] = []
+        # Pose-graph edges: (i, j, measured pose of j in i's frame, (sigma_xy, sigma_yaw)).
+        self._edges: list[tuple[int, int, Pose2D, tuple[float, float]]] = []
         self._last_closure_path_m = 0.0
         self.closures: list[LoopClosure] = []
 
@@ -255,7 +268,10 @@ class SlamErrorModel:
                                 float(jyaw) * p.jitter_yaw_rad))
         self._kf_ranges.append(np.array(ranges, dtype=np.float32))
         self._kf_path.append(self._path_m)
+        self._kf_turn.append(self._turn_rad)
         k = len(self._kf_base) - 1
+        if k > 0:
+            self._edges.append(self._odometry_edge(k))
         matched = self._loop_candidate(k)
         if matched is not None and self._close_loop(k, matched):
             return True
@@ -281,6 +297,7 @@ class SlamErrorModel:
         if dist <= _STILL_M and turn <= _STILL_RAD:
             return
         self._path_m += dist
+        self._turn_rad += turn
         p = self.params
         nx, ny, nyaw = self._rng.normal(0.0, 1.0, 3)
         s_xy = p.drift_xy_m * math.sqrt(dist)
@@ -309,30 +326,44 @@ class SlamErrorModel:
         best = int(np.argmin(d))
         return int(old[best]) if d[best] <= p.loop_radius_m else None
 
+    def _odometry_edge(self, k: int) -> tuple[int, int, Pose2D, tuple[float, float]]:
+        """The edge from keyframe ``k - 1`` to ``k``: the drifted estimate's relative pose,
+        with the standard deviations of the drift accumulated between them."""
+        p = self.params
+        prev = compose(self._kf_drift[k - 1], self._kf_base[k - 1])
+        z = compose(inverse(prev), compose(self._drift, self._kf_base[k]))
+        dist = self._kf_path[k] - self._kf_path[k - 1]
+        turn = self._kf_turn[k] - self._kf_turn[k - 1]
+        s_xy = max(p.drift_xy_m * math.sqrt(dist), _MIN_SIGMA_M)
+        s_yaw = max(math.sqrt(p.drift_yaw_per_m_rad ** 2 * dist
+                              + p.drift_yaw_per_rad ** 2 * turn), _MIN_SIGMA_RAD)
+        return k - 1, k, z, (s_xy, s_yaw)
+
     def _close_loop(self, k: int, j: int) -> bool:
-        """Reset the drift to keyframe ``j``'s, spread the correction over the keyframes
-        since the last closure (or since ``j``); True when the map was re-rendered."""
-        target, current = self._kf_drift[j], self._kf_drift[k]
-        anchor = max(j, self._last_closure_kf)
-        span = self._kf_path[k] - self._kf_path[anchor]
-        delta = (target[0] - current[0], target[1] - current[1],
-                 wrap_angle(target[2] - current[2]))
-        before = [self.keyframe_pose(i) for i in range(anchor + 1, k + 1)]
-        for i in range(anchor + 1, k + 1):
-            w = (self._kf_path[i] - self._kf_path[anchor]) / span if span > 0 else 1.0
-            d = self._kf_drift[i]
-            self._kf_drift[i] = (d[0] + w * delta[0], d[1] + w * delta[1],
-                                 wrap_angle(d[2] + w * delta[2]))
+        """Join keyframes ``j`` and ``k`` by their true relative pose and re-solve the
+        graph; True when the map was re-rendered."""
+        p = self.params
+        z = compose(inverse(self._kf_base[j]), self._kf_base[k])
+        self._edges.append((j, k, z, (max(p.jitter_xy_m, _MIN_SIGMA_M),
+                                      max(p.jitter_yaw_rad, _MIN_SIGMA_RAD))))
+        n = len(self._kf_base)
+        before = [self.keyframe_pose(i) for i in range(n)]
+        start = np.asarray([compose(self._kf_drift[i], self._kf_base[i]) for i in range(n)])
+        edges = Edges(np.asarray([e[0] for e in self._edges], dtype=np.int64),
+                      np.asarray([e[1] for e in self._edges], dtype=np.int64),
+                      np.asarray([e[2] for e in self._edges], dtype=np.float64),
+                      np.asarray([e[3] for e in self._edges], dtype=np.float64))
+        solved = optimise(start, edges, fixed=0)
+        self._kf_drift = [compose(tuple(float(v) for v in solved[i]),  # type: ignore[arg-type]
+                                  inverse(self._kf_base[i])) for i in range(n)]
         old_pose = self.estimate(self._last_true)  # type: ignore[arg-type]
         self._drift = self._kf_drift[k]
         new_pose = self.estimate(self._last_true)  # type: ignore[arg-type]
-        self._last_closure_kf = k
         self._last_closure_path_m = self._kf_path[k]
         # Re-render only when some keyframe's beams moved by half a cell at full range.
         moved = max(math.hypot(a[0] - b[0], a[1] - b[1])
                     + abs(wrap_angle(a[2] - b[2])) * self._lidar.range_max_m
-                    for a, b in zip(before, (self.keyframe_pose(i)
-                                             for i in range(anchor + 1, k + 1))))
+                    for a, b in zip(before, (self.keyframe_pose(i) for i in range(n))))
         rerender = moved > 0.5 * self._mapping.resolution_m
         self.closures.append(LoopClosure(
             k, j, math.hypot(new_pose[0] - old_pose[0], new_pose[1] - old_pose[1]),
