@@ -92,6 +92,24 @@ def test_load_node_params_merges_wildcard(tmp_path):
         load_node_params(f, "target_selector")
 
 
+def test_load_node_params_sees_an_edited_file_and_returns_own_values(tmp_path):
+    """The parsed file is cached, but an edit (new size or time) is read again, and a
+    caller changing the values it got does not change what the next caller gets."""
+    import os
+
+    f = tmp_path / "p.yaml"
+    f.write_text("n:\n  ros__parameters:\n    a: [1, 2]\n    b: 1\n")
+    got = load_node_params(f, "n")
+    got["a"].append(3)
+    assert load_node_params(f, "n") == {"a": [1, 2], "b": 1}
+    st = f.stat()
+    f.write_text("n:\n  ros__parameters:\n    a: [1, 2]\n    b: 2\n")   # same size
+    os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns + 1_000_000))
+    assert load_node_params(f, "n")["b"] == 2
+    f.write_text("n:\n  ros__parameters:\n    b: 30\n")
+    assert load_node_params(f, "n") == {"b": 30}
+
+
 def test_explorer_puts_its_default_params_file_before_the_callers_overrides():
     """rcl applies parameter arguments in order (the last wins): the default file must
     come first so that a caller's ``-p detector.backend:=oracle`` is not overridden."""
