@@ -8,9 +8,10 @@ simulator's mapping error model (:mod:`sim_bridge.slam_error`) does the same wit
 
 Each step solves the sparse normal equations with SuperLU (``scipy.sparse.linalg.spsolve``).
 ``scipy.optimize.least_squares`` takes sparse Jacobians only with its iterative ``lsmr``
-solver; on a pose graph (a long chain closed by one stiff loop edge, condition numbers
-of 1e6 and more) each of its steps is approximate where a direct solve is exact, so the
-hand-written iteration is the few lines around a library solve.
+trust-region solver; on random-walk graphs with loops (``test/test_sim_pose_graph.py``'s
+``_graph``) it took 9.1 CPU s for 100 nodes and 291 s for 400 (119,700 evaluations) and
+stopped short of the minimum (cost 55.7 against 53.6, poses up to 1.7 m apart), where this
+Gauss-Newton iteration took 0.006 and 0.025 s: hence the few lines around a library solve.
 """
 
 from __future__ import annotations
