@@ -17,6 +17,7 @@ import os
 import queue
 import signal
 import sys
+import threading
 import time
 from typing import Any, Callable, Iterator
 
@@ -126,22 +127,46 @@ def _worker_init() -> None:
 
 def _stop_handler_not_inherited() -> None:
     """In a child just forked: SIGTERM back to its default (the child dies) when the
-    parent had :func:`catch_stop_signals`' handler. A Python-level handler runs only when
-    the child runs bytecode, so a worker stuck in C before :func:`_worker_init` (a lock
-    another thread of the parent held at the fork, such as stderr's) would survive the
-    pool's terminate, and its join would hang."""
+    parent had :func:`catch_stop_signals`' handler, then unblocked (:func:`_hold_stop`).
+    A Python-level handler runs only when the child runs bytecode, so a worker stuck in C
+    before :func:`_worker_init` (a lock another thread of the parent held at the fork,
+    such as stderr's) would survive the pool's terminate, and its join would hang."""
     if signal.getsignal(signal.SIGTERM) is _raise_interrupt:
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _release_stop()
 
 
+def _hold_stop() -> None:
+    """Before a fork: block SIGTERM in the forking thread, so that one sent to the child
+    before :func:`_stop_handler_not_inherited` runs (a pool terminated right after it
+    forked a worker) waits for the default disposition instead of reaching the parent's
+    Python-level handler, which a child stuck in C never runs. The parent's other threads
+    still take a SIGTERM meant for the parent."""
+    _FORK_MASK.blocked = signal.SIGTERM in signal.pthread_sigmask(signal.SIG_BLOCK,
+                                                                   {signal.SIGTERM})
+
+
+def _release_stop() -> None:
+    """After a fork (parent and child): SIGTERM unblocked again unless it was before."""
+    if not getattr(_FORK_MASK, "blocked", True):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
+
+
+_FORK_MASK = threading.local()
 _AT_FORK_HOOK = [False]
+
+
+def install_fork_hooks() -> None:
+    """Register the fork hooks above once per process (:func:`worker_pool` does)."""
+    if not _AT_FORK_HOOK[0]:
+        os.register_at_fork(before=_hold_stop, after_in_parent=_release_stop,
+                            after_in_child=_stop_handler_not_inherited)
+        _AT_FORK_HOOK[0] = True
 
 
 def worker_pool(jobs: int) -> Any:
     """``jobs`` forked worker processes (they inherit the loaded worlds and parameters)."""
-    if not _AT_FORK_HOOK[0]:
-        os.register_at_fork(after_in_child=_stop_handler_not_inherited)
-        _AT_FORK_HOOK[0] = True
+    install_fork_hooks()
     return mp.get_context("fork").Pool(jobs, initializer=_worker_init, maxtasksperchild=20)
 
 

@@ -96,3 +96,37 @@ def test_workers_do_not_inherit_the_stop_handler(tmp_path, monkeypatch):
         bench_tasks.restore_signals(old)
     seen = [p.read_text() for p in tmp_path.iterdir()]
     assert seen and set(seen) == {"default"}
+
+
+def test_a_sigterm_before_the_fork_hook_still_stops_the_worker(tmp_path):
+    """A pool terminated right after it forked a worker: the SIGTERM reaches the child
+    before the at-fork hook that restores SIGTERM's default. It waits (blocked across the
+    fork) and then kills the child, instead of going to the parent's Python-level handler,
+    which a child stuck in C never runs. A fresh interpreter, so that the test's own
+    at-fork hook runs before the benchmark's."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = (
+        "import os, signal\n"
+        "armed = [False]\n"
+        "os.register_at_fork(after_in_child=lambda: armed[0] and "
+        "os.kill(os.getpid(), signal.SIGTERM))\n"
+        "from bench import tasks\n"
+        "tasks.install_fork_hooks()\n"
+        "old = tasks.catch_stop_signals()\n"
+        "armed[0] = True\n"
+        "pid = os.fork()\n"
+        "if pid == 0:\n"
+        "    os._exit(0)\n"
+        "armed[0] = False\n"
+        "_, status = os.waitpid(pid, 0)\n"
+        "print('killed' if os.WIFSIGNALED(status) and "
+        "os.WTERMSIG(status) == signal.SIGTERM else f'exit {status}')\n"
+        "print(signal.SIGTERM in signal.pthread_sigmask(signal.SIG_BLOCK, set()))\n")
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, "-c", script], cwd=root, capture_output=True,
+                         text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["killed", "False"], out.stdout + out.stderr
