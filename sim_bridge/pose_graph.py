@@ -23,6 +23,8 @@ import numpy.typing as npt
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from explore_seg.core.angles import wrap_angles
+
 #: Gauss-Newton stops when no pose moves more than this (m or rad) in one step.
 _CONVERGED = 1e-7
 
@@ -47,10 +49,6 @@ class Edges:
             raise ValueError("edge standard deviations must be finite and > 0")
 
 
-def _wrap(a: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
-    return (a + np.pi) % (2.0 * np.pi) - np.pi
-
-
 def residuals(poses: npt.NDArray[np.float64], edges: Edges) -> npt.NDArray[np.float64]:
     """The edges' errors (predicted minus measured relative pose, yaw wrapped), ``(m, 3)``,
     unweighted."""
@@ -59,7 +57,7 @@ def residuals(poses: npt.NDArray[np.float64], edges: Edges) -> npt.NDArray[np.fl
     dx, dy = pj[:, 0] - pi[:, 0], pj[:, 1] - pi[:, 1]
     return np.column_stack((c * dx + s * dy - edges.z[:, 0],
                             -s * dx + c * dy - edges.z[:, 1],
-                            _wrap(pj[:, 2] - pi[:, 2] - edges.z[:, 2])))
+                            wrap_angles(pj[:, 2] - pi[:, 2] - edges.z[:, 2])))
 
 
 def _jacobian(poses: npt.NDArray[np.float64], edges: Edges) -> sp.csr_matrix:
@@ -131,5 +129,5 @@ def optimise(poses: npt.NDArray[np.float64], edges: Edges, fixed: int = 0,
         x += step.reshape(n, 3)
         if np.max(np.abs(step)) < _CONVERGED:
             break
-    x[:, 2] = _wrap(x[:, 2])
+    x[:, 2] = wrap_angles(x[:, 2])
     return x

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from explore_seg.core.angles import wrap_angle
+from explore_seg.core.angles import wrap_angle, wrap_angles
 from explore_seg.core.pose_fusion import compose, inverse
 from sim_bridge.navigation import wrap_angle as nav_wrap_angle
 
@@ -66,3 +66,10 @@ def test_navigation_and_pose_fusion_share_the_function():
     # compose / inverse give headings in [-pi, pi): a half turn composed is -pi.
     assert compose((0.0, 0.0, 0.5 * PI), (0.0, 0.0, 0.5 * PI))[2] == -PI
     assert inverse((0.0, 0.0, -PI))[2] == -PI
+
+
+def test_the_array_form_gives_the_scalar_values():
+    rng = np.random.default_rng(2)
+    values = np.concatenate([rng.uniform(-40.0, 40.0, 5000),
+                             [PI, -PI, 2 * PI, math.nextafter(-PI, -math.inf), 0.0]])
+    assert wrap_angles(values).tolist() == [wrap_angle(float(a)) for a in values]

@@ -4,19 +4,17 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
+from explore_seg.core.pose_fusion import compose, inverse
 from sim_bridge.pose_graph import Edges, _jacobian, optimise, residuals
 
 
 def _compose(a, b):
-    c, s = np.cos(a[2]), np.sin(a[2])
-    return np.array([a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], a[2] + b[2]])
+    return np.array(compose(tuple(a), tuple(b)))
 
 
 def _relative(a, b):
-    c, s = np.cos(a[2]), np.sin(a[2])
-    dx, dy = b[0] - a[0], b[1] - a[1]
-    return np.array([c * dx + s * dy, -s * dx + c * dy,
-                     (b[2] - a[2] + np.pi) % (2 * np.pi) - np.pi])
+    """The pose ``b`` in the frame of ``a``."""
+    return np.array(compose(inverse(tuple(a)), tuple(b)))
 
 
 def _graph(seed: int, n: int = 30, loops: int = 4):

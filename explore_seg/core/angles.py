@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+import numpy.typing as npt
+
 
 def wrap_angle(a: float) -> float:
     """``a`` wrapped to the half-open range [-pi, pi).
@@ -33,3 +36,13 @@ def wrap_angle(a: float) -> float:
     """
     w = (a + math.pi) % (2.0 * math.pi) - math.pi
     return w if w < math.pi else -math.pi
+
+
+def wrap_angles(a: npt.ArrayLike) -> npt.NDArray[np.float64]:
+    """:func:`wrap_angle` of every element of ``a`` (same convention: [-pi, pi)).
+
+    >>> wrap_angles([math.pi, -math.pi, 1.5 * math.pi]).round(6).tolist()
+    [-3.141593, -3.141593, -1.570796]
+    """
+    w = (np.asarray(a, dtype=np.float64) + math.pi) % (2.0 * math.pi) - math.pi
+    return np.where(w < math.pi, w, -math.pi)
