@@ -4,7 +4,8 @@ A benchmark folder holds runs of one mapping error profile (``bench/run_bench.py
 --mapping-noise PROFILE``, :class:`sim_bridge.engine.SimParams` ``mapping_error``). The
 report of the noise-free folder takes the folders of the other profiles
 (``bench/report.py OUT --mapping-noise-dir realistic=OUT_R``) and gives, per strategy and
-profile, over the worlds both ran: runs, complete, runs that ended "done" below
+profile, over the worlds both ran: runs and their seeds (a profile's folder may hold fewer
+seeds than the noise-free one), complete, runs that ended "done" below
 :data:`EARLY_DONE_PCT` (exploration declared finished too early: the failure a noisy map
 causes), contacts, median T95, and the median per-seed ratio of T95 to the same
 strategy's noise-free run on the same world and seeded start, with its bootstrap
@@ -17,6 +18,8 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+
+from bench.store import seed_ranges
 
 #: A run that ends "done" below this coverage stopped exploring too early.
 EARLY_DONE_PCT = 97.0
@@ -75,7 +78,7 @@ def noise_lines(base: list[dict[str, Any]], profiles: list[tuple[str, list[dict[
         report's others.
     """
     ref = {(r["world"], r["strategy"], int(r["seed"])): r for r in base}
-    head = ("| strategy | mapping error | worlds | runs | complete | done < "
+    head = ("| strategy | mapping error | worlds | runs | seeds | complete | done < "
             f"{EARLY_DONE_PCT:.0f} % | contacts | median T95 [s] | T95 ÷ no error [95 % CI] |")
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
     rows = [("none", base)] + [(p, rs) for p, rs, _ in profiles]
@@ -86,6 +89,7 @@ def noise_lines(base: list[dict[str, Any]], profiles: list[tuple[str, list[dict[
                 continue
             n = len(mine)
             line = (f"| {st} | {profile} | {len({r['world'] for r in mine})} | {n} | "
+                    f"{seed_ranges(sorted({int(r['seed']) for r in mine}))} | "
                     f"{sum(1 for r in mine if r['completed'])}/{n} | "
                     f"{sum(1 for r in mine if early_done(r))} | "
                     f"{sum(int(r.get('collisions') or 0) for r in mine)} | "

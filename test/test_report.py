@@ -365,17 +365,21 @@ def test_the_table_under_mapping_error_pairs_each_run_with_its_noise_free_one(tm
     real += [_rec("w", "nearest", 0, A, t95=None, stop_reason="done", coverage_pct=90.0),
              _rec("w", "nearest", 1, A, t95=None, stop_reason="done", coverage_pct=98.0),
              _rec("w", "nearest", 2, A, t95=120.0, collisions=2)]
+    real += [_rec("w", "paper", 1, A, t95=130.0)]    # a strategy with fewer seeds
+    base += [_rec("w", "paper", k, A, t95=100.0) for k in range(3)]
     out = _folder(tmp_path / "none", base)
     noisy = _folder(tmp_path / "realistic", real)
     md = report.write_all(out, tmp_path / "B.md", command="x",
                           noise_dirs=[("realistic", noisy)]).read_text()
     assert "## Under mapping error" in md
-    assert "| routed | none | 1 | 3 | 3/3 | 0 | 0 | 110 | 1 (reference) |" in md
-    assert "| routed | realistic | 1 | 3 | 3/3 | 0 | 0 | 121 | 1.10 [1.10, 1.10] |" in md
+    assert "| routed | none | 1 | 3 | 0-2 | 3/3 | 0 | 0 | 110 | 1 (reference) |" in md
+    assert "| routed | realistic | 1 | 3 | 0-2 | 3/3 | 0 | 0 | 121 | 1.10 [1.10, 1.10] |" in md
+    # the seeds each row ran, paired with the noise-free run of the same seed
+    assert "| paper | realistic | 1 | 1 | 1 | 1/1 | 0 | 0 | 130 | 1.30 [1.30, 1.30] |" in md
     row = next(ln for ln in md.splitlines() if ln.startswith("| nearest | realistic |"))
     # one "done" below 97 %, one at 98 % (not early), contacts 2, the seeds without a
     # T95 count with their end time (†)
-    assert row.startswith("| nearest | realistic | 1 | 3 | 1/3 | 1 | 2 |") and "†" in row
+    assert row.startswith("| nearest | realistic | 1 | 3 | 0-2 | 1/3 | 1 | 2 |") and "†" in row
     assert "`realistic` on `aaaaaaa11111`" in md
 
 
