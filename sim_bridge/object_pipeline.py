@@ -21,7 +21,7 @@ from explore_seg.core.camera import CameraIntrinsics
 from explore_seg.core.detector import Detector, DetectorParams
 from explore_seg.core.objects import WALL_OCCUPIED_THRESHOLD, DepthFrame, ObjectMap, ObjectParams, \
     WallMask, load_priors, process_frame, wall_mask
-from explore_seg.core.pose_fusion import compose, inverse
+from explore_seg.core.pose_fusion import Pose2D, compose, inverse
 from sim_bridge.engine import SimEngine
 from sim_bridge.sensors import CLASS_IDS
 
@@ -60,12 +60,23 @@ class ClosureWatch:
 
     def rerendered(self) -> bool:
         """True when a closure since the last call re-rendered the map."""
+        return self.correction() is not None
+
+    def correction(self) -> Pose2D | None:
+        """The closures since the last call when one of them re-rendered the map: the
+        rigid map-frame transform their pose jumps make together (the first applied
+        first); None otherwise."""
         slam = self.engine.slam_error
         if slam is None or len(slam.closures) == self._seen:
-            return False
+            return None
         new = slam.closures[self._seen:]
         self._seen = len(slam.closures)
-        return any(c.rerendered for c in new)
+        if not any(c.rerendered for c in new):
+            return None
+        jump: Pose2D = (0.0, 0.0, 0.0)
+        for c in new:
+            jump = compose(c.jump, jump)
+        return jump
 
 
 class ObjectPipeline:
@@ -94,16 +105,20 @@ class ObjectPipeline:
 
     def _after_correction(self) -> None:
         """A loop closure that re-rendered the map since the last call: forget the boxes
-        and depth voxels placed since the previous one (:meth:`ObjectMap.forget_since`).
+        and depth voxels placed since the previous one, but move those of the last
+        ``correction_move_recent_s`` with the SLAM pose's jump
+        (:meth:`ObjectMap.forget_since`).
 
         The simulator's own record of its closures is the signal (exact: no closure
         missed, none invented); the object_costmap node, which has no such record,
         detects corrections from its inputs (:mod:`explore_seg.core.corrections`).
         """
-        if not self._closures.rerendered():
+        jump = self._closures.correction()
+        if jump is None:
             return
         self.map.forget_since(None if self._correction_s == -math.inf
-                              else int(round(self._correction_s * 1e9)))
+                              else int(round(self._correction_s * 1e9)),
+                              jump, int(round(self.engine.time_s * 1e9)))
         self._correction_s = self.engine.time_s
 
     def _wall_mask(self) -> WallMask:

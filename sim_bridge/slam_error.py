@@ -150,6 +150,9 @@ class LoopClosure:
     shift_m: float
     shift_rad: float
     rerendered: bool
+    #: The rigid map-frame transform that took the SLAM pose from before to after it
+    #: (``drift after o drift before^-1``).
+    jump: Pose2D = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -357,7 +360,7 @@ class SlamErrorModel:
         self._kf_drift = [compose(tuple(float(v) for v in solved[i]),  # type: ignore[arg-type]
                                   inverse(self._kf_base[i])) for i in range(n)]
         old_pose = self.estimate(self._last_true)  # type: ignore[arg-type]
-        self._drift = self._kf_drift[k]
+        old_drift, self._drift = self._drift, self._kf_drift[k]
         new_pose = self.estimate(self._last_true)  # type: ignore[arg-type]
         self._last_closure_path_m = self._kf_path[k]
         # Re-render only when some keyframe's beams moved by half a cell at full range.
@@ -367,7 +370,8 @@ class SlamErrorModel:
         rerender = moved > 0.5 * self._mapping.resolution_m
         self.closures.append(LoopClosure(
             k, j, math.hypot(new_pose[0] - old_pose[0], new_pose[1] - old_pose[1]),
-            abs(wrap_angle(new_pose[2] - old_pose[2])), rerender))
+            abs(wrap_angle(new_pose[2] - old_pose[2])), rerender,
+            compose(self._drift, inverse(old_drift))))
         if rerender:
             self._rerender()
         return rerender

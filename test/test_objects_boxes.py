@@ -63,3 +63,30 @@ def test_cluster_far_beyond_the_prior_is_dropped_not_clamped():
     assert not plausible_extent(np.vstack([chair_pts, wall_pts]), prior, p)
     assert plausible_extent(np.vstack([chair_pts, wall_pts]), prior,
                             ObjectParams(prior_reject_factor=0.0))
+
+
+def test_a_moved_box_keeps_its_shape_and_turns_its_sides_with_its_axes():
+    """Object3D.moved: the footprint's corners go where the transform takes them (sizes
+    and heights kept); when the heading wraps by pi the open sides swap with the axes;
+    the measured footprint and surface move too."""
+    from explore_seg.core.objects import Object3D
+    surface = np.array([[1.2, 0.1, 0.7], [0.8, -0.1, 0.7]], np.float32)
+    b = Object3D("dining table", 0.9, (1.0, 0.0, 0.37), (0.9, 0.6, 0.74), 0.2, 50,
+                 (1.0, 0.0, 0.8, 0.5), (True, False, False, True), surface)
+    for jump in [(0.3, -0.2, 0.1), (0.0, 0.0, 1.5), (-1.0, 2.0, -2.9)]:
+        m = b.moved(jump)
+        c, s = np.cos(jump[2]), np.sin(jump[2])
+        rot = np.array([[c, -s], [s, c]])
+        want = b.footprint() @ rot.T + np.array(jump[:2])
+        got = m.footprint()
+        # the same four corners (their order may start elsewhere)
+        assert all(np.min(np.hypot(*(got - w).T)) < 1e-9 for w in want)
+        assert m.size_xyz == b.size_xyz and m.center_xyz[2] == b.center_xyz[2]
+        assert -np.pi / 2 <= m.yaw < np.pi / 2
+        flipped = abs(np.cos(m.yaw - (b.yaw + jump[2])) + 1.0) < 1e-9
+        assert m.open_sides == ((False, True, True, False) if flipped
+                                else (True, False, False, True))
+        np.testing.assert_allclose(m.measured_xy[:2], rot @ [1.0, 0.0] + jump[:2])
+        np.testing.assert_allclose(m.surface[:, :2], surface[:, :2] @ rot.T + jump[:2],
+                                   atol=1e-6)
+    assert b.moved((0.0, 0.0, 1.5)).open_sides == (False, True, True, False)   # 1.7 wraps

@@ -300,3 +300,44 @@ def test_after_a_clock_jump_back_the_voxels_decay_from_the_new_time():
     om.update([make_obj(2.0, 0.0, "chair")], None, 1000 * 10**9)
     om.time_went_back(10 * 10**9)
     assert [t.last_seen_ns for t in om.tracked] == [10 * 10**9]
+
+
+def test_forget_since_moves_the_voxels_of_the_last_moments_with_the_jump():
+    """With the correction's jump, voxels marked at or after ``recent_s`` move by it
+    (binned again; one landing on a kept voxel keeps the higher score and the later
+    stamp); those marked since the previous correction but before ``recent_s`` go; older
+    ones stay where they are."""
+    d = DepthObstacles(ObjectParams())
+    pose = camera_pose(**PAPER_CAM)
+    d.update(DepthFrame(render_depth([LOW_BOX], pose), K, pose), 0.0)      # before: kept
+    kept = d.centres()
+    behind = camera_pose(yaw=np.pi, **PAPER_CAM)
+    d.update(DepthFrame(render_depth([box_parts((-1.5, 0.1), (0.3, 0.3, 0.12))], behind),
+                        K, behind), 6.0)                                   # since: goes
+    d.update(DepthFrame(render_depth([box_parts((0.1, 1.5), (0.3, 0.3, 0.12))],
+                                     camera_pose(yaw=np.pi / 2, **PAPER_CAM)), K,
+                        camera_pose(yaw=np.pi / 2, **PAPER_CAM)), 9.0)     # recent: moves
+    recent = d.centres()[d.centres()[:, 1] > 1.0]
+    assert len(recent) > 0
+    v = ObjectParams().depth_voxel_m
+    jump = (0.0, -0.3, np.pi / 2)            # turns the recent box's voxels onto x < 0
+    assert d.forget_since(5.0, jump, recent_s=8.0)
+    got = {tuple(np.round(c, 6)) for c in d.centres()}
+    x = -recent[:, 1] + jump[0]
+    y = recent[:, 0] - 0.3
+    moved = {(round((np.floor(a / v) + 0.5) * v, 6), round((np.floor(b / v) + 0.5) * v, 6),
+              round(z, 6)) for a, b, z in zip(x, y, recent[:, 2])}
+    assert got == {tuple(np.round(c, 6)) for c in kept} | moved
+    # without the jump the recent voxels go too, as before
+    e = DepthObstacles(ObjectParams())
+    e.update(DepthFrame(render_depth([LOW_BOX], pose), K, pose), 9.0)
+    assert e.forget_since(5.0, None, recent_s=8.0) and len(e) == 0
+
+
+def test_moved_voxels_that_land_on_kept_ones_keep_the_higher_score():
+    from explore_seg.core.objects.depth_obstacles import _merge
+    keys, score, stamp = _merge(np.array([3, 7], np.int64), np.array([1, 5], np.int16),
+                                np.array([1.0, 2.0]), np.array([7, 7, 9], np.int64),
+                                np.array([2, 6, 1], np.int16), np.array([9.0, 3.0, 4.0]))
+    assert keys.tolist() == [3, 7, 9] and score.tolist() == [1, 6, 1]
+    assert stamp.tolist() == [1.0, 9.0, 4.0]

@@ -181,6 +181,11 @@ def test_a_loop_closure_moves_map_and_slam_pose_together():
     jump = math.hypot(after[0] - before[0], after[1] - before[1])
     # (the estimate before add_scan lacks that scan's own drift step: < 1 cm)
     assert jump == pytest.approx(c.shift_m, abs=0.01) and c.shift_m > 0.02
+    # The closure's jump is the rigid transform between the SLAM poses (what the object
+    # layer moves its last marks by): after ~ jump o before, up to that scan's drift step.
+    moved = compose(c.jump, before)
+    assert math.hypot(moved[0] - after[0], moved[1] - after[1]) < 0.01
+    assert abs(math.remainder(moved[2] - after[2], 2 * math.pi)) < 0.01
     # The current scan, projected from the corrected SLAM pose, lands on the walls of the
     # re-rendered map.
     assert _hit_fraction(grid, after, ranges, sp) > 0.9

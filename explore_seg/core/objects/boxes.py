@@ -12,7 +12,7 @@ import numpy as np
 import numpy.typing as npt
 
 from explore_seg.core.objects.cloud import voxel_downsample
-from explore_seg.core.objects.geometry import footprint_orientation, rect_corners
+from explore_seg.core.objects.geometry import footprint_orientation, rect_corners, wrap_half_pi
 from explore_seg.core.objects.params import ObjectParams
 from explore_seg.core.objects.priors import SizePrior
 
@@ -66,6 +66,39 @@ class Object3D:
     def footprint(self) -> npt.NDArray[np.float64]:
         """The 4 corners (x, y) of the footprint, counter-clockwise, shape (4, 2)."""
         return rect_corners(self.center_xyz[:2], self.size_xyz[:2], self.yaw)
+
+    def moved(self, transform: tuple[float, float, float]) -> Object3D:
+        """The box moved by the rigid map-frame transform ``(x, y, yaw)`` (a point p goes
+        to ``R(yaw) p + (x, y)``): centre, heading, measured footprint and surface; the
+        sizes and heights stay. When the heading wraps by pi (it is kept in
+        [-pi/2, pi/2)), the box's own axes turn round and the open sides swap.
+
+        >>> b = Object3D("chair", 0.9, (1.0, 0.0, 0.4), (0.5, 0.4, 0.8), 0.0, 10)
+        >>> m = b.moved((0.5, 0.0, math.pi / 2))
+        >>> [round(v, 6) for v in m.center_xyz], round(m.yaw, 6)
+        ([0.5, 1.0, 0.4], -1.570796)
+        """
+        tx, ty, th = (float(v) for v in transform)
+        c, s = math.cos(th), math.sin(th)
+        x, y, z = self.center_xyz
+        yaw = wrap_half_pi(self.yaw + th)
+        # the wrap took off an odd multiple of pi: the box's axes point the other way
+        flipped = abs(math.remainder(yaw - self.yaw - th, 2.0 * math.pi)) > 0.5 * math.pi
+        measured = self.measured_xy
+        if measured is not None:
+            mx, my, ex, ey = measured
+            measured = (c * mx - s * my + tx, s * mx + c * my + ty, ex, ey)
+        sides = self.open_sides
+        if flipped:
+            sides = (sides[1], sides[0], sides[3], sides[2])
+        surface = self.surface
+        if surface is not None:
+            pts = np.asarray(surface, dtype=np.float64)
+            surface = np.column_stack([c * pts[:, 0] - s * pts[:, 1] + tx,
+                                       s * pts[:, 0] + c * pts[:, 1] + ty,
+                                       pts[:, 2]]).astype(np.float32)
+        return Object3D(self.cls, self.score, (c * x - s * y + tx, s * x + c * y + ty, z),
+                        self.size_xyz, yaw, self.n_points, measured, sides, surface)
 
 
 #: Most points an object keeps of its measured surface (:attr:`Object3D.surface`).

@@ -76,6 +76,21 @@ def _unpack(keys: npt.NDArray[np.int64]) -> tuple[npt.NDArray[np.int64], ...]:
     return ix, iy, iz
 
 
+def _merge(keys: npt.NDArray[np.int64], score: npt.NDArray[np.int16],
+           stamp: npt.NDArray[np.float64], keys2: npt.NDArray[np.int64],
+           score2: npt.NDArray[np.int16], stamp2: npt.NDArray[np.float64]
+           ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int16], npt.NDArray[np.float64]]:
+    """Two sets of voxels as one, sorted by key; a key in both (or twice) keeps its
+    highest score and latest stamp."""
+    all_keys = np.concatenate([keys, keys2])
+    out, inv = np.unique(all_keys, return_inverse=True)
+    sc = np.zeros(out.size, np.int16)
+    st = np.full(out.size, -math.inf)
+    np.maximum.at(sc, inv, np.concatenate([score, score2]).astype(np.int16))
+    np.maximum.at(st, inv, np.concatenate([stamp, stamp2]))
+    return out, sc, st
+
+
 class DepthObstacles:
     """Voxels of depth points in the robot's height band (see the module docstring).
 
@@ -242,20 +257,47 @@ class DepthObstacles:
             keys[pending], count[pending], first[pending])
         return np.union1d(seen[strong], keys[done])
 
-    def forget_since(self, stamp_s: float) -> bool:
+    def forget_since(self, stamp_s: float, jump: tuple[float, float, float] | None = None,
+                     recent_s: float = math.inf) -> bool:
         """Forget the voxels last marked, and the pending points first seen, at or after
         ``stamp_s`` (after a SLAM correction moved the poses they were placed at: they are
         re-observed where the corrected map has them); True when the obstacle columns
-        changed."""
+        changed.
+
+        With ``jump`` (the rigid map-frame transform of the robot's pose at the correction,
+        see :meth:`Object3D.moved`), the voxels last marked at or after ``recent_s`` are
+        moved by it instead (their centres, binned again; a voxel that lands on a kept one
+        keeps the higher score and the later stamp): they were placed at the pose error
+        the robot had just before the correction, which the jump corrects."""
         pend = self._pend_stamp < stamp_s
         self._pend_keys, self._pend_count, self._pend_stamp = (
             self._pend_keys[pend], self._pend_count[pend], self._pend_stamp[pend])
         lid = self._lidar_stamp < stamp_s
         self._lidar_cols, self._lidar_stamp = self._lidar_cols[lid], self._lidar_stamp[lid]
         keep = self._stamp < stamp_s
+        move = (~keep & (self._stamp >= recent_s) if jump is not None
+                else np.zeros_like(keep))
         if keep.all():
             return False
-        return self._store(self._keys[keep], self._score[keep], self._stamp[keep])
+        keys, score, stamp = self._keys[keep], self._score[keep], self._stamp[keep]
+        if move.any():
+            keys, score, stamp = _merge(keys, score, stamp,
+                                        self._moved_keys(self._keys[move], jump),
+                                        self._score[move], self._stamp[move])
+        return self._store(keys, score, stamp)
+
+    def _moved_keys(self, keys: npt.NDArray[np.int64], jump: tuple[float, float, float]
+                    ) -> npt.NDArray[np.int64]:
+        """The keys of the voxels ``keys`` with their centres moved by ``jump``."""
+        p = self.params
+        c = self.centres(keys)
+        tx, ty, th = (float(v) for v in jump)
+        cs, sn = math.cos(th), math.sin(th)
+        x = cs * c[:, 0] - sn * c[:, 1] + tx
+        y = sn * c[:, 0] + cs * c[:, 1] + ty
+        ix = np.floor(x / p.depth_voxel_m).astype(np.int64)
+        iy = np.floor(y / p.depth_voxel_m).astype(np.int64)
+        return _pack(ix, iy, _unpack(keys)[2])
 
     def time_went_back(self, stamp_s: float) -> None:
         """The clock jumped back to ``stamp_s``: the voxels marked later (on the old time

@@ -106,32 +106,54 @@ class ObjectMap:
         if self.depth is not None:
             self.depth.clear()
 
-    def forget_since(self, stamp_ns: int | None) -> bool:
+    def forget_since(self, stamp_ns: int | None,
+                     jump: tuple[float, float, float] | None = None,
+                     now_ns: int | None = None) -> bool:
         """After a SLAM correction: forget what was placed at poses it corrected.
 
         The tracked boxes last seen at or after ``stamp_ns`` (the previous correction;
         None: every box) are dropped when ``boxes_forget_on_correction``, the depth voxels
         last marked then when ``depth_forget_on_correction``. Their evidence came at
         uncorrected poses, and a pose-graph correction spreads over the poses since the
-        previous one, so no single transform moves them right; a dropped box in view is
-        found again, where the corrected map has it, by the next frame. Older boxes stay:
-        their evidence predates the poses the correction moved.
+        previous one, so no single transform moves them all right; a dropped box in view
+        is found again, where the corrected map has it, by the next frame. Older boxes
+        stay: their evidence predates the poses the correction moved.
+
+        Given the correction's ``jump`` (the rigid map-frame transform that took the
+        robot's pose from before to after it) and its time ``now_ns``, those last seen
+        within ``correction_move_recent_s`` before ``now_ns`` are moved by it instead
+        (:meth:`Object3D.moved`, :meth:`DepthObstacles.forget_since`): they were placed
+        at the pose error the robot had just before, which the jump corrects near the
+        robot, and an obstacle beside the robot, outside the camera's view, would not be
+        found again before the robot meets it.
 
         Returns
         -------
         bool
-            True when a box was dropped or the depth obstacle columns changed.
+            True when a box was dropped or moved or the depth obstacle columns changed.
         """
         p = self.params
+        recent_ns = (now_ns - int(round(p.correction_move_recent_s * 1e9))
+                     if jump is not None and now_ns is not None
+                     and p.correction_move_recent_s > 0 else None)
         changed = False
         if p.boxes_forget_on_correction:
-            keep = [t for t in self._objects
-                    if stamp_ns is not None and t.last_seen_ns < stamp_ns]
-            changed = len(keep) != len(self._objects)
-            self._objects = keep
+            kept = []
+            for t in self._objects:
+                if stamp_ns is not None and t.last_seen_ns < stamp_ns:
+                    kept.append(t)
+                elif recent_ns is not None and t.last_seen_ns >= recent_ns:
+                    assert jump is not None
+                    t.obj = t.obj.moved(jump)
+                    kept.append(t)
+                    changed = True
+            changed |= len(kept) != len(self._objects)
+            self._objects = kept
         if p.depth_forget_on_correction and self.depth is not None:
-            changed |= self.depth.forget_since(-math.inf if stamp_ns is None
-                                               else stamp_ns * 1e-9)
+            changed |= self.depth.forget_since(
+                -math.inf if stamp_ns is None else stamp_ns * 1e-9,
+                jump if recent_ns is not None else None,
+                math.inf if recent_ns is None else recent_ns * 1e-9)
         return changed
 
     def time_went_back(self, stamp_ns: int) -> None:

@@ -287,6 +287,14 @@ class ObjectParams:
         "one: their evidence came at uncorrected poses (a box seen from a drifted pose "
         "stands in a passage of the corrected map); the camera finds them again where "
         "the corrected map has them"))
+    correction_move_recent_s: float = field(default=10.0, metadata=param_meta(
+        "At such a correction, the boxes and voxels last seen within this long before it "
+        "are moved with the robot's pose jump instead of forgotten, when the jump is known "
+        "(the lock step: the simulator's; the object_costmap node: the change of map <- "
+        "odom with pose_topic_type 'fused'): they were placed at the pose error the robot "
+        "had just before, which the jump corrects, and an obstacle beside the robot, "
+        "outside the camera's view, is not found again (0 = forget them too)", "s",
+        range=(0.0, math.inf)))
     depth_decay_s: float = field(default=300.0, metadata=param_meta(
         "A voxel not marked again for this long is forgotten (0 = never)", "s",
         range=(0.0, math.inf)))
@@ -316,7 +324,7 @@ class ObjectParams:
             "voxel_size_m", "miss_depth_margin_m", "leg_min_width_m", "unknown_radius_m",
             "post_max_width_m", "post_overhang_m", "post_band_m", "depth_min_height_m",
             "depth_clear_margin_m", "depth_decay_s", "depth_lidar_height_m",
-            "depth_lidar_band_m", "depth_evidence_window_s"))
+            "depth_lidar_band_m", "depth_evidence_window_s", "correction_move_recent_s"))
         for name in ("floor_height_m", "unknown_min_height_m"):
             v = getattr(self, name)
             if not math.isfinite(v):
