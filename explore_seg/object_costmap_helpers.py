@@ -25,8 +25,10 @@ def stamp_ns(msg: Any) -> int:
 class CorrectionHandler:
     """The node's SLAM corrections: the detector fed from the pose and map callbacks
     (any thread), and, in the processing thread, :meth:`apply`: each correction found
-    drops from ``objects`` what was placed since the previous one
-    (:meth:`ObjectMap.forget_since`), as the lock step does at the simulator's closures.
+    drops from ``objects`` what was placed since the previous one, but moves what was
+    seen within ``correction_move_recent_s`` before it with the correction's jump when a
+    pose jump showed it (:attr:`Correction.jump`), as the lock step does at the
+    simulator's closures (:meth:`ObjectMap.forget_since`).
 
     ``log(text)`` reports each correction once (they are seconds apart at the least).
     """
@@ -45,13 +47,16 @@ class CorrectionHandler:
         changed."""
         changed = False
         for c in self.detector.take():
-            dropped = self._objects.forget_since(self._previous_ns)
+            dropped = self._objects.forget_since(self._previous_ns, c.jump, c.stamp_ns)
             self._previous_ns = c.stamp_ns
             self.applied += 1
             changed |= dropped
+            what = ("the boxes and depth voxels placed since the previous one are dropped"
+                    + ("" if c.jump is None else ", those of the last moments moved with "
+                       f"the pose's jump ({c.jump[0]:.2f} m, {c.jump[1]:.2f} m, "
+                       f"{c.jump[2]:.3f} rad)"))
             self._log(f"SLAM correction at {c.stamp_ns / 1e9:.3f} s ({c.source}: {c.detail}): "
-                      + ("the boxes and depth voxels placed since the previous one are dropped"
-                         if dropped else "nothing placed since the previous one"))
+                      + (what if dropped else "nothing placed since the previous one"))
         return changed
 
     def time_went_back(self) -> None:

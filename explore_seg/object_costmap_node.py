@@ -18,7 +18,9 @@ is true (and ``idle_when_done``) the timer is paused (:class:`~explore_seg.done_
 A SLAM correction (a loop closure), found in the map-frame poses (a jump that driving does
 not explain) or in ``map`` (occupied cells that moved; ``correction_*`` parameters,
 :mod:`explore_seg.core.objects.corrections`), drops the boxes and depth voxels placed since
-the previous correction, as the lock step does at the simulator's closures
+the previous correction, except those seen within ``correction_move_recent_s`` before it,
+which move with the pose's jump when the poses showed the correction, as the lock step does
+at the simulator's closures
 (:class:`~explore_seg.object_costmap_helpers.CorrectionHandler`).
 """
 from __future__ import annotations

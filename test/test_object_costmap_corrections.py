@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pytest
 from nav_msgs.msg import OccupancyGrid, Odometry
 from rclpy.parameter import Parameter
 
@@ -81,10 +82,12 @@ def test_a_map_moved_by_0_3_m_drops_the_boxes_growth_and_driving_do_not(ros):
     assert node._corrections.applied == 1
 
 
-def test_the_simulators_loop_closure_is_found_from_its_topics(ros, tmp_path):
+@pytest.mark.parametrize("move_recent_s", [10.0, 0.0])
+def test_the_simulators_loop_closure_is_found_from_its_topics(ros, tmp_path, move_recent_s):
     """sim_bridge with the mapping error model: its re-render moves the map and the
-    map-frame pose on ``odom`` by 0.3 m; the node counts one correction and drops the box
-    placed before it (the first correction: everything placed so far)."""
+    map-frame pose on ``odom`` by 0.3 m; the node counts one correction and moves the box
+    seen a moment before it with the pose's jump; with correction_move_recent_s 0 the box
+    is dropped (the first correction: everything placed so far)."""
     from sim_bridge.node import SimBridgeNode
 
     sim = ros.add(SimBridgeNode(context=ros.context, parameter_overrides=[
@@ -94,7 +97,9 @@ def test_the_simulators_loop_closure_is_found_from_its_topics(ros, tmp_path):
         Parameter("map_update_interval_s", value=0.2),
         Parameter("output_dir", value=str(tmp_path)),
     ]))
-    node = _node(ros)
+    node = ros.add(ObjectCostmapNode(context=ros.context, parameter_overrides=[
+        Parameter("detector.backend", value="oracle"), Parameter("rate_hz", value=10.0),
+        Parameter("correction_move_recent_s", value=move_recent_s)]))
     eng = sim.engine
     ros.spin_until(lambda: node._grid is not None and node._pose_in.latest() is not None
                    and eng.slam_error.n_keyframes >= 1, what="the map and poses")
@@ -105,6 +110,64 @@ def test_the_simulators_loop_closure_is_found_from_its_topics(ros, tmp_path):
     assert len(node.objects()) == 1
     eng.slam_error.shift((0.3, 0.0, 0.0))
     ros.spin_until(lambda: node._corrections.applied >= 1, what="the correction")
-    assert node.objects() == []
+    if move_recent_s > 0:                           # the robot stands still: jump exact
+        (box,) = node.objects()
+        assert box.center_xyz[:2] == pytest.approx((x + 1.8, y), abs=1e-6)
+    else:
+        assert node.objects() == []
     ros.spin_for(1.0)                               # the map shows the same closure
     assert node._corrections.applied == 1
+
+
+def test_a_fused_pose_jump_moves_what_was_just_seen_and_drops_the_rest(ros):
+    """With ``pose_topic_type: fused`` a loop closure moves the SLAM pose 0.3 m off what
+    odometry predicts: the node finds the correction in its map-frame poses and the box
+    seen a moment before moves with the jump (an obstacle beside the robot stays where
+    the corrected map has it; the jump holds one odometry step of driving, 1 cm), the box
+    seen since the previous correction but more than correction_move_recent_s before is
+    dropped."""
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+    from explore_seg.qos import POSE_QOS
+
+    node = ros.add(ObjectCostmapNode(context=ros.context, parameter_overrides=[
+        Parameter("detector.backend", value="oracle"), Parameter("rate_hz", value=10.0),
+        Parameter("pose_topic_type", value="fused"), Parameter("correction_merge_s", value=1.0),
+        Parameter("correction_move_recent_s", value=1.0)]))
+    pub = ros.node("slam")
+    odom = pub.create_publisher(Odometry, "odom", POSE_QOS)
+    slam = pub.create_publisher(PoseWithCovarianceStamped, "pose", POSE_QOS)
+    clock = pub.get_clock()
+    state = {"x": 0.0, "dy": 0.0}
+
+    def send():
+        stamp = clock.now().to_msg()
+        o = Odometry()
+        o.header = convert.make_header("odom", stamp)
+        o.pose.pose = convert.pose_from_2d(state["x"], 0.0, 0.0)
+        odom.publish(o)
+        m = PoseWithCovarianceStamped()
+        m.header = convert.make_header("map", stamp)
+        m.pose.pose = convert.pose_from_2d(state["x"] + 1.0, 2.0 + state["dy"], 0.0)
+        slam.publish(m)
+        state["x"] += 0.01                          # 0.2 m/s at 20 Hz
+
+    pub.create_timer(0.05, send)
+    ros.spin_until(lambda: node._pose_in.latest() is not None
+                   and node._pose_in.fusion.pose_at(node._pose_in.latest()[0], 10**8)
+                   is not None, what="fused poses")
+    ros.spin_for(0.5)
+    # (the fused pose's switch from odometry alone to the first correction may count as
+    # one, with nothing placed yet)
+    base = node._corrections.applied
+    ros.spin_for(2.5)                               # past correction_merge_s
+    assert node._corrections.applied == base
+    now = clock.now().nanoseconds
+    node._objects.update(_table(5.0, 0.0), stamp_ns=now - 3 * NS // 2)   # since then
+    node._objects.update(_table(2.0, 3.0), stamp_ns=now - NS // 5)       # just before
+    assert len(node.objects()) == 2
+    state["dy"] = 0.3                               # the loop closure
+    ros.spin_until(lambda: node._corrections.applied > base, what="the correction")
+    objs = node.objects()
+    assert len(objs) == 1
+    assert objs[0].center_xyz[0] == pytest.approx(2.0, abs=0.02)
+    assert objs[0].center_xyz[1] == pytest.approx(3.3, abs=1e-6)

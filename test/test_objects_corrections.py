@@ -146,3 +146,25 @@ def test_the_simulators_re_render_is_detected():
 def test_bad_thresholds_are_rejected(field, value):
     with pytest.raises(ValueError, match=field):
         dataclasses.replace(P, **{field: value})
+
+
+def test_a_pose_jump_carries_the_transform_a_map_moved_first_gets_it_later():
+    """The pose source's correction carries after o before^-1; a correction the map
+    showed first takes the jump of the pose jump merged into it while it waits."""
+    import math
+
+    from explore_seg.core.pose_fusion import compose
+    d = CorrectionDetector(ObjectCostmapNodeParams())
+    before, after = (1.0, 2.0, 0.3), (1.1, 2.4, 0.5)
+    d.observe_pose(0, before)
+    c = d.observe_pose(50_000_000, after)
+    assert c is not None and c.source == "pose"
+    moved = compose(c.jump, before)
+    assert all(math.isclose(a, b, abs_tol=1e-12) for a, b in zip(moved, after))
+    assert d.take()[0].jump == c.jump
+    d2 = CorrectionDetector(ObjectCostmapNodeParams())
+    d2._found(10**9, "map", "walls moved")           # the map first
+    d2.observe_pose(10**9, before)
+    d2.observe_pose(10**9 + 50_000_000, after)       # the same correction, merged
+    (only,) = d2.take()
+    assert only.source == "map" and only.jump is not None

@@ -27,6 +27,7 @@ Every method may be called from different threads (a lock guards the state).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import threading
 from dataclasses import dataclass, field
@@ -106,11 +107,15 @@ class CorrectionParams:
 @dataclass(frozen=True)
 class Correction:
     """One detected correction: when (the pose's or the map's stamp), which input showed
-    it (``pose`` or ``map``) and what it saw (for a log line)."""
+    it (``pose`` or ``map``), what it saw (for a log line) and, when a pose jump showed it,
+    the jump: the rigid map-frame transform from the pose before to the pose after
+    (``after o before^-1``; the driving between the two poses is in it too, at most
+    ``correction_max_speed_mps`` times their gap)."""
 
     stamp_ns: int
     source: str
     detail: str
+    jump: Pose2D | None = None
 
 
 def pose_jump(prev: tuple[int, Pose2D], cur: tuple[int, Pose2D],
@@ -140,6 +145,16 @@ def pose_jump(prev: tuple[int, Pose2D], cur: tuple[int, Pose2D],
         return (f"turned {turned:.3f} rad in {dt:.3f} s (at most "
                 f"{s.correction_max_turn_rps:g} rad/s)")
     return None
+
+
+def _relative(before: Pose2D, after: Pose2D) -> Pose2D:
+    """The rigid map-frame transform ``after o before^-1``: it takes ``before`` to
+    ``after`` (and every point near the robot along with it)."""
+    x0, y0, a0 = before
+    x1, y1, a1 = after
+    th = wrap_angle(a1 - a0)
+    c, s = math.cos(th), math.sin(th)
+    return (x1 - (c * x0 - s * y0), y1 - (s * x0 + c * y0), th)
 
 
 def occupied_xy(grid: GridMap, threshold: int = OCCUPIED_THRESHOLD) -> npt.NDArray[np.float64]:
@@ -196,7 +211,10 @@ class CorrectionDetector:
             if last is None:
                 return None
             why = pose_jump(last, cur, self.settings)  # type: ignore[arg-type]
-            return None if why is None else self._found(cur[0], "pose", why)
+            if why is None:
+                return None
+            jump = _relative(last[1], cur[1])  # type: ignore[arg-type]
+            return self._found(cur[0], "pose", why, jump)
 
     def observe_map(self, grid: GridMap) -> Correction | None:
         """Feed a new map; the correction it shows against the previous one, if any (also
@@ -230,14 +248,19 @@ class CorrectionDetector:
             self._last_map_xy = None
             self._last_found_ns = None
 
-    def _found(self, t_ns: int, source: str, why: str) -> Correction | None:
+    def _found(self, t_ns: int, source: str, why: str, jump: Pose2D | None = None
+               ) -> Correction | None:
         """Record a correction at ``t_ns`` unless it is the previous one seen again
-        (within ``correction_merge_s``). Called with the lock held."""
+        (within ``correction_merge_s``; a pose jump seen after the map showed the same
+        correction lends it its jump while it waits for :meth:`take`). Called with the
+        lock held."""
         last = self._last_found_ns
         if last is not None and abs(t_ns - last) <= self.settings.correction_merge_s * 1e9:
+            if jump is not None and self._pending and self._pending[-1].jump is None:
+                self._pending[-1] = dataclasses.replace(self._pending[-1], jump=jump)
             return None
         self._last_found_ns = t_ns
-        c = Correction(int(t_ns), source, why)
+        c = Correction(int(t_ns), source, why, jump)
         self._pending.append(c)
         self.count += 1
         return c

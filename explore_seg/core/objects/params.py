@@ -290,8 +290,8 @@ class ObjectParams:
     correction_move_recent_s: float = field(default=10.0, metadata=param_meta(
         "At such a correction, the boxes and voxels last seen within this long before it "
         "are moved with the robot's pose jump instead of forgotten, when the jump is known "
-        "(the lock step: the simulator's; the object_costmap node: the change of map <- "
-        "odom with pose_topic_type 'fused'): they were placed at the pose error the robot "
+        "(the lock step: the simulator's; the object_costmap node: when the map-frame "
+        "poses showed the correction, correction_pose_jump_*): they were placed at the pose error the robot "
         "had just before, which the jump corrects, and an obstacle beside the robot, "
         "outside the camera's view, is not found again (0 = forget them too)", "s",
         range=(0.0, math.inf)))
